@@ -1,0 +1,30 @@
+// graspbed: simulation-in-the-loop grasp testbed for a prosthetic hand with a tactile fingertip.
+#include <exception>
+#include <iostream>
+#include <stdexcept>
+
+#include "app/command_registry.h"
+
+int main(int argc, char** argv) {
+  CLI::App root{"graspbed: simulation-in-the-loop grasp testbed for a prosthetic hand with a tactile "
+                "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
+  root.require_subcommand(1);
+  root.set_version_flag("--version", "graspbed 0.1.0");
+  graspbed::app::InstallCommands(root);
+  try {
+    root.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // Usage errors are bad input (exit 2); --help and --version exit 0; a subcommand that throws
+    // CLI::RuntimeError(code) ends with that code.
+    const int code = root.exit(error);
+    if (dynamic_cast<const CLI::RuntimeError*>(&error) != nullptr) return code;
+    return code == 0 ? 0 : graspbed::app::kExitBadInput;
+  } catch (const std::invalid_argument& error) {
+    std::cerr << "graspbed: error: " << error.what() << '\n';
+    return graspbed::app::kExitBadInput;
+  } catch (const std::exception& error) {
+    std::cerr << "graspbed: error: " << error.what() << '\n';
+    return graspbed::app::kExitFailed;
+  }
+  return graspbed::app::kExitOk;
+}

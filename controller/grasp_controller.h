@@ -1,0 +1,70 @@
+#pragma once
+/// GraspController: the pluggable decision maker. It sees only TactileState, time and the user's
+/// intent (close / open), never MuJoCo, serial ports or ground truth, so the same controller runs in
+/// simulation and on the hand.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "controller/hand_command.h"
+#include "sensor/tactile_state.h"
+
+namespace graspbed::controller {
+
+/// What the user (EMG, a button, a scenario script) currently asks the hand to do.
+enum class GraspIntent { kIdle, kClose, kOpen };
+
+/// Controller state exposed for logging and plots; fixed size, filled every update.
+struct ControllerTelemetry {
+  const char* phase = "idle";       ///< static string naming the current phase
+  double grip_target_n = 0.0;       ///< grip force the controller aims for [N]
+  double friction_estimate = 0.0;   ///< current estimate of the contact friction coefficient
+  bool slip_detected = false;       ///< slip detected at this update
+  int slip_events = 0;              ///< slip events since Reset()
+  bool safe_hold = false;           ///< holding because data are stale or too few units are valid
+};
+
+/// One tunable parameter of a controller: its name, default, unit and meaning (for docs and
+/// validation of scenario files).
+struct ControllerParameter {
+  std::string name;
+  double default_value = 0.0;
+  double min = 0.0;
+  double max = 0.0;
+  std::string unit;
+  std::string doc;
+};
+
+/// Parameter values by name, as given in a scenario's controller.params (validated by the factory).
+using ControllerParams = std::map<std::string, double>;
+
+class GraspController {
+ public:
+  virtual ~GraspController() = default;
+
+  /// Back to the initial state (hand considered open, no contact, estimates reset).
+  virtual void Reset() = 0;
+  /// Sets the user's intent; takes effect at the next Update().
+  virtual void SetIntent(GraspIntent intent) = 0;
+  /// One control tick at `time_s` [s] with the newest state; returns the motor command.
+  /// Must not allocate.
+  virtual HandCommand Update(const sensor::TactileState& state, double time_s) = 0;
+  /// Grip force ceiling for this task [N] (fragile objects); never exceeded on purpose.
+  virtual void SetGripCeiling(double ceiling_n) = 0;
+  virtual ControllerTelemetry telemetry() const = 0;
+  virtual std::string name() const = 0;
+};
+
+/// Names of the controllers the factory knows, sorted.
+std::vector<std::string> ControllerNames();
+/// The parameters (with defaults) of controller `name`; throws std::invalid_argument on an unknown
+/// name, listing the valid ones.
+std::vector<ControllerParameter> ControllerParameters(const std::string& name);
+/// Builds controller `name` with `params` (unknown or out-of-range parameters throw
+/// std::invalid_argument naming the parameter, value and range).
+std::unique_ptr<GraspController> MakeController(const std::string& name, const ControllerParams& params);
+
+}  // namespace graspbed::controller

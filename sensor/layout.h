@@ -1,0 +1,68 @@
+#pragma once
+/// The sensor holder (an elliptic cylinder) and the poses of the sensing units on it, loaded from a
+/// layout YAML file. Immutable after loading; the single source of truth for where units are (the
+/// MuJoCo model is generated from it).
+///
+/// Holder frame: origin on the holder axis at the middle of its length; +x along the axis towards
+/// the fingertip; +y lateral (the 14 mm major axis); +z dorsal (the 8 mm minor axis), so the palmar
+/// midline, where the units are centred, is the line (x, 0, -minor/2).
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace graspbed::sensor {
+
+/// Which way a unit's beam (its shear-sensitive axis) runs on the holder surface.
+enum class BeamOrientation { kAxial, kCircumferential };
+
+/// Elliptic-cylinder holder, paper section 2.
+struct HolderGeometry {
+  double major_axis_m = 14e-3;  ///< full lateral width of the cross-section (y) [m]
+  double minor_axis_m = 8e-3;   ///< full dorsal-palmar depth of the cross-section (z) [m]
+  double length_m = 30e-3;      ///< axial length of the holder (x) [m]
+};
+
+/// Dimensions of one sensing unit (paper Fig. 2), used by the model and the FEA.
+struct UnitGeometry {
+  double beam_length_m = 3e-3;     ///< along the beam axis [m]
+  double beam_width_m = 2e-3;      ///< across the beam axis [m]
+  double beam_thickness_m = 0.2e-3;
+  double brace_height_m = 3e-3;
+  double mesa_length_m = 1.0e-3;   ///< mesa along the beam axis [m] (not in the paper; chosen)
+  double mesa_width_m = 2e-3;      ///< mesa across the beam axis [m]
+  double mesa_height_m = 0.5e-3;   ///< mesa thickness above the beam [m]
+};
+
+/// Where one unit sits and how it is oriented. Vectors are unit length, holder frame.
+struct UnitPose {
+  int row = 0;                    ///< index along the axis (0 = most proximal)
+  int column = 0;                 ///< index around the circumference (0 = most towards -y)
+  double axial_position_m = 0.0;  ///< x of the unit centre [m]
+  double arc_position_m = 0.0;    ///< arc length from the palmar midline, + towards +y [m]
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< unit centre on the holder surface [m]
+  Eigen::Vector3d inward_normal = Eigen::Vector3d::UnitZ();  ///< into the holder; +Fn pushes along it
+  Eigen::Vector3d beam_axis = Eigen::Vector3d::UnitX();      ///< +Ft direction, tangent to the surface
+  BeamOrientation orientation = BeamOrientation::kAxial;
+};
+
+/// A complete layout: holder, unit geometry and every unit's pose, in layout order (the order of
+/// R1/R2 in frames and of geoms unit_0..unit_N-1 in the model).
+struct Layout {
+  std::string name;
+  std::string source_file;  ///< file it was loaded from ("" if built in code)
+  HolderGeometry holder;
+  UnitGeometry unit;
+  std::vector<UnitPose> units;
+
+  int unit_count() const { return static_cast<int>(units.size()); }
+};
+
+/// Loads and validates a layout file; throws common::ConfigError naming file, line and key.
+Layout LoadLayout(const std::string& path);
+
+/// Path of the shipped default layout (sensor/layouts/default_20.yaml in the source tree).
+std::string DefaultLayoutPath();
+
+}  // namespace graspbed::sensor

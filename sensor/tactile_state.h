@@ -1,0 +1,43 @@
+#pragma once
+/// TactileState: per-unit forces estimated from one RawFrame, the only thing controllers see.
+
+#include <array>
+#include <cstdint>
+
+#include "sensor/raw_frame.h"
+
+namespace graspbed::sensor {
+
+/// Why a unit's estimate can or cannot be used.
+enum class UnitValidity : uint8_t {
+  kValid = 0,
+  kOpen,         ///< a channel reads open circuit
+  kShort,        ///< a channel reads short circuit
+  kOutOfRange,   ///< estimate beyond the rated range (saturated)
+  kImplausible,  ///< resistance physically implausible (e.g. far from R0, inconsistent pair)
+  kNotTared,     ///< no baseline yet
+};
+
+/// Human-readable name of a validity value ("valid", "open", ...).
+const char* ToString(UnitValidity validity);
+
+/// Forces estimated for every unit at one sample time.
+struct TactileState {
+  uint32_t sequence = 0;  ///< sequence number of the RawFrame this came from
+  double time_s = 0.0;    ///< sample time of that frame [s]
+  int unit_count = 0;
+  bool stale = false;     ///< true when no new frame arrived within the stale timeout
+  std::array<double, kMaxUnits> fn_n{};  ///< normal force per unit, + pressing into the holder [N], unit frame
+  std::array<double, kMaxUnits> ft_n{};  ///< shear per unit along its beam axis [N], unit frame
+  std::array<UnitValidity, kMaxUnits> validity{};
+  int valid_count = 0;                   ///< units with validity == kValid
+  double total_fn_n = 0.0;               ///< sum of fn over valid units [N]
+  /// Sum of ft over valid units whose beam runs along the holder axis [N], holder frame (+x distal).
+  double total_shear_axial_n = 0.0;
+  /// Sum of ft over valid units whose beam runs around the circumference [N] (+ towards holder +y).
+  double total_shear_circumferential_n = 0.0;
+  /// Units with fn above the inversion's contact threshold.
+  int contact_count = 0;
+};
+
+}  // namespace graspbed::sensor
