@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "controller/grasp_controller.h"
+#include "controller/open_loop_controller.h"
 
 namespace graspbed::controller {
 namespace {
@@ -18,6 +19,11 @@ struct ControllerEntry {
 /// Every built-in controller; a user's own controller is added here with one line.
 const std::vector<ControllerEntry>& Entries() {
   static const std::vector<ControllerEntry> entries = {
+      {"open_loop", &OpenLoopController::Parameters,
+       [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
+         return std::make_unique<OpenLoopController>(
+             OpenLoopConfig{.close_effort = p.at("close_effort"), .open_effort = p.at("open_effort")});
+       }},
   };
   return entries;
 }
