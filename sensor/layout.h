@@ -60,7 +60,34 @@ struct Layout {
 };
 
 /// Loads and validates a layout file; throws common::ConfigError naming file, line and key.
+/// Format: docs/sensor.md ("Layout files"); lengths in the file are in millimetres.
 Layout LoadLayout(const std::string& path);
+
+/// Like LoadLayout, from YAML text; `source_name` stands for the file name in messages.
+Layout LoadLayoutFromString(const std::string& text, const std::string& source_name);
+
+/// A point on the holder's elliptic surface with its local frame, holder frame.
+struct HolderSurfacePoint {
+  double angle_rad = 0.0;  ///< ellipse parameter t: (y, z) = (a sin t, -b cos t); 0 on the palmar midline
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();      ///< on the surface [m]
+  Eigen::Vector3d inward_normal = Eigen::Vector3d::UnitZ();  ///< unit, perpendicular to the surface
+  Eigen::Vector3d circumferential_tangent = Eigen::Vector3d::UnitY();  ///< unit, towards +y at the midline
+};
+
+/// Arc length [m] along the holder cross-section from the palmar midline (t = 0) to parameter
+/// `angle_rad` (signed, + towards +y). Gauss-Legendre quadrature, error far below 1 nm.
+double HolderArcLengthM(const HolderGeometry& holder, double angle_rad);
+
+/// Arc length [m] of the palmar half from the midline to either side (a quarter of the perimeter).
+double PalmarHalfArcLengthM(const HolderGeometry& holder);
+
+/// The surface point at signed arc length `arc_m` from the palmar midline and axial position
+/// `axial_m` (Newton on the arc length, converged to < 1 nm). |arc_m| must not exceed
+/// PalmarHalfArcLengthM(holder).
+HolderSurfacePoint HolderPointAtArc(const HolderGeometry& holder, double axial_m, double arc_m);
+
+/// "axial" / "circumferential".
+const char* ToString(BeamOrientation orientation);
 
 /// Path of the shipped default layout (sensor/layouts/default_20.yaml in the source tree).
 std::string DefaultLayoutPath();
