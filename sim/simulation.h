@@ -1,0 +1,181 @@
+#pragma once
+/// Simulation: owns the MuJoCo model and data of one scene (the generated hand with the sensorised
+/// fingertip, the table and the object), steps it, takes script commands (wrist targets, grip
+/// effort, perturbations of the object) and maps contacts onto the sensing units. The only place in
+/// graspbed that holds mjModel/mjData besides the CLI's `model` command and the sim tests.
+///
+/// Frames: world (z up, table top z = 0); unit frames from the layout (holder frame) carried along
+/// with the holder body. Step(), ComputeUnitLoads() and truth() allocate nothing.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "sensor/layout.h"
+#include "sensor/strain_model.h"
+#include "sim/scene_config.h"
+
+// MuJoCo types stay out of users' translation units.
+struct mjModel_;
+struct mjData_;
+
+namespace graspbed::sim {
+
+/// A physics failure during a run: a value, not a crash. Once set, the simulation keeps the
+/// time and cause of the first fault; Step() still runs (MuJoCo resets bad states itself).
+struct PhysicsFault {
+  bool occurred = false;
+  double time_s = 0.0;                 ///< simulation time of the first fault [s]
+  std::array<char, 160> cause{};       ///< NUL-terminated text: MuJoCo warning or "NaN in qpos" etc.
+  uint64_t warning_count = 0;          ///< MuJoCo warnings seen so far (all kinds)
+  const char* cause_text() const { return cause.data(); }
+};
+
+/// Ground truth of one instant, never passed through the sensor path. World frame unless noted.
+struct GroundTruth {
+  double time_s = 0.0;
+  std::array<double, 3> object_position_m{};       ///< object centre of mass [m]
+  std::array<double, 3> object_velocity_m_s{};     ///< linear velocity of the object centre [m/s]
+  std::array<double, 3> object_angular_velocity_rad_s{};  ///< [rad/s]
+  /// Lowest point of the object above the table top [m] (0 when resting on it).
+  double object_height_above_table_m = 0.0;
+  std::array<double, 3> wrist_position_m{};        ///< actual wrist position [m]
+  double grip_closure_m = 0.0;                     ///< finger + thumb travel from open [m]
+  double grip_velocity_m_s = 0.0;                  ///< closing speed of the gap [m/s]
+  double grip_motor_force_n = 0.0;                 ///< force the motor applies to the grip tendon [N]
+  /// Largest relative tangential speed between object and finger/thumb at their contact points
+  /// [m/s]; 0 without contact. Includes MuJoCo's residual creep (um/s with noslip).
+  double slip_speed_m_s = 0.0;
+  /// Same, normal-force weighted mean over the finger/thumb contacts [m/s].
+  double mean_slip_speed_m_s = 0.0;
+  /// Total contact normal force on the sensorised finger (holder, mesas, link) from anything
+  /// outside the hand [N]; on the thumb (pad, link) [N].
+  double finger_normal_force_n = 0.0;
+  double thumb_normal_force_n = 0.0;
+  /// Normal force carried by the mesas (sensed) and by the whole holder (mesas + shell) [N].
+  double sensed_normal_force_n = 0.0;
+  double holder_normal_force_n = 0.0;
+  /// sensed / holder normal force [0..1]; 0 when the holder carries nothing.
+  double sensed_share = 0.0;
+  /// Largest squeeze on the object: the larger of the total normal force from the finger and from
+  /// the thumb on the object [N] (compare with a crush limit).
+  double object_squeeze_n = 0.0;
+  /// Deepest penetration of the object into a mesa [m] (>= 0) and whether the object touches the
+  /// holder shell itself (pushed through the mesas).
+  double max_mesa_penetration_m = 0.0;
+  bool object_touches_holder_shell = false;
+  int finger_contacts = 0;  ///< contacts between the object and the finger
+  int thumb_contacts = 0;   ///< contacts between the object and the thumb
+};
+
+/// The scene in MuJoCo. Owns mjModel/mjData; not copyable, not movable.
+class Simulation {
+ public:
+  /// Generates the MJCF from `layout` and `scene` and loads it from memory. Throws
+  /// std::runtime_error with MuJoCo's message if the model does not load, std::invalid_argument for
+  /// a bad scene.
+  Simulation(const sensor::Layout& layout, const SceneConfig& scene);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  /// One physics step (scene.physics.timestep_s). Checks for MuJoCo warnings and NaN afterwards and
+  /// records the first as fault(). Never throws, never allocates.
+  void Step();
+  /// Steps until time_s() >= `time_s` [s].
+  void StepUntil(double time_s);
+  /// Simulation time [s].
+  double time_s() const;
+  /// Physics step [s].
+  double timestep_s() const;
+
+  /// Grip motor effort in [-1, 1] (clamped): + closes, - opens; force = stall (effort - v / v0).
+  void SetGripEffort(double effort);
+  double grip_effort() const { return grip_effort_; }
+  /// Engages (holds the current closure, whatever the load) or releases the grip brake.
+  void SetGripBrake(bool engaged);
+  bool grip_brake() const { return brake_engaged_; }
+  /// Wrist servo target [m], world frame (the wrist body origin). Scripts move it for approach,
+  /// lift, carry, place and shake; the servo is stiff but not rigid (HandConfig).
+  void SetWristTarget(const std::array<double, 3>& position_m);
+  const std::array<double, 3>& wrist_target() const { return wrist_target_; }
+  /// External force on the object's centre of mass [N], world frame (pull, knock); stays until reset.
+  void SetObjectExternalForce(const std::array<double, 3>& force_n);
+  /// Changes the object's mass [kg] (> 0), scaling its inertia with it (mass steps, pouring).
+  void SetObjectMass(double mass_kg);
+  double object_mass_kg() const;
+  /// Changes the friction coefficient of every object contact (> 0).
+  void SetObjectFriction(double friction);
+
+  /// Current load on every unit, unit frames, layout order (`loads.size()` == unit count):
+  /// Fn along the inward normal (+ pressing in), Ft along the beam axis, cross-axis shear, offset of
+  /// the normal load along the beam from the mesa centre. Force on the holder between mesas is not
+  /// sensed. Allocates nothing.
+  void ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const;
+  /// Ground truth now (object state, slip, contact forces). Allocates nothing.
+  GroundTruth truth() const;
+  /// First physics fault (NaN, MuJoCo warning), if any.
+  const PhysicsFault& fault() const { return fault_; }
+
+  /// Wrist origin -> holder centre, digit stroke etc. of this model.
+  const sensor::Layout& layout() const { return layout_; }
+  const SceneConfig& scene() const { return scene_; }
+  int unit_count() const { return layout_.unit_count(); }
+  /// The MJCF text the model was loaded from.
+  const std::string& mjcf() const { return mjcf_; }
+
+  /// Raw MuJoCo handles, for sim/ internals and sim tests only (controllers never see them).
+  const mjModel_* model() const { return model_; }
+  mjModel_* mutable_model() { return model_; }
+  const mjData_* data() const { return data_; }
+  mjData_* mutable_data() { return data_; }
+
+ private:
+  void ApplyControls();
+  void CheckFault();
+  void RecordFault(const char* cause);
+
+  sensor::Layout layout_;
+  SceneConfig scene_;
+  std::string mjcf_;
+  mjModel_* model_ = nullptr;
+  mjData_* data_ = nullptr;
+
+  // Ids resolved once at construction.
+  int object_body_ = -1;
+  int object_geom_ = -1;
+  int holder_body_ = -1;
+  int holder_shell_geom_ = -1;
+  int finger_body_ = -1;
+  int thumb_body_ = -1;
+  int wrist_body_ = -1;
+  int finger_joint_qpos_ = -1;
+  int thumb_joint_qpos_ = -1;
+  int finger_joint_dof_ = -1;
+  int thumb_joint_dof_ = -1;
+  int grip_actuator_ = -1;
+  int grip_tendon_ = -1;
+  int brake_equality_ = -1;
+  std::array<int, 3> wrist_actuators_{-1, -1, -1};
+  std::array<int, 3> wrist_joint_qpos_{-1, -1, -1};
+  /// geom id -> unit index (-1 for non-mesa geoms); built once.
+  std::vector<int> geom_unit_;
+  /// geom id -> 1 finger, 2 thumb, 0 other (hand-side classification for ground truth).
+  std::vector<int> geom_side_;
+  /// Unit frames in the holder body frame (inward normal, beam axis, cross axis, centre), per unit.
+  std::vector<std::array<double, 12>> unit_frames_;
+  double object_mass_ = 0.0;
+  std::array<double, 3> object_inertia_{};
+  double hand_weight_n_ = 0.0;  ///< weight of everything the wrist servo carries [N]
+
+  double grip_effort_ = 0.0;
+  bool brake_engaged_ = false;
+  std::array<double, 3> wrist_target_{};
+  PhysicsFault fault_;
+  std::array<uint64_t, 8> warning_seen_{};  ///< per MuJoCo warning kind, last count seen
+};
+
+}  // namespace graspbed::sim
