@@ -4,7 +4,9 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 
+#include "common/yaml_map.h"
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_state.h"
 
@@ -18,6 +20,78 @@ struct ReadoutFrame {
   std::array<double, kMaxUnits> dr1_rel{};  ///< (R1 - R1_baseline) / R1_baseline
   std::array<double, kMaxUnits> dr2_rel{};  ///< (R2 - R2_baseline) / R2_baseline
   std::array<UnitValidity, kMaxUnits> validity{};
+};
+
+/// Readout settings. Resistance bounds are fractions of the nominal R0 so they follow the gauge.
+struct ReadoutConfig {
+  /// Frames averaged for the tare baseline after construction or Reset() [frames, >= 1].
+  int baseline_frames = 100;
+  /// A channel at or below this reads as a short circuit [Ohm].
+  double short_circuit_ohm = 1.0;
+  /// A channel at or above this (or infinite) reads as open circuit [Ohm].
+  double open_circuit_ohm = 1e6;
+  /// Channel resistance outside [min, max] x nominal R0 (but not open/short) is implausible [-].
+  double min_plausible_fraction = 0.2;
+  double max_plausible_fraction = 3.0;
+  /// A tare baseline further than this from nominal R0 is implausible (bad tare, wrong gauge) [-].
+  double max_baseline_deviation_fraction = 0.3;
+  /// Mean dR/R of a unit below this is implausible: the mesa would be pulled hard, which the
+  /// frame cannot transmit (the paper's -Fn) [-]; -0.1 is about -1.8 N at paper sensitivities.
+  double min_mean_dr_rel = -0.1;
+  /// |dR/R| of a channel above this is out of the gauge's linear range [-]; paper max is 0.96.
+  double max_abs_dr_rel = 1.5;
+  /// ADC full scale of the source [Ohm]; a channel at or above it is clipped and marked out of
+  /// range. 0 = unknown (no check).
+  double adc_full_scale_ohm = 0.0;
+
+  /// Throws std::invalid_argument naming the offending field and value.
+  void Validate() const;
+};
+
+/// Reads a ReadoutConfig from its own YAML section (field names as keys; unknown keys refused).
+ReadoutConfig LoadReadoutConfig(const common::YamlMap& map);
+
+/// Tare + dR/R + per-unit validity. Holds the baseline; Process() allocates nothing.
+class Readout {
+ public:
+  /// Throws std::invalid_argument for an invalid config, unit_count outside 1..kMaxUnits or a
+  /// non-positive nominal R0.
+  Readout(const ReadoutConfig& config, int unit_count, double nominal_r0_ohm);
+
+  /// Forgets the baseline; the next baseline_frames frames tare again (validity kNotTared).
+  void Reset();
+  /// True once a baseline exists (averaged or set).
+  bool tared() const { return tared_; }
+  /// Uses a stored baseline [Ohm] instead of averaging; sizes must equal unit_count and values be
+  /// finite and > 0 (std::invalid_argument otherwise).
+  void SetBaseline(std::span<const double> r1_ohm, std::span<const double> r2_ohm);
+
+  /// One frame -> dR/R and validity. While taring, validity is kNotTared (open/short still shown)
+  /// and dR/R is 0. A frame whose unit_count differs marks every unit implausible.
+  void Process(const RawFrame& frame, ReadoutFrame* out);
+
+  int unit_count() const { return unit_count_; }
+  double nominal_r0_ohm() const { return nominal_r0_ohm_; }
+  /// Baseline per unit [Ohm] (meaningful once tared()).
+  const std::array<double, kMaxUnits>& baseline_r1_ohm() const { return baseline_r1_; }
+  const std::array<double, kMaxUnits>& baseline_r2_ohm() const { return baseline_r2_; }
+  /// Frames averaged so far in the current tare window.
+  int baseline_frames_seen() const { return frames_seen_; }
+
+ private:
+  // Validity of one channel value before any baseline is involved.
+  UnitValidity ChannelValidity(double resistance_ohm) const;
+  void FinishBaseline();
+
+  ReadoutConfig config_;
+  int unit_count_ = 0;
+  double nominal_r0_ohm_ = 0.0;
+  bool tared_ = false;
+  int frames_seen_ = 0;
+  std::array<double, kMaxUnits> sum_r1_{}, sum_r2_{};
+  std::array<int, kMaxUnits> count_r1_{}, count_r2_{};
+  std::array<double, kMaxUnits> baseline_r1_{}, baseline_r2_{};
+  std::array<bool, kMaxUnits> baseline_ok_{};
 };
 
 }  // namespace graspbed::sensor
