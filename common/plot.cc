@@ -1,0 +1,379 @@
+#include "common/plot.h"
+
+#include <cairo.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <system_error>
+
+namespace graspbed::plot {
+namespace {
+
+struct Rgb {
+  double r, g, b;
+};
+
+// Colour-blind friendly palette (Okabe-Ito), cycled.
+constexpr std::array<Rgb, 8> kPalette{{{0.00, 0.45, 0.70},
+                                       {0.84, 0.37, 0.00},
+                                       {0.00, 0.62, 0.45},
+                                       {0.80, 0.47, 0.65},
+                                       {0.90, 0.62, 0.00},
+                                       {0.34, 0.71, 0.91},
+                                       {0.10, 0.10, 0.10},
+                                       {0.94, 0.89, 0.26}}};
+
+constexpr double kMarginLeft = 90.0;
+constexpr double kMarginRight = 20.0;
+constexpr double kMarginTop = 40.0;
+constexpr double kMarginBottom = 55.0;
+constexpr double kFontSize = 13.0;
+constexpr double kTitleFontSize = 15.0;
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void Add(double value) {
+    if (!std::isfinite(value)) return;
+    lo = std::min(lo, value);
+    hi = std::max(hi, value);
+  }
+  bool Empty() const { return !(lo <= hi); }
+};
+
+// Pads an empty or degenerate range so the axis maps it to a non-zero span.
+Range Padded(Range range) {
+  if (range.Empty()) return {0.0, 1.0};
+  if (range.hi - range.lo <= 1e-12 * std::max(1.0, std::abs(range.hi))) {
+    const double pad = range.lo == 0.0 ? 1.0 : 0.1 * std::abs(range.lo);
+    return {range.lo - pad, range.hi + pad};
+  }
+  return range;
+}
+
+std::string FormatTick(double value, double step) {
+  if (std::abs(value) < 1e-9 * step) value = 0.0;  // no "-0" or "1e-17"
+  char text[32];
+  const double magnitude = std::max(std::abs(value), step);
+  if (magnitude >= 1e5 || magnitude < 1e-3) {
+    std::snprintf(text, sizeof text, "%.3g", value);
+  } else {
+    const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
+    std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  }
+  return text;
+}
+
+void ValidateChart(const Chart& chart) {
+  for (const Series& series : chart.series) {
+    if (series.x.size() != series.y.size()) {
+      throw std::invalid_argument("plot: series '" + series.name + "' has " +
+                                  std::to_string(series.x.size()) + " x values but " +
+                                  std::to_string(series.y.size()) + " y values");
+    }
+  }
+}
+
+void ShowText(cairo_t* cr, const std::string& text, double x, double y, double align_x,
+              double align_y) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  cairo_move_to(cr, x - align_x * extents.width - extents.x_bearing,
+                y - align_y * extents.height - extents.y_bearing);
+  cairo_show_text(cr, text.c_str());
+}
+
+// Draws one chart into the rectangle (x0, y0, width, height) of the surface.
+void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
+  Range x_range;
+  Range y_range;
+  for (const Series& series : chart.series) {
+    for (size_t i = 0; i < series.x.size(); ++i) {
+      if (std::isfinite(series.x[i]) && std::isfinite(series.y[i])) {
+        x_range.Add(series.x[i]);
+        y_range.Add(series.y[i]);
+      }
+    }
+  }
+  for (const Marker& marker : chart.markers) x_range.Add(marker.x);
+  for (const Band& band : chart.bands) {
+    x_range.Add(band.x_min);
+    x_range.Add(band.x_max);
+  }
+  if (chart.include_zero_y) y_range.Add(0.0);
+  x_range = Padded(x_range);
+  y_range = Padded(y_range);
+  // A little head room so lines do not run along the frame.
+  const double y_pad = 0.05 * (y_range.hi - y_range.lo);
+  y_range = {y_range.lo - y_pad, y_range.hi + y_pad};
+
+  const double left = x0 + kMarginLeft;
+  const double right = x0 + width - kMarginRight;
+  const double top = y0 + kMarginTop;
+  const double bottom = y0 + height - kMarginBottom;
+  auto to_px_x = [&](double x) { return left + (x - x_range.lo) / (x_range.hi - x_range.lo) * (right - left); };
+  auto to_px_y = [&](double y) { return bottom - (y - y_range.lo) / (y_range.hi - y_range.lo) * (bottom - top); };
+
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, kFontSize);
+
+  // Bands under everything else.
+  for (const Band& band : chart.bands) {
+    const double a = to_px_x(std::min(band.x_min, band.x_max));
+    const double b = to_px_x(std::max(band.x_min, band.x_max));
+    cairo_set_source_rgba(cr, 0.2, 0.4, 0.9, 0.12);
+    cairo_rectangle(cr, a, top, b - a, bottom - top);
+    cairo_fill(cr);
+    if (!band.label.empty()) {
+      cairo_set_source_rgb(cr, 0.15, 0.3, 0.7);
+      ShowText(cr, band.label, 0.5 * (a + b), top + 4, 0.5, 0.0);
+    }
+  }
+
+  // Grid and ticks.
+  cairo_set_line_width(cr, 1.0);
+  const std::vector<double> x_ticks = NiceTicks(x_range.lo, x_range.hi);
+  const std::vector<double> y_ticks = NiceTicks(y_range.lo, y_range.hi);
+  const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0;
+  const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : 1.0;
+  for (double tick : x_ticks) {
+    const double px = to_px_x(tick);
+    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+    cairo_move_to(cr, px, top);
+    cairo_line_to(cr, px, bottom);
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_move_to(cr, px, bottom);
+    cairo_line_to(cr, px, bottom + 5);
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, x_step), px, bottom + 8, 0.5, 0.0);
+  }
+  for (double tick : y_ticks) {
+    const double py = to_px_y(tick);
+    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+    cairo_move_to(cr, left, py);
+    cairo_line_to(cr, right, py);
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_move_to(cr, left - 5, py);
+    cairo_line_to(cr, left, py);
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, y_step), left - 8, py, 1.0, 0.5);
+  }
+  // Zero line when zero is inside the y range: strain plots change sign.
+  if (y_range.lo < 0.0 && y_range.hi > 0.0) {
+    cairo_set_source_rgb(cr, 0.55, 0.55, 0.55);
+    cairo_move_to(cr, left, to_px_y(0.0));
+    cairo_line_to(cr, right, to_px_y(0.0));
+    cairo_stroke(cr);
+  }
+
+  // Frame and labels.
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, left, top, right - left, bottom - top);
+  cairo_stroke(cr);
+  ShowText(cr, chart.x_label, 0.5 * (left + right), y0 + height - 6, 0.5, 1.0);
+  cairo_save(cr);
+  cairo_translate(cr, x0 + 14, 0.5 * (top + bottom));
+  cairo_rotate(cr, -M_PI / 2);
+  ShowText(cr, chart.y_label, 0.0, 0.0, 0.5, 0.5);
+  cairo_restore(cr);
+  cairo_set_font_size(cr, kTitleFontSize);
+  ShowText(cr, chart.title, 0.5 * (left + right), y0 + 10, 0.5, 0.0);
+  cairo_set_font_size(cr, kFontSize);
+
+  // Series, clipped to the plot area.
+  cairo_save(cr);
+  cairo_rectangle(cr, left, top, right - left, bottom - top);
+  cairo_clip(cr);
+  for (const Marker& marker : chart.markers) {
+    const double px = to_px_x(marker.x);
+    cairo_set_source_rgb(cr, 0.4, 0.4, 0.4);
+    const double dash[] = {3.0, 3.0};
+    cairo_set_dash(cr, dash, 2, 0);
+    cairo_move_to(cr, px, top);
+    cairo_line_to(cr, px, bottom);
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0);
+    if (!marker.label.empty()) ShowText(cr, marker.label, px + 3, top + 20, 0.0, 0.0);
+  }
+  for (size_t s = 0; s < chart.series.size(); ++s) {
+    const Series& series = chart.series[s];
+    const Rgb colour = kPalette[s % kPalette.size()];
+    cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
+    cairo_set_line_width(cr, 2.0);
+    const double dash[] = {7.0, 4.0};
+    cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
+    bool pen_down = false;
+    for (size_t i = 0; i < series.x.size(); ++i) {
+      if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) {
+        pen_down = false;
+        continue;
+      }
+      const double px = to_px_x(series.x[i]);
+      const double py = to_px_y(series.y[i]);
+      if (pen_down) {
+        cairo_line_to(cr, px, py);
+      } else {
+        cairo_move_to(cr, px, py);
+        pen_down = true;
+      }
+    }
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0);
+    if (series.markers) {
+      for (size_t i = 0; i < series.x.size(); ++i) {
+        if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) continue;
+        cairo_arc(cr, to_px_x(series.x[i]), to_px_y(series.y[i]), 3.0, 0, 2 * M_PI);
+        cairo_fill(cr);
+      }
+    }
+  }
+  cairo_restore(cr);
+
+  // Legend in the top-left corner of the plot area.
+  std::vector<size_t> listed;
+  double legend_width = 0.0;
+  for (size_t s = 0; s < chart.series.size(); ++s) {
+    if (chart.series[s].name.empty()) continue;
+    listed.push_back(s);
+    cairo_text_extents_t extents;
+    cairo_text_extents(cr, chart.series[s].name.c_str(), &extents);
+    legend_width = std::max(legend_width, extents.x_advance);
+  }
+  if (!listed.empty()) {
+    constexpr double kRow = 18.0;
+    constexpr double kSwatch = 26.0;
+    const double box_x = left + 10;
+    const double box_y = top + (chart.bands.empty() ? 10 : 24);
+    const double box_w = legend_width + kSwatch + 20;
+    const double box_h = kRow * static_cast<double>(listed.size()) + 8;
+    cairo_set_source_rgba(cr, 1, 1, 1, 0.85);
+    cairo_rectangle(cr, box_x, box_y, box_w, box_h);
+    cairo_fill_preserve(cr);
+    cairo_set_source_rgb(cr, 0.6, 0.6, 0.6);
+    cairo_set_line_width(cr, 1.0);
+    cairo_stroke(cr);
+    for (size_t row = 0; row < listed.size(); ++row) {
+      const Series& series = chart.series[listed[row]];
+      const Rgb colour = kPalette[listed[row] % kPalette.size()];
+      const double cy = box_y + 4 + kRow * (static_cast<double>(row) + 0.5);
+      cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
+      cairo_set_line_width(cr, 2.0);
+      const double dash[] = {7.0, 4.0};
+      cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
+      cairo_move_to(cr, box_x + 6, cy);
+      cairo_line_to(cr, box_x + kSwatch, cy);
+      cairo_stroke(cr);
+      cairo_set_dash(cr, nullptr, 0, 0);
+      cairo_set_source_rgb(cr, 0, 0, 0);
+      ShowText(cr, series.name, box_x + kSwatch + 8, cy, 0.0, 0.5);
+    }
+  }
+}
+
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* surface) const { cairo_surface_destroy(surface); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* cr) const { cairo_destroy(cr); }
+};
+
+// Renders with `draw` onto a white width x height image and writes it to `path` atomically.
+template <typename DrawFn>
+void Render(int width_px, int height_px, const std::string& path, DrawFn draw) {
+  if (width_px <= 0 || height_px <= 0) {
+    throw std::invalid_argument("plot: image size " + std::to_string(width_px) + "x" +
+                                std::to_string(height_px) + " for " + path + ": must be positive");
+  }
+  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(
+      cairo_image_surface_create(CAIRO_FORMAT_RGB24, width_px, height_px));
+  std::unique_ptr<cairo_t, ContextDeleter> cr(cairo_create(surface.get()));
+  cairo_set_source_rgb(cr.get(), 1, 1, 1);
+  cairo_paint(cr.get());
+  draw(cr.get());
+  cairo_surface_flush(surface.get());
+  if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error("plot: drawing " + path + " failed: " +
+                             cairo_status_to_string(cairo_status(cr.get())));
+  }
+  const std::string temp_path = path + ".tmp." + std::to_string(::getpid());
+  const cairo_status_t status = cairo_surface_write_to_png(surface.get(), temp_path.c_str());
+  if (status != CAIRO_STATUS_SUCCESS) {
+    std::error_code ignored;
+    std::filesystem::remove(temp_path, ignored);
+    throw std::runtime_error("plot: cannot write " + path + ": " + cairo_status_to_string(status));
+  }
+  std::error_code error;
+  std::filesystem::rename(temp_path, path, error);
+  if (error) {
+    std::error_code ignored;
+    std::filesystem::remove(temp_path, ignored);
+    throw std::runtime_error("plot: cannot write " + path + ": " + error.message());
+  }
+}
+
+}  // namespace
+
+std::vector<double> NiceTicks(double lo, double hi, int target_count) {
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};
+  const double raw_step = (hi - lo) / std::max(1, target_count);
+  const double power = std::pow(10.0, std::floor(std::log10(raw_step)));
+  double step = power;
+  for (double factor : {1.0, 2.0, 5.0, 10.0}) {
+    step = factor * power;
+    if (step >= raw_step) break;
+  }
+  std::vector<double> ticks;
+  const double first = std::ceil(lo / step - 1e-9) * step;
+  for (double tick = first; tick <= hi + 1e-9 * step; tick += step) ticks.push_back(tick);
+  return ticks;
+}
+
+void WritePng(const Chart& chart, const std::string& path, int width_px, int height_px) {
+  ValidateChart(chart);
+  Render(width_px, height_px, path, [&](cairo_t* cr) {
+    DrawChart(cr, chart, 0.0, 0.0, width_px, height_px);
+  });
+}
+
+void WritePng(const Figure& figure, const std::string& path) {
+  for (const Chart& chart : figure.panels) ValidateChart(chart);
+  if (figure.columns <= 0) {
+    throw std::invalid_argument("plot: figure for " + path + " has " +
+                                std::to_string(figure.columns) + " columns: must be positive");
+  }
+  const int count = std::max<int>(1, static_cast<int>(figure.panels.size()));
+  const int columns = std::min(figure.columns, count);
+  const int rows = (count + columns - 1) / columns;
+  const int title_px = figure.title.empty() ? 0 : 34;
+  const int width = columns * figure.panel_width_px;
+  const int height = rows * figure.panel_height_px + title_px;
+  if (figure.panel_width_px <= 0 || figure.panel_height_px <= 0) {
+    throw std::invalid_argument("plot: panel size for " + path + " must be positive");
+  }
+  Render(width, height, path, [&](cairo_t* cr) {
+    if (!figure.title.empty()) {
+      cairo_set_source_rgb(cr, 0, 0, 0);
+      cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+      cairo_set_font_size(cr, 17.0);
+      ShowText(cr, figure.title, 0.5 * width, 8.0, 0.5, 0.0);
+    }
+    for (size_t i = 0; i < figure.panels.size(); ++i) {
+      const int row = static_cast<int>(i) / columns;
+      const int column = static_cast<int>(i) % columns;
+      DrawChart(cr, figure.panels[i], column * figure.panel_width_px,
+                title_px + row * figure.panel_height_px, figure.panel_width_px,
+                figure.panel_height_px);
+    }
+  });
+}
+
+}  // namespace graspbed::plot

@@ -1,0 +1,65 @@
+#pragma once
+/// Small PNG line-chart writer (cairo): named series, axes with ticks and labels, a title, a legend,
+/// optional vertical markers and shaded x-bands; several charts can share one image as panels.
+/// Files are written atomically (temporary file + rename), so a reader never sees half a PNG.
+
+#include <string>
+#include <vector>
+
+namespace graspbed::plot {
+
+/// One named line. x and y have the same length; non-finite points break the line.
+struct Series {
+  std::string name;        ///< legend text; empty = not listed in the legend
+  std::vector<double> x;   ///< abscissae, in the chart's x unit
+  std::vector<double> y;   ///< ordinates, in the chart's y unit
+  bool dashed = false;     ///< draw dashed instead of solid
+  bool markers = false;    ///< draw a small dot at every point
+};
+
+/// A vertical line across the plot area at `x`, labelled at its top.
+struct Marker {
+  double x = 0.0;
+  std::string label;
+};
+
+/// A shaded vertical band between x_min and x_max (e.g. where a resistor sits), labelled at its top.
+struct Band {
+  double x_min = 0.0;
+  double x_max = 0.0;
+  std::string label;
+};
+
+/// One chart: axes, series and decorations. Axis ranges come from the data unless fixed here.
+struct Chart {
+  std::string title;
+  std::string x_label;  ///< with its unit, e.g. "x [mm]"
+  std::string y_label;  ///< with its unit
+  std::vector<Series> series;
+  std::vector<Marker> markers;
+  std::vector<Band> bands;
+  bool include_zero_y = false;  ///< stretch the y range to contain 0
+};
+
+/// Several charts laid out in a grid of `columns` columns, row by row, with an optional overall title.
+struct Figure {
+  std::string title;
+  std::vector<Chart> panels;
+  int columns = 1;
+  int panel_width_px = 800;   ///< size of one panel [px]
+  int panel_height_px = 500;  ///< size of one panel [px]
+};
+
+/// Writes `chart` as a width x height PNG at `path` (temp file + rename). Throws std::invalid_argument
+/// for mismatched series lengths or a non-positive size, std::runtime_error when the file cannot be
+/// written (naming the path).
+void WritePng(const Chart& chart, const std::string& path, int width_px = 800, int height_px = 500);
+
+/// Writes a multi-panel figure as one PNG at `path` (temp file + rename); same errors as above.
+void WritePng(const Figure& figure, const std::string& path);
+
+/// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten) covering [lo, hi], about
+/// `target_count` of them. Exposed for tests.
+std::vector<double> NiceTicks(double lo, double hi, int target_count = 6);
+
+}  // namespace graspbed::plot
