@@ -174,6 +174,7 @@ class Simulation {
   double grip_effort_ = 0.0;
   bool brake_engaged_ = false;
   std::array<double, 3> wrist_target_{};
+  std::array<double, 3> external_force_{};  ///< on the object [N], re-applied every step
   PhysicsFault fault_;
   std::array<uint64_t, 8> warning_seen_{};  ///< per MuJoCo warning kind, last count seen
 };

@@ -1,0 +1,312 @@
+#include "sim/scenario/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace graspbed::scenario {
+namespace {
+
+std::string Format(double value, const char* unit, int precision = 3) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*g%s%s", precision, value, unit[0] ? " " : "", unit);
+  return buffer;
+}
+
+ExpectationOutcome Outcome(const std::string& name, const std::string& limit) {
+  ExpectationOutcome outcome;
+  outcome.name = name;
+  outcome.limit = limit;
+  return outcome;
+}
+
+}  // namespace
+
+MetricsTracker::MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n)
+    : config_(config), crush_limit_n_(crush_limit_n), contact_threshold_n_(contact_threshold_n) {}
+
+void MetricsTracker::OpenEvent(double time_s) {
+  event_open_ = true;
+  current_ = SlipEvent{};
+  current_.onset_s = time_s;
+  current_.end_s = time_s;
+  last_above_s_ = time_s;
+  // A flag shortly before the onset detected the slip early (incipient slip).
+  const double window_start = time_s - config_.early_detection_window_s;
+  int kept = 0;
+  for (int i = 0; i < pending_count_; ++i) {
+    if (pending_flags_[i] >= window_start) {
+      if (!current_.detected) {
+        current_.detected = true;
+        current_.latency_s = 0.0;
+      }
+    } else {
+      pending_flags_[kept++] = pending_flags_[i];
+    }
+  }
+  false_flags_ += kept;  // older than the window: they matched nothing
+  pending_count_ = 0;
+}
+
+void MetricsTracker::CloseEvent() {
+  event_open_ = false;
+  if (current_.detected) {
+    worst_latency_s_ = std::max(worst_latency_s_, current_.latency_s);
+  } else {
+    ++missed_;
+  }
+  if (event_count_ < kMaxEvents) events_[event_count_] = current_;
+  ++event_count_;
+}
+
+void MetricsTracker::OnControllerFlag(double time_s) {
+  ++flags_;
+  if (event_open_) {
+    if (!current_.detected) {
+      current_.detected = true;
+      current_.latency_s = std::max(0.0, time_s - current_.onset_s);
+    }
+    return;  // a repeated flag during an event is no false alarm
+  }
+  if (pending_count_ == static_cast<int>(pending_flags_.size())) {
+    ++false_flags_;  // window full of flags: the oldest cannot all be early detections
+    std::copy(pending_flags_.begin() + 1, pending_flags_.end(), pending_flags_.begin());
+    --pending_count_;
+  }
+  pending_flags_[pending_count_++] = time_s;
+}
+
+void MetricsTracker::Update(const TickSample& sample) {
+  const sim::GroundTruth& truth = *sample.truth;
+  const double t = sample.time_s;
+  const double dt = last_time_s_ < 0.0 ? 0.0 : t - last_time_s_;
+  last_time_s_ = t;
+
+  peak_grip_n_ = std::max(peak_grip_n_, truth.object_squeeze_n);
+
+  // Grasp state: established by contact on both digits and enough finger force after a close;
+  // lost (for scoring) when the intent changes.
+  const bool closing = sample.intent == controller::GraspIntent::kClose;
+  if (!closing) {
+    if (holding_ && event_open_) CloseEvent();
+    grasped_ = false;
+    holding_ = false;
+  } else if (!grasped_ && truth.finger_contacts > 0 && truth.thumb_contacts > 0 &&
+             truth.finger_normal_force_n >= config_.grasp_force_n) {
+    grasped_ = true;
+    if (!grasped_ever_) grasp_time_s_ = t;
+    grasped_ever_ = true;
+    for (int k = 0; k < 3; ++k) {
+      reference_offset_m_[k] = truth.object_position_m[k] - truth.wrist_position_m[k];
+    }
+  }
+  const bool was_holding = holding_;
+  holding_ = closing && grasped_ && !dropped_;
+  if (was_holding) held_s_ += dt;
+
+  if (holding_) {
+    double squared = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double d = truth.object_position_m[k] - truth.wrist_position_m[k] - reference_offset_m_[k];
+      squared += d * d;
+    }
+    if (std::sqrt(squared) > config_.drop_distance_m) {
+      dropped_ = true;
+      drop_time_s_ = t;
+    }
+  }
+
+  // Slip distance, slip events and the controller's flags, all while held.
+  const bool flag = sample.controller_slip;
+  const bool rising_flag = flag && !previous_flag_;
+  previous_flag_ = flag;
+  if (holding_) {
+    const double speed = truth.slip_speed_m_s;
+    if (speed > config_.creep_speed_m_s) {
+      slip_distance_m_ += speed * dt;
+      if (event_open_) current_.distance_m += speed * dt;
+    }
+    if (speed > config_.slip_speed_m_s) {
+      if (!event_open_) OpenEvent(t);
+      last_above_s_ = t;
+      current_.end_s = t;
+      current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
+    } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
+      CloseEvent();
+    }
+    if (rising_flag) OnControllerFlag(t);
+    // Flags that fell out of the early window can no longer match an event.
+    int kept = 0;
+    for (int i = 0; i < pending_count_; ++i) {
+      if (pending_flags_[i] >= t - config_.early_detection_window_s) {
+        pending_flags_[kept++] = pending_flags_[i];
+      } else {
+        ++false_flags_;
+      }
+    }
+    pending_count_ = kept;
+  }
+
+  // Estimation error over (tick, unit) pairs in contact, valid and fresh.
+  const sensor::TactileState& state = *sample.state;
+  if (!state.stale) {
+    const int units = std::min<int>(state.unit_count, static_cast<int>(sample.true_loads.size()));
+    for (int u = 0; u < units; ++u) {
+      if (state.validity[u] != sensor::UnitValidity::kValid) continue;
+      const sensor::UnitLoad& load = sample.true_loads[u];
+      if (load.fn_n <= contact_threshold_n_ && state.fn_n[u] <= contact_threshold_n_) continue;
+      const double fn_error = state.fn_n[u] - load.fn_n;
+      const double ft_error = state.ft_n[u] - load.ft_n;
+      fn_square_sum_ += fn_error * fn_error;
+      ft_square_sum_ += ft_error * ft_error;
+      ++estimation_samples_;
+    }
+  }
+
+  // Stable grasp: restart the candidate window whenever the squeeze leaves the band or slip occurs.
+  if (stable_found_s_ < 0.0) {
+    const double squeeze = truth.object_squeeze_n;
+    if (!holding_ || event_open_) {
+      stable_start_s_ = -1.0;
+    } else if (stable_start_s_ < 0.0) {
+      stable_start_s_ = t;
+      stable_min_n_ = stable_max_n_ = squeeze;
+    } else {
+      const double low = std::min(stable_min_n_, squeeze);
+      const double high = std::max(stable_max_n_, squeeze);
+      const double mid = 0.5 * (low + high);
+      if (high - low > 2.0 * config_.stable_force_band * mid) {
+        stable_start_s_ = t;
+        stable_min_n_ = stable_max_n_ = squeeze;
+      } else {
+        stable_min_n_ = low;
+        stable_max_n_ = high;
+        if (t - stable_start_s_ >= config_.stable_window_s) stable_found_s_ = stable_start_s_;
+      }
+    }
+  }
+}
+
+Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_time_s) const {
+  MetricsTracker copy = *this;  // closing the open event must not change the live tracker
+  if (copy.event_open_) copy.CloseEvent();
+  copy.false_flags_ += copy.pending_count_;
+  copy.pending_count_ = 0;
+
+  Metrics m;
+  m.grasped = copy.grasped_ever_;
+  m.grasp_time_s = copy.grasp_time_s_;
+  m.dropped = copy.dropped_ || (first_close_time_s >= 0.0 && !copy.grasped_ever_);
+  m.drop_time_s = copy.drop_time_s_;
+  m.max_slip_mm = copy.slip_distance_m_ * 1e3;
+  m.peak_grip_n = copy.peak_grip_n_;
+  m.crushed = copy.crush_limit_n_ > 0.0 && copy.peak_grip_n_ > copy.crush_limit_n_;
+  m.slip_events = copy.event_count_;
+  m.missed_slip_events = copy.missed_;
+  if (copy.event_count_ > 0 && copy.worst_latency_s_ >= 0.0) m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
+  m.controller_slip_flags = copy.flags_;
+  m.false_slip_flags = copy.false_flags_;
+  m.held_s = copy.held_s_;
+  m.false_slip_per_min = copy.held_s_ > 0.0 ? copy.false_flags_ / (copy.held_s_ / 60.0) : 0.0;
+  if (copy.estimation_samples_ > 0) {
+    m.fn_rmse_n = std::sqrt(copy.fn_square_sum_ / static_cast<double>(copy.estimation_samples_));
+    m.ft_rmse_n = std::sqrt(copy.ft_square_sum_ / static_cast<double>(copy.estimation_samples_));
+  }
+  m.estimation_samples = copy.estimation_samples_;
+  if (copy.stable_found_s_ >= 0.0 && first_close_time_s >= 0.0) {
+    m.time_to_stable_s = copy.stable_found_s_ - first_close_time_s;
+  }
+  m.sim_s = sim_s;
+  m.wall_s = wall_s;
+  const int stored = std::min(copy.event_count_, kMaxEvents);
+  m.events.assign(copy.events_.begin(), copy.events_.begin() + stored);
+  return m;
+}
+
+std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, const Metrics& m) {
+  std::vector<ExpectationOutcome> outcomes;
+  if (e.not_dropped) {
+    ExpectationOutcome o = Outcome("not_dropped", *e.not_dropped ? "true" : "false");
+    o.value = m.dropped ? 1.0 : 0.0;
+    o.value_text = !m.grasped ? "never grasped" : m.dropped ? "dropped at " + Format(m.drop_time_s, "s") : "held";
+    o.passed = *e.not_dropped ? !m.dropped : m.dropped;
+    if (!m.grasped) o.note = "the object was never grasped";
+    outcomes.push_back(o);
+  }
+  if (e.max_slip_mm) {
+    ExpectationOutcome o = Outcome("max_slip_mm", "<= " + Format(*e.max_slip_mm, "mm"));
+    o.value = m.max_slip_mm;
+    o.value_text = Format(m.max_slip_mm, "mm");
+    o.passed = m.max_slip_mm <= *e.max_slip_mm;
+    outcomes.push_back(o);
+  }
+  if (e.max_peak_grip_n) {
+    ExpectationOutcome o = Outcome("max_peak_grip_n", "<= " + Format(*e.max_peak_grip_n, "N"));
+    o.value = m.peak_grip_n;
+    o.value_text = Format(m.peak_grip_n, "N");
+    o.passed = m.peak_grip_n <= *e.max_peak_grip_n;
+    outcomes.push_back(o);
+  }
+  if (e.not_crushed) {
+    ExpectationOutcome o = Outcome("not_crushed", *e.not_crushed ? "true" : "false");
+    o.value = m.crushed ? 1.0 : 0.0;
+    o.value_text = m.crushed ? "crushed (" + Format(m.peak_grip_n, "N") + ")" : "intact";
+    o.passed = *e.not_crushed ? !m.crushed : m.crushed;
+    outcomes.push_back(o);
+  }
+  if (e.slip_detected_within_ms) {
+    ExpectationOutcome o = Outcome("slip_detected_within_ms", "<= " + Format(*e.slip_detected_within_ms, "ms"));
+    if (m.slip_events == 0) {
+      o.value_text = "no slip";
+      o.passed = true;
+      o.note = "no slip event occurred, nothing to detect";
+    } else if (m.missed_slip_events > 0) {
+      o.value = m.slip_detect_latency_ms;
+      o.value_text = std::to_string(m.missed_slip_events) + " of " + std::to_string(m.slip_events) + " missed";
+      o.passed = false;
+      o.note = "slip events the controller never flagged";
+    } else {
+      o.value = m.slip_detect_latency_ms;
+      o.value_text = Format(*m.slip_detect_latency_ms, "ms");
+      o.passed = *m.slip_detect_latency_ms <= *e.slip_detected_within_ms;
+    }
+    outcomes.push_back(o);
+  }
+  if (e.max_estimation_error_n) {
+    ExpectationOutcome o = Outcome("max_estimation_error_n", "<= " + Format(*e.max_estimation_error_n, "N"));
+    if (!m.fn_rmse_n) {
+      o.value_text = "no contact";
+      o.passed = false;
+      o.note = "no valid unit was ever in contact, so the estimate could not be scored";
+    } else {
+      const double worst = std::max(*m.fn_rmse_n, *m.ft_rmse_n);
+      o.value = worst;
+      o.value_text = "Fn " + Format(*m.fn_rmse_n, "N") + ", Ft " + Format(*m.ft_rmse_n, "N");
+      o.passed = worst <= *e.max_estimation_error_n;
+    }
+    outcomes.push_back(o);
+  }
+  if (e.stable_within_s) {
+    ExpectationOutcome o = Outcome("stable_within_s", "<= " + Format(*e.stable_within_s, "s"));
+    o.value = m.time_to_stable_s;
+    o.value_text = m.time_to_stable_s ? Format(*m.time_to_stable_s, "s") : "never";
+    o.passed = m.time_to_stable_s && *m.time_to_stable_s <= *e.stable_within_s;
+    outcomes.push_back(o);
+  }
+  if (e.max_false_slip_per_min) {
+    ExpectationOutcome o = Outcome("max_false_slip_per_min", "<= " + Format(*e.max_false_slip_per_min, "/min"));
+    o.value = m.false_slip_per_min;
+    o.value_text = Format(m.false_slip_per_min, "/min") + " (" + std::to_string(m.false_slip_flags) + ")";
+    o.passed = m.false_slip_per_min <= *e.max_false_slip_per_min;
+    outcomes.push_back(o);
+  }
+  ExpectationOutcome physics = Outcome("no_physics_fault", "true");
+  physics.value = m.physics_fault ? 1.0 : 0.0;
+  physics.value_text = m.physics_fault ? m.physics_fault_cause : "ok";
+  physics.passed = !m.physics_fault;
+  if (m.physics_fault) physics.note = "at t = " + Format(m.physics_fault_time_s, "s");
+  outcomes.push_back(physics);
+  return outcomes;
+}
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,155 @@
+#pragma once
+/// Scoring of a scenario run: MetricsTracker turns the per-tick ground truth, tactile state and
+/// controller telemetry into the metrics of summary.json (definitions: docs/scenarios.md,
+/// "Metrics"), and EvaluateExpectations checks them against a scenario's expectations.
+/// Update() allocates nothing (fixed-capacity event storage).
+
+#include <array>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "controller/grasp_controller.h"
+#include "sensor/strain_model.h"
+#include "sensor/tactile_state.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/simulation.h"
+
+namespace graspbed::scenario {
+
+/// One ground-truth slip event while the object was held.
+struct SlipEvent {
+  double onset_s = 0.0;           ///< first tick with relative speed above slip_speed_m_s [s]
+  double end_s = 0.0;             ///< last tick above it [s] (event closes slip_event_gap_s later)
+  double peak_speed_m_s = 0.0;    ///< [m/s]
+  double distance_m = 0.0;        ///< slip distance accumulated during the event [m]
+  bool detected = false;          ///< a controller slip flag matched the event
+  double latency_s = 0.0;         ///< flag time - onset, >= 0 (0 for an early flag) [s]
+};
+
+/// The metrics of one run.
+struct Metrics {
+  bool grasped = false;           ///< the object was grasped at some point after a close
+  double grasp_time_s = -1.0;     ///< when it first was [s]; < 0 never
+  bool dropped = false;           ///< left the hand while held (or was never grasped)
+  double drop_time_s = -1.0;      ///< [s]; < 0 not dropped
+  double max_slip_mm = 0.0;       ///< slip distance accumulated above the creep speed while held [mm]
+  double peak_grip_n = 0.0;       ///< largest squeeze on the object over the run [N]
+  bool crushed = false;           ///< peak_grip_n above object.crush_limit_n (fragile objects only)
+  /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
+  std::optional<double> slip_detect_latency_ms;
+  int slip_events = 0;            ///< ground-truth slip events while held
+  int missed_slip_events = 0;     ///< of those, never flagged by the controller
+  int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
+  int false_slip_flags = 0;       ///< flags matching no slip event
+  double false_slip_per_min = 0.0;  ///< false_slip_flags per minute held [1/min]
+  double held_s = 0.0;            ///< time the object was held [s]
+  std::optional<double> fn_rmse_n;  ///< per-unit Fn estimation RMSE over contact samples [N]
+  std::optional<double> ft_rmse_n;  ///< per-unit Ft estimation RMSE over the same samples [N]
+  int64_t estimation_samples = 0;   ///< (tick, unit) pairs in the RMSEs
+  /// Time from the first close to the start of the first stable window [s]; nullopt never stable.
+  std::optional<double> time_to_stable_s;
+  double sim_s = 0.0;             ///< simulated time [s]
+  double wall_s = 0.0;            ///< wall-clock time of the run [s]
+  bool physics_fault = false;     ///< NaN or MuJoCo warning during the run
+  std::string physics_fault_cause;
+  double physics_fault_time_s = 0.0;
+  std::vector<SlipEvent> events;  ///< every slip event (first kMaxEvents)
+};
+
+/// What one tick tells the tracker. References are only read during Update().
+struct TickSample {
+  double time_s = 0.0;
+  controller::GraspIntent intent = controller::GraspIntent::kIdle;
+  const sim::GroundTruth* truth = nullptr;
+  const sensor::TactileState* state = nullptr;
+  /// True unit loads at the sample time of `state`, layout order (estimation error reference).
+  std::span<const sensor::UnitLoad> true_loads;
+  bool controller_slip = false;  ///< telemetry().slip_detected at this tick
+};
+
+/// Accumulates the metrics tick by tick.
+class MetricsTracker {
+ public:
+  /// Most slip events kept with their details (more are counted, not stored).
+  static constexpr int kMaxEvents = 256;
+
+  /// `contact_threshold_n`: per-unit Fn above which a (tick, unit) pair enters the RMSEs [N].
+  MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n);
+
+  /// One control tick. Allocates nothing.
+  void Update(const TickSample& sample);
+
+  /// Whether the object counts as held now (grasped and intent close).
+  bool holding() const { return holding_; }
+  /// Whether a slip event is open now.
+  bool in_slip_event() const { return event_open_; }
+  /// Slip distance accumulated so far [m].
+  double slip_distance_m() const { return slip_distance_m_; }
+
+  /// Closes open events and returns the metrics; `first_close_time_s` < 0 when no close fired.
+  Metrics Finish(double sim_s, double wall_s, double first_close_time_s) const;
+
+ private:
+  void OpenEvent(double time_s);
+  void CloseEvent();
+  void OnControllerFlag(double time_s);
+
+  MetricsConfig config_;
+  double crush_limit_n_ = 0.0;
+  double contact_threshold_n_ = 0.0;
+  double last_time_s_ = -1.0;
+
+  bool grasped_ever_ = false;
+  double grasp_time_s_ = -1.0;
+  bool grasped_ = false;  ///< grasped since the latest close
+  bool holding_ = false;
+  std::array<double, 3> reference_offset_m_{};  ///< object - wrist when grasped [m]
+  bool dropped_ = false;
+  double drop_time_s_ = -1.0;
+  double held_s_ = 0.0;
+
+  double slip_distance_m_ = 0.0;
+  double peak_grip_n_ = 0.0;
+
+  std::array<SlipEvent, kMaxEvents> events_{};
+  int event_count_ = 0;       ///< events started (may exceed kMaxEvents)
+  bool event_open_ = false;
+  SlipEvent current_{};
+  double last_above_s_ = 0.0;
+  bool previous_flag_ = false;
+  int flags_ = 0;
+  int false_flags_ = 0;
+  /// Flags not (yet) matched to an event, within the early-detection window of now.
+  std::array<double, 64> pending_flags_{};
+  int pending_count_ = 0;
+  int missed_ = 0;
+  double worst_latency_s_ = -1.0;
+
+  double fn_square_sum_ = 0.0;
+  double ft_square_sum_ = 0.0;
+  int64_t estimation_samples_ = 0;
+
+  // Stable-window search: start of the current candidate window and squeeze range within it.
+  double stable_start_s_ = -1.0;
+  double stable_min_n_ = 0.0;
+  double stable_max_n_ = 0.0;
+  double stable_found_s_ = -1.0;
+};
+
+/// Outcome of one expectation.
+struct ExpectationOutcome {
+  std::string name;             ///< key in the scenario's expectations section
+  std::string limit;            ///< the limit as written ("<= 2 mm", "true")
+  std::optional<double> value;  ///< the measured value (nullopt where there is none)
+  std::string value_text;       ///< the measured value for tables ("1.23 mm", "none")
+  bool passed = false;
+  std::string note;             ///< why, when not obvious
+};
+
+/// Checks `metrics` against every configured expectation (in a fixed order), plus the implicit
+/// "no_physics_fault" that every run must meet.
+std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations, const Metrics& metrics);
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,613 @@
+#include "sim/scenario/runner.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/plot.h"
+#include "controller/grasp_controller.h"
+#include "sensor/calibration.h"
+#include "sensor/layout.h"
+#include "sim/scenario/script_player.h"
+#include "sim/scenario/signal_log.h"
+#include "sim/sim_rig.h"
+
+namespace graspbed::scenario {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kIncompleteMarker = "INCOMPLETE";
+// Files a run writes; removed at the start so an old result never sits next to a new run.
+constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
+                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png"};
+// Simulated time between progress callbacks [s].
+constexpr double kProgressPeriodS = 0.1;
+
+// MuJoCo's XML parser keeps global state while loading; models are built one at a time, runs then
+// step in parallel on their own mjModel/mjData.
+std::mutex& ConstructionMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+const char* IntentName(controller::GraspIntent intent) {
+  switch (intent) {
+    case controller::GraspIntent::kClose:
+      return "close";
+    case controller::GraspIntent::kOpen:
+      return "open";
+    case controller::GraspIntent::kIdle:
+      return "idle";
+  }
+  return "idle";
+}
+
+/// True unit loads per control tick in a ring, to look up the truth at a frame's sample time.
+class TruthRing {
+ public:
+  TruthRing(size_t capacity, int units, double rate_hz)
+      : capacity_(capacity), units_(units), rate_hz_(rate_hz), times_(capacity, -1.0),
+        loads_(capacity * static_cast<size_t>(units)) {}
+
+  std::span<sensor::UnitLoad> Next(double time_s) {
+    const size_t slot = count_ % capacity_;
+    times_[slot] = time_s;
+    ++count_;
+    return {loads_.data() + slot * static_cast<size_t>(units_), static_cast<size_t>(units_)};
+  }
+
+  /// Loads recorded nearest to `time_s` (the newest when older than the ring).
+  std::span<const sensor::UnitLoad> Near(double time_s) const {
+    const size_t newest = (count_ - 1) % capacity_;
+    // Ticks are evenly spaced: step back by the time difference, then check the neighbours.
+    const double back = std::round((times_[newest] - time_s) * rate_hz_);
+    size_t steps = back <= 0.0 ? 0 : static_cast<size_t>(back);
+    steps = std::min({steps, count_ - 1, capacity_ - 1});
+    size_t best = (newest + capacity_ - steps) % capacity_;
+    for (int delta : {-1, 1}) {
+      const size_t candidate_steps = static_cast<size_t>(static_cast<long>(steps) + delta);
+      if (delta < 0 && steps == 0) continue;
+      if (candidate_steps >= std::min(count_, capacity_)) continue;
+      const size_t candidate = (newest + capacity_ - candidate_steps) % capacity_;
+      if (std::abs(times_[candidate] - time_s) < std::abs(times_[best] - time_s)) best = candidate;
+    }
+    return {loads_.data() + best * static_cast<size_t>(units_), static_cast<size_t>(units_)};
+  }
+
+ private:
+  size_t capacity_;
+  int units_;
+  double rate_hz_;
+  size_t count_ = 0;
+  std::vector<double> times_;
+  std::vector<sensor::UnitLoad> loads_;
+};
+
+// Column indices of the fixed (non per-unit) numeric signals.
+enum Col : size_t {
+  kTime,
+  kGripEffort,
+  kEnable,
+  kBrake,
+  kGripTarget,
+  kFrictionEstimate,
+  kSlipFlag,
+  kSafeHold,
+  kStale,
+  kValidUnits,
+  kContactUnits,
+  kEstTotalFn,
+  kEstShearAxial,
+  kEstShearCirc,
+  kTrueSensedFn,
+  kTrueFingerFn,
+  kTrueThumbFn,
+  kTrueSqueeze,
+  kSlipSpeed,
+  kObjectX,
+  kObjectY,
+  kObjectZ,
+  kObjectHeight,
+  kWristX,
+  kWristY,
+  kWristZ,
+  kWristTargetZ,
+  kGripClosure,
+  kObjectMass,
+  kForceX,
+  kForceY,
+  kForceZ,
+  kHolding,
+  kSlipEvent,
+  kSlipDistance,
+  kFixedCount
+};
+
+constexpr const char* kFixedNames[kFixedCount] = {
+    "time_s",          "grip_effort",        "motor_enable",     "brake",
+    "grip_target_n",   "friction_estimate",  "slip_flag",        "safe_hold",
+    "stale",           "valid_units",        "contact_units",    "est_total_fn_n",
+    "est_shear_axial_n", "est_shear_circumferential_n", "true_sensed_fn_n", "true_finger_fn_n",
+    "true_thumb_fn_n", "true_squeeze_n",     "slip_speed_mm_s",  "object_x_m",
+    "object_y_m",      "object_z_m",         "object_height_m",  "wrist_x_m",
+    "wrist_y_m",       "wrist_z_m",          "wrist_target_z_m", "grip_closure_m",
+    "object_mass_kg",  "external_force_x_n", "external_force_y_n", "external_force_z_n",
+    "holding",         "slip_event",         "slip_distance_mm"};
+
+// Per-unit columns, in this order per unit.
+constexpr const char* kUnitNames[] = {"r1_ohm", "r2_ohm", "fn_est_n", "ft_est_n", "fn_true_n", "ft_true_n",
+                                      "validity"};
+constexpr size_t kPerUnit = std::size(kUnitNames);
+
+std::vector<std::string> NumericColumns(int units) {
+  std::vector<std::string> names(kFixedNames, kFixedNames + kFixedCount);
+  for (int u = 0; u < units; ++u) {
+    for (const char* name : kUnitNames) names.push_back(std::string(name) + "_" + std::to_string(u));
+  }
+  return names;
+}
+
+std::string TempPath(const std::string& path) {
+  static std::atomic<uint64_t> counter{0};
+  return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+
+void WriteCsvAtomic(const SignalLog& log, const std::string& path) {
+  const std::string temp = TempPath(path);
+  std::FILE* file = std::fopen(temp.c_str(), "w");
+  if (file == nullptr) throw std::runtime_error(path + ": cannot write");
+  try {
+    log.WriteCsv(file);
+  } catch (const std::exception&) {
+    std::fclose(file);
+    std::remove(temp.c_str());
+    throw std::runtime_error(path + ": write error");
+  }
+  if (std::fclose(file) != 0 || std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    throw std::runtime_error(path + ": write error");
+  }
+}
+
+plot::Chart MakeChart(const std::string& title, const std::string& x_label, const std::string& y_label) {
+  plot::Chart chart;
+  chart.title = title;
+  chart.x_label = x_label;
+  chart.y_label = y_label;
+  return chart;
+}
+
+plot::Series HorizontalLine(const std::string& name, double x0, double x1, double y) {
+  plot::Series series;
+  series.name = name;
+  series.x = {x0, x1};
+  series.y = {y, y};
+  series.dashed = true;
+  return series;
+}
+
+plot::Series Line(const SignalLog& log, const std::vector<double>& time, const std::string& column,
+                  const std::string& name, double scale = 1.0, bool dashed = false) {
+  plot::Series series;
+  series.name = name;
+  series.x = time;
+  series.y = log.ColumnValues(column);
+  for (double& value : series.y) value *= scale;
+  series.dashed = dashed;
+  return series;
+}
+
+std::vector<plot::Marker> ScriptMarkers(const ScenarioConfig& config) {
+  std::vector<plot::Marker> markers;
+  for (const Action& action : config.script) markers.push_back({action.at_s, ActionName(action.kind)});
+  return markers;
+}
+
+void WritePlots(const RunResult& result, const SignalLog& log, const std::string& dir) {
+  if (log.rows() < 2) return;
+  const std::vector<double> time = log.ColumnValues("time_s");
+  const int units = static_cast<int>((log.numeric_column_count() - kFixedCount) / kPerUnit);
+  const std::string title = result.config.name + " (" + result.config.controller.name + ")";
+
+  plot::Figure forces;
+  forces.title = title + ": forces";
+  forces.columns = 1;
+  plot::Chart per_unit = MakeChart("Estimated normal force per unit", "time [s]", "Fn [N]");
+  for (int u = 0; u < units; ++u) {
+    per_unit.series.push_back(Line(log, time, "fn_est_n_" + std::to_string(u), "unit " + std::to_string(u)));
+  }
+  per_unit.include_zero_y = true;
+  plot::Chart totals = MakeChart("Total normal force", "time [s]", "force [N]");
+  totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
+  totals.series.push_back(Line(log, time, "true_sensed_fn_n", "true, on the mesas", 1.0, true));
+  totals.series.push_back(Line(log, time, "true_squeeze_n", "true squeeze on the object", 1.0, true));
+  totals.markers = ScriptMarkers(result.config);
+  totals.include_zero_y = true;
+  forces.panels = {per_unit, totals};
+  plot::WritePng(forces, dir + "/forces.png");
+
+  // Estimate against truth for the unit that carried the most load.
+  int busiest = 0;
+  double busiest_load = -1.0;
+  for (int u = 0; u < units; ++u) {
+    const std::vector<double> fn = log.ColumnValues("fn_true_n_" + std::to_string(u));
+    const double peak = fn.empty() ? 0.0 : *std::max_element(fn.begin(), fn.end());
+    if (peak > busiest_load) {
+      busiest_load = peak;
+      busiest = u;
+    }
+  }
+  const std::string b = std::to_string(busiest);
+  plot::Figure estimate;
+  estimate.title = title + ": estimate vs truth";
+  plot::Chart fn = MakeChart("Unit " + b + " (most loaded): Fn", "time [s]", "Fn [N]");
+  fn.series = {Line(log, time, "fn_est_n_" + b, "estimated"), Line(log, time, "fn_true_n_" + b, "true", 1.0, true)};
+  fn.include_zero_y = true;
+  plot::Chart ft = MakeChart("Unit " + b + " (most loaded): Ft", "time [s]", "Ft [N]");
+  ft.series = {Line(log, time, "ft_est_n_" + b, "estimated"), Line(log, time, "ft_true_n_" + b, "true", 1.0, true)};
+  ft.include_zero_y = true;
+  plot::Chart total = MakeChart("Sum over units: Fn", "time [s]", "Fn [N]");
+  total.series = {Line(log, time, "est_total_fn_n", "estimated"),
+                  Line(log, time, "true_sensed_fn_n", "true", 1.0, true)};
+  total.include_zero_y = true;
+  estimate.panels = {fn, ft, total};
+  plot::WritePng(estimate, dir + "/estimate_vs_truth.png");
+
+  plot::Figure grip;
+  grip.title = title + ": grip";
+  plot::Chart effort = MakeChart("Grip motor command", "time [s]", "effort [-]");
+  effort.series = {Line(log, time, "grip_effort", "effort")};
+  effort.markers = ScriptMarkers(result.config);
+  effort.include_zero_y = true;
+  plot::Chart force = MakeChart("Grip force", "time [s]", "force [N]");
+  force.series = {Line(log, time, "grip_target_n", "controller target"),
+                  Line(log, time, "est_total_fn_n", "estimated"),
+                  Line(log, time, "true_squeeze_n", "true squeeze", 1.0, true)};
+  if (result.config.scene.object.crush_limit_n > 0.0) {
+    force.series.push_back(
+        HorizontalLine("crush limit", time.front(), time.back(), result.config.scene.object.crush_limit_n));
+  }
+  force.include_zero_y = true;
+  grip.panels = {effort, force};
+  plot::WritePng(grip, dir + "/grip.png");
+
+  plot::Figure slip;
+  slip.title = title + ": slip";
+  plot::Chart speed = MakeChart("Relative speed object / fingertips (truth)", "time [s]", "speed [mm/s]");
+  speed.series = {Line(log, time, "slip_speed_mm_s", "slip speed")};
+  speed.series.push_back(
+      HorizontalLine("slip threshold", time.front(), time.back(), result.config.metrics.slip_speed_m_s * 1e3));
+  for (const SlipEvent& event : result.metrics.events) speed.markers.push_back({event.onset_s, "slip"});
+  speed.include_zero_y = true;
+  plot::Chart flags = MakeChart("Slip: truth events and controller flags", "time [s]", "flag [-]");
+  flags.series = {Line(log, time, "slip_event", "true slip event"),
+                  Line(log, time, "slip_flag", "controller slip flag", 1.0, true)};
+  plot::Chart distance = MakeChart("Accumulated slip distance", "time [s]", "slip [mm]");
+  distance.series = {Line(log, time, "slip_distance_mm", "slip distance")};
+  distance.include_zero_y = true;
+  slip.panels = {speed, flags, distance};
+  plot::WritePng(slip, dir + "/slip.png");
+
+  plot::Figure height;
+  height.title = title + ": height";
+  plot::Chart z = MakeChart("Object and wrist height", "time [s]", "height [mm]");
+  z.series = {Line(log, time, "object_height_m", "object above table", 1e3),
+              Line(log, time, "wrist_z_m", "wrist z", 1e3, true)};
+  z.markers = ScriptMarkers(result.config);
+  height.panels = {z};
+  plot::WritePng(height, dir + "/height.png");
+}
+
+nlohmann::json Optional(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+void PrepareOutputDir(const std::string& dir) {
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (error || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create output directory");
+  for (const char* name : kOutputFiles) fs::remove(fs::path(dir) / name, error);
+  WriteFileAtomic(dir + "/" + kIncompleteMarker,
+                  "This run is in progress or was interrupted; its results are not complete.\n");
+}
+
+}  // namespace
+
+void WriteFileAtomic(const std::string& path, const std::string& content) {
+  const std::string temp = TempPath(path);
+  {
+    std::ofstream stream(temp, std::ios::binary | std::ios::trunc);
+    if (!stream) throw std::runtime_error(path + ": cannot write");
+    stream << content;
+    stream.flush();
+    if (!stream) {
+      std::remove(temp.c_str());
+      throw std::runtime_error(path + ": write error");
+    }
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    throw std::runtime_error(path + ": cannot rename the temporary file into place");
+  }
+}
+
+RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  RunResult result;
+  result.config = config;
+  result.out_dir = options.out_dir;
+
+  const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
+  const int units = layout.unit_count();
+  sim::SimRigConfig rig_config;
+  rig_config.scene = config.scene;
+  rig_config.backend.sample_rate_hz = config.sensor.sample_rate_hz;
+  rig_config.backend.latency_s = config.sensor.latency_s;
+  rig_config.backend.drop_probability = config.sensor.drop_probability;
+  rig_config.backend.strain_model = config.sensor.strain_model;
+  rig_config.loop.stale_timeout_s = config.controller.stale_timeout_s;
+  rig_config.loop.readout = config.sensor.readout;
+  rig_config.loop.inversion = config.sensor.inversion;
+  rig_config.control_rate_hz = config.controller.rate_hz;
+  rig_config.seed = config.seed;
+  rig_config.Validate();
+
+  if (!options.out_dir.empty()) {
+    PrepareOutputDir(options.out_dir);
+    WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
+  }
+
+  std::unique_ptr<sim::SimRig> rig;
+  {
+    std::lock_guard<std::mutex> lock(ConstructionMutex());
+    rig = std::make_unique<sim::SimRig>(layout, sensor::PaperCalibration(units), rig_config,
+                                        controller::MakeController(config.controller.name, config.controller.params));
+  }
+  ScriptPlayer player(config);
+  player.Start(*rig);
+  MetricsTracker tracker(config.metrics, config.scene.object.crush_limit_n,
+                         config.sensor.inversion.contact_threshold_n);
+
+  // Everything the loop writes is allocated here.
+  const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * config.controller.rate_hz)) + 16;
+  SignalLog log(NumericColumns(units), {"intent", "phase"}, capacity_rows);
+  double max_latency_s = config.sensor.latency_s;
+  for (const Action& action : config.script) {
+    if (action.kind == ActionKind::kAddLatency) max_latency_s += action.latency_s;
+  }
+  const size_t ring_capacity = static_cast<size_t>(std::ceil(
+                                   (max_latency_s + config.controller.stale_timeout_s + 0.05) *
+                                   config.controller.rate_hz)) + 8;
+  TruthRing truth_ring(ring_capacity, units, config.controller.rate_hz);
+
+  double next_progress_s = 0.0;
+  bool stopped = false;
+  // The simulated-time loop: no allocation, no I/O (the progress callback excepted, 10 Hz).
+  while (rig->time_s() < config.duration_s - 1e-9) {
+    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
+      stopped = true;
+      break;
+    }
+    player.Update(rig->time_s(), *rig);
+    if (!rig->Step()) continue;
+
+    const double t = rig->time_s();
+    sim::Simulation& simulation = rig->simulation();
+    rig->simulation().ComputeUnitLoads(truth_ring.Next(t));
+    const sim::GroundTruth truth = simulation.truth();
+    const sensor::TactileState& state = rig->loop().state();
+    const std::span<const sensor::UnitLoad> true_loads = truth_ring.Near(state.time_s);
+    const controller::ControllerTelemetry telemetry = rig->controller().telemetry();
+    const controller::HandCommand& command = rig->loop().command();
+
+    TickSample sample;
+    sample.time_s = t;
+    sample.intent = player.intent();
+    sample.truth = &truth;
+    sample.state = &state;
+    sample.true_loads = true_loads;
+    sample.controller_slip = telemetry.slip_detected;
+    tracker.Update(sample);
+
+    const char** text = nullptr;
+    double* row = log.AppendRow(&text);
+    if (row != nullptr) {
+      text[0] = IntentName(player.intent());
+      text[1] = telemetry.phase;
+      row[kTime] = t;
+      row[kGripEffort] = command.grip_effort;
+      row[kEnable] = command.enable ? 1.0 : 0.0;
+      row[kBrake] = command.brake ? 1.0 : 0.0;
+      row[kGripTarget] = telemetry.grip_target_n;
+      row[kFrictionEstimate] = telemetry.friction_estimate;
+      row[kSlipFlag] = telemetry.slip_detected ? 1.0 : 0.0;
+      row[kSafeHold] = telemetry.safe_hold ? 1.0 : 0.0;
+      row[kStale] = state.stale ? 1.0 : 0.0;
+      row[kValidUnits] = state.valid_count;
+      row[kContactUnits] = state.contact_count;
+      row[kEstTotalFn] = state.total_fn_n;
+      row[kEstShearAxial] = state.total_shear_axial_n;
+      row[kEstShearCirc] = state.total_shear_circumferential_n;
+      double sensed = 0.0;
+      for (const sensor::UnitLoad& load : true_loads) sensed += load.fn_n;
+      row[kTrueSensedFn] = sensed;
+      row[kTrueFingerFn] = truth.finger_normal_force_n;
+      row[kTrueThumbFn] = truth.thumb_normal_force_n;
+      row[kTrueSqueeze] = truth.object_squeeze_n;
+      row[kSlipSpeed] = truth.slip_speed_m_s * 1e3;
+      row[kObjectX] = truth.object_position_m[0];
+      row[kObjectY] = truth.object_position_m[1];
+      row[kObjectZ] = truth.object_position_m[2];
+      row[kObjectHeight] = truth.object_height_above_table_m;
+      row[kWristX] = truth.wrist_position_m[0];
+      row[kWristY] = truth.wrist_position_m[1];
+      row[kWristZ] = truth.wrist_position_m[2];
+      row[kWristTargetZ] = simulation.wrist_target()[2];
+      row[kGripClosure] = truth.grip_closure_m;
+      row[kObjectMass] = simulation.object_mass_kg();
+      row[kForceX] = player.external_force_n()[0];
+      row[kForceY] = player.external_force_n()[1];
+      row[kForceZ] = player.external_force_n()[2];
+      row[kHolding] = tracker.holding() ? 1.0 : 0.0;
+      row[kSlipEvent] = tracker.in_slip_event() ? 1.0 : 0.0;
+      row[kSlipDistance] = tracker.slip_distance_m() * 1e3;
+      const sensor::RawFrame& frame = rig->loop().frame();
+      for (int u = 0; u < units; ++u) {
+        double* cell = row + kFixedCount + static_cast<size_t>(u) * kPerUnit;
+        cell[0] = frame.r1_ohm[u];
+        cell[1] = frame.r2_ohm[u];
+        cell[2] = state.fn_n[u];
+        cell[3] = state.ft_n[u];
+        cell[4] = true_loads[u].fn_n;
+        cell[5] = true_loads[u].ft_n;
+        cell[6] = static_cast<double>(state.validity[u]);
+      }
+    }
+    if (options.progress && t >= next_progress_s) {
+      options.progress(t, config.duration_s);
+      next_progress_s = t + kProgressPeriodS;
+    }
+  }
+  const double sim_s = rig->time_s();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  result.completed = !stopped;
+  result.metrics = tracker.Finish(sim_s, wall_s, player.first_close_time_s());
+  const sim::PhysicsFault& fault = rig->simulation().fault();
+  result.metrics.physics_fault = fault.occurred;
+  result.metrics.physics_fault_cause = fault.occurred ? fault.cause_text() : "";
+  result.metrics.physics_fault_time_s = fault.time_s;
+  result.outcomes = EvaluateExpectations(config.expectations, result.metrics);
+  result.passed = result.completed && std::all_of(result.outcomes.begin(), result.outcomes.end(),
+                                                  [](const ExpectationOutcome& o) { return o.passed; });
+  result.real_time_factor = wall_s > 0.0 ? sim_s / wall_s : 0.0;
+  const sensor::BackendCounters counters = rig->backend().counters();
+  result.frames = counters.frames;
+  result.dropped_frames = counters.dropped;
+  result.stale_ticks = rig->loop().counters().stale_ticks;
+  result.control_ticks = rig->loop().counters().ticks;
+  result.signal_rows_lost = log.lost_rows();
+
+  if (!options.out_dir.empty()) {
+    WriteCsvAtomic(log, options.out_dir + "/signals.csv");
+    if (options.write_plots) WritePlots(result, log, options.out_dir);
+    WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
+    if (result.completed) fs::remove(fs::path(options.out_dir) / kIncompleteMarker);
+  }
+  return result;
+}
+
+nlohmann::json SummaryJson(const RunResult& result) {
+  const Metrics& m = result.metrics;
+  nlohmann::json metrics = {
+      {"dropped", m.dropped},
+      {"max_slip_mm", m.max_slip_mm},
+      {"peak_grip_n", m.peak_grip_n},
+      {"crushed", m.crushed},
+      {"slip_detect_latency_ms", Optional(m.slip_detect_latency_ms)},
+      {"false_slip_per_min", m.false_slip_per_min},
+      {"fn_rmse_n", Optional(m.fn_rmse_n)},
+      {"ft_rmse_n", Optional(m.ft_rmse_n)},
+      {"time_to_stable_s", Optional(m.time_to_stable_s)},
+      {"sim_s", m.sim_s},
+      {"wall_s", m.wall_s},
+      {"grasped", m.grasped},
+      {"grasp_time_s", m.grasp_time_s >= 0.0 ? nlohmann::json(m.grasp_time_s) : nlohmann::json(nullptr)},
+      {"drop_time_s", m.drop_time_s >= 0.0 ? nlohmann::json(m.drop_time_s) : nlohmann::json(nullptr)},
+      {"held_s", m.held_s},
+      {"slip_events", m.slip_events},
+      {"missed_slip_events", m.missed_slip_events},
+      {"controller_slip_flags", m.controller_slip_flags},
+      {"false_slip_flags", m.false_slip_flags},
+      {"estimation_samples", m.estimation_samples},
+      {"physics_fault", m.physics_fault},
+  };
+  nlohmann::json expectations = nlohmann::json::array();
+  for (const ExpectationOutcome& o : result.outcomes) {
+    expectations.push_back({{"name", o.name},
+                            {"limit", o.limit},
+                            {"value", Optional(o.value)},
+                            {"value_text", o.value_text},
+                            {"passed", o.passed},
+                            {"note", o.note}});
+  }
+  nlohmann::json events = nlohmann::json::array();
+  for (const SlipEvent& e : m.events) {
+    events.push_back({{"onset_s", e.onset_s},
+                      {"end_s", e.end_s},
+                      {"peak_speed_mm_s", e.peak_speed_m_s * 1e3},
+                      {"distance_mm", e.distance_m * 1e3},
+                      {"detected", e.detected},
+                      {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
+  }
+  return {
+      {"scenario", result.config.name},
+      {"source_file", result.config.source_file},
+      {"controller", result.config.controller.name},
+      {"seed", result.config.seed},
+      {"completed", result.completed},
+      {"passed", result.passed},
+      {"metrics", metrics},
+      {"expectations", expectations},
+      {"slip_events", events},
+      {"physics_fault",
+       {{"occurred", m.physics_fault}, {"cause", m.physics_fault_cause}, {"time_s", m.physics_fault_time_s}}},
+      {"counters",
+       {{"control_ticks", result.control_ticks},
+        {"frames", result.frames},
+        {"dropped_frames", result.dropped_frames},
+        {"stale_ticks", result.stale_ticks},
+        {"signal_rows_lost", result.signal_rows_lost}}},
+      {"real_time_factor", result.real_time_factor},
+  };
+}
+
+std::string SummaryTable(const RunResult& result) {
+  const Metrics& m = result.metrics;
+  std::ostringstream out;
+  char line[256];
+  const auto optional_text = [](const std::optional<double>& v, const char* format) {
+    if (!v) return std::string("none");
+    char buffer[64];
+    std::snprintf(buffer, sizeof(buffer), format, *v);
+    return std::string(buffer);
+  };
+  std::snprintf(line, sizeof(line), "scenario %s, controller %s, seed %llu: %s\n", result.config.name.c_str(),
+                result.config.controller.name.c_str(), static_cast<unsigned long long>(result.config.seed),
+                !result.completed ? "INTERRUPTED" : result.passed ? "PASSED" : "FAILED");
+  out << line;
+  std::snprintf(line, sizeof(line),
+                "  grasped %s  dropped %s  slip %.2f mm  peak grip %.2f N  crushed %s\n",
+                m.grasped ? "yes" : "no", m.dropped ? "yes" : "no", m.max_slip_mm, m.peak_grip_n,
+                m.crushed ? "yes" : "no");
+  out << line;
+  std::snprintf(line, sizeof(line),
+                "  slip events %d (missed %d), detect latency %s, false slip %.2f/min, stable after %s\n",
+                m.slip_events, m.missed_slip_events, optional_text(m.slip_detect_latency_ms, "%.1f ms").c_str(),
+                m.false_slip_per_min, optional_text(m.time_to_stable_s, "%.3f s").c_str());
+  out << line;
+  std::snprintf(line, sizeof(line), "  Fn RMSE %s, Ft RMSE %s; %.2f s simulated in %.2f s (%.1fx real time)\n",
+                optional_text(m.fn_rmse_n, "%.3f N").c_str(), optional_text(m.ft_rmse_n, "%.3f N").c_str(),
+                m.sim_s, m.wall_s, result.real_time_factor);
+  out << line;
+  for (const ExpectationOutcome& o : result.outcomes) {
+    std::snprintf(line, sizeof(line), "  [%s] %-24s %-14s got %s%s%s\n", o.passed ? "pass" : "FAIL",
+                  o.name.c_str(), o.limit.c_str(), o.value_text.c_str(), o.note.empty() ? "" : " -- ",
+                  o.note.c_str());
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,64 @@
+#pragma once
+/// Running one scenario: builds the rig (simulation, simulated sensor, control loop, controller,
+/// actuator), plays the script, scores the run and writes its outputs:
+///   DIR/config.yaml   the fully resolved configuration (loads again to reproduce the run)
+///   DIR/signals.csv   one row per control tick (docs/scenarios.md, "Outputs")
+///   DIR/summary.json  metrics, every expectation with its outcome, and `passed`
+///   DIR/*.png         forces, estimate vs truth, grip, slip, height
+/// Every file is written to a temporary name and renamed; while a run is in progress, or after it
+/// was interrupted, DIR/INCOMPLETE exists and summary.json (if any) says "completed": false.
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "sim/scenario/metrics.h"
+#include "sim/scenario/scenario_config.h"
+
+namespace graspbed::scenario {
+
+/// How to run and what to write.
+struct RunOptions {
+  std::string out_dir;      ///< "" = write nothing (suites and sweeps that only need the summary)
+  bool write_plots = true;  ///< PNGs in out_dir
+  /// Set (e.g. by SIGINT) to stop the run at the next control tick; the run then ends with
+  /// completed = false. May be nullptr.
+  const std::atomic<bool>* stop = nullptr;
+  /// Called about every 0.1 s of simulated time with (simulated time, duration) [s]; may be empty.
+  std::function<void(double, double)> progress;
+};
+
+/// The result of one run.
+struct RunResult {
+  ScenarioConfig config;
+  Metrics metrics;
+  std::vector<ExpectationOutcome> outcomes;
+  bool completed = false;  ///< ran to duration_s (false: stopped early)
+  bool passed = false;     ///< completed and every expectation held
+  double real_time_factor = 0.0;  ///< simulated seconds per wall-clock second
+  uint64_t frames = 0;            ///< sensor frames delivered
+  uint64_t dropped_frames = 0;    ///< frames lost on the simulated link
+  uint64_t stale_ticks = 0;       ///< control ticks on stale data
+  uint64_t control_ticks = 0;
+  size_t signal_rows_lost = 0;    ///< rows beyond the reserved signal storage (should be 0)
+  std::string out_dir;            ///< where the outputs went ("" none)
+};
+
+/// Runs `config`. Throws std::invalid_argument for a configuration the rig refuses and
+/// std::runtime_error when outputs cannot be written; physics faults are results, not exceptions.
+RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options = {});
+
+/// summary.json content for `result`.
+nlohmann::json SummaryJson(const RunResult& result);
+
+/// A short human-readable table: one line per metric that matters and per expectation.
+std::string SummaryTable(const RunResult& result);
+
+/// Writes `content` to `path` via a temporary file in the same directory and rename(), so `path`
+/// either holds the old content or the complete new one. Throws std::runtime_error naming the path.
+void WriteFileAtomic(const std::string& path, const std::string& content);
+
+}  // namespace graspbed::scenario

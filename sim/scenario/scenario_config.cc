@@ -1,0 +1,777 @@
+#include "sim/scenario/scenario_config.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "sensor/layout.h"
+
+namespace graspbed::scenario {
+namespace {
+
+using common::ConfigError;
+using common::NumberRule;
+using common::YamlMap;
+
+constexpr double kMaxDurationS = 3600.0;  // one simulated hour: beyond that a scenario is a mistake
+constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every integer up to here is exact in YAML
+
+struct ActionEntry {
+  ActionKind kind;
+  const char* name;
+};
+
+constexpr ActionEntry kActions[] = {
+    {ActionKind::kClose, "close"},           {ActionKind::kOpen, "open"},
+    {ActionKind::kIdle, "idle"},             {ActionKind::kMove, "move"},
+    {ActionKind::kLift, "lift"},             {ActionKind::kShake, "shake"},
+    {ActionKind::kAddMass, "add_mass"},      {ActionKind::kPull, "pull"},
+    {ActionKind::kSetFriction, "set_friction"}, {ActionKind::kDeadUnit, "dead_unit"},
+    {ActionKind::kShortUnit, "short_unit"},  {ActionKind::kRestoreUnit, "restore_unit"},
+    {ActionKind::kBias, "bias"},             {ActionKind::kNoiseBurst, "noise_burst"},
+    {ActionKind::kDropFrames, "drop_frames"}, {ActionKind::kAddLatency, "add_latency"},
+};
+
+std::string FileStem(const std::string& path) {
+  std::filesystem::path p(path);
+  return p.stem().string();
+}
+
+std::string Join(const std::vector<std::string>& items) {
+  std::string joined;
+  for (const auto& item : items) joined += (joined.empty() ? "" : ", ") + item;
+  return joined;
+}
+
+ActionKind ActionFromName(const std::string& name) {
+  for (const ActionEntry& entry : kActions) {
+    if (name == entry.name) return entry.kind;
+  }
+  throw std::logic_error("unvalidated action name " + name);
+}
+
+Profile ReadProfile(const YamlMap& map) {
+  const std::string text = map.GetString("profile", "minimum_jerk", {"minimum_jerk", "linear"});
+  return text == "linear" ? Profile::kLinear : Profile::kMinimumJerk;
+}
+
+// A YAML list of exactly three finite numbers.
+std::array<double, 3> ReadVector(const YamlMap& map, std::string_view key, std::array<double, 3> fallback,
+                                 bool required) {
+  if (required && !map.Has(key)) map.Fail(key, "missing required key (a list of 3 numbers)");
+  const std::vector<double> values =
+      map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3);
+  return {values[0], values[1], values[2]};
+}
+
+Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_count) {
+  Action action;
+  action.line = map.line();
+  const std::string name = map.RequireString("action", ActionNames());
+  action.kind = ActionFromName(name);
+  action.at_s = map.RequireNumber("at_s", NumberRule::Between(0.0, config.duration_s));
+  const auto unit_index = [&] { return map.RequireInt("unit", 0, unit_count - 1); };
+  switch (action.kind) {
+    case ActionKind::kClose:
+    case ActionKind::kOpen:
+    case ActionKind::kIdle:
+      break;
+    case ActionKind::kMove: {
+      const bool absolute = map.Has("position_m");
+      const bool offset = map.Has("offset_m");
+      if (absolute == offset) map.FailHere("move needs exactly one of position_m (absolute) or offset_m");
+      action.relative = offset;
+      action.vector = ReadVector(map, absolute ? "position_m" : "offset_m", {0, 0, 0}, true);
+      action.duration_s = map.GetNumber("duration_s", 1.0, NumberRule::NonNegative());
+      action.profile = ReadProfile(map);
+      break;
+    }
+    case ActionKind::kLift:
+      action.height_m = map.RequireNumber("height_m", NumberRule::Between(-1.0, 1.0));
+      action.duration_s = map.GetNumber("duration_s", 1.0, NumberRule::NonNegative());
+      action.profile = ReadProfile(map);
+      break;
+    case ActionKind::kShake: {
+      action.frequency_hz = map.RequireNumber("frequency_hz", NumberRule{0.0, 100.0, true});
+      action.amplitude_m = map.RequireNumber("amplitude_m", NumberRule{0.0, 0.1, true});
+      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
+      action.vector = ReadVector(map, "axis", {0, 0, 1}, false);
+      const double norm = std::hypot(action.vector[0], action.vector[1], action.vector[2]);
+      if (!(norm > 1e-9)) map.Fail("axis", "must not be the zero vector");
+      for (double& component : action.vector) component /= norm;
+      break;
+    }
+    case ActionKind::kAddMass:
+      action.mass_kg = map.RequireNumber("mass_kg", NumberRule::Between(-100.0, 100.0));
+      if (action.mass_kg == 0.0) map.Fail("mass_kg", "must not be 0");
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
+      action.profile = ReadProfile(map);
+      break;
+    case ActionKind::kPull:
+      action.vector = ReadVector(map, "force_n", {0, 0, 0}, true);
+      for (double component : action.vector) {
+        if (std::abs(component) > 1000.0) map.Fail("force_n", "each component must be within +-1000 N");
+      }
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
+      action.duration_s = map.GetNumber("duration_s", 0.0, NumberRule::NonNegative());
+      action.profile = ReadProfile(map);
+      break;
+    case ActionKind::kSetFriction:
+      action.friction = map.RequireNumber("friction", NumberRule{0.0, 10.0, true});
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
+      action.profile = ReadProfile(map);
+      break;
+    case ActionKind::kDeadUnit:
+    case ActionKind::kShortUnit:
+    case ActionKind::kRestoreUnit:
+      action.unit = unit_index();
+      break;
+    case ActionKind::kBias:
+      action.unit = unit_index();
+      action.r1_bias_ohm = map.GetNumber("r1_ohm", 0.0, NumberRule::Between(-1e5, 1e5));
+      action.r2_bias_ohm = map.GetNumber("r2_ohm", 0.0, NumberRule::Between(-1e5, 1e5));
+      break;
+    case ActionKind::kNoiseBurst:
+      action.noise_scale = map.GetNumber("scale", 10.0, NumberRule::Between(0.0, 1e4));
+      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
+      if (config.sensor.strain_model.noise_ohm <= 0.0) {
+        map.Fail("action", "noise_burst scales sensor.strain_model.noise_ohm, which is 0; set it > 0");
+      }
+      break;
+    case ActionKind::kDropFrames:
+      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
+      action.probability = map.GetNumber("probability", 1.0, NumberRule::Between(0.0, 1.0));
+      break;
+    case ActionKind::kAddLatency:
+      action.latency_s = map.RequireNumber("latency_s", NumberRule::Between(0.0, 1.0));
+      break;
+  }
+  map.RejectUnknownKeys();
+  return action;
+}
+
+std::optional<double> OptionalNumber(const YamlMap& map, std::string_view key, NumberRule rule) {
+  if (!map.Has(key)) {
+    map.GetNumber(key, 0.0);  // marks the key as valid for RejectUnknownKeys
+    return std::nullopt;
+  }
+  return map.GetNumber(key, 0.0, rule);
+}
+
+std::optional<bool> OptionalBool(const YamlMap& map, std::string_view key) {
+  if (!map.Has(key)) {
+    map.GetBool(key, false);
+    return std::nullopt;
+  }
+  return map.GetBool(key, false);
+}
+
+Expectations LoadExpectations(const YamlMap& map, const ScenarioConfig& config) {
+  Expectations e;
+  e.not_dropped = OptionalBool(map, "not_dropped");
+  e.max_slip_mm = OptionalNumber(map, "max_slip_mm", NumberRule::NonNegative());
+  e.max_peak_grip_n = OptionalNumber(map, "max_peak_grip_n", NumberRule::Positive());
+  e.not_crushed = OptionalBool(map, "not_crushed");
+  if (e.not_crushed.value_or(false) && config.scene.object.crush_limit_n <= 0.0) {
+    map.Fail("not_crushed", "needs object.crush_limit_n > 0 (the object is not fragile)");
+  }
+  e.slip_detected_within_ms = OptionalNumber(map, "slip_detected_within_ms", NumberRule::NonNegative());
+  e.max_estimation_error_n = OptionalNumber(map, "max_estimation_error_n", NumberRule::NonNegative());
+  e.stable_within_s = OptionalNumber(map, "stable_within_s", NumberRule::NonNegative());
+  e.max_false_slip_per_min = OptionalNumber(map, "max_false_slip_per_min", NumberRule::NonNegative());
+  map.RejectUnknownKeys();
+  return e;
+}
+
+MetricsConfig LoadMetricsConfig(const YamlMap& map) {
+  MetricsConfig m;
+  m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, NumberRule::Positive());
+  m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, NumberRule::Positive());
+  if (m.slip_speed_m_s < m.creep_speed_m_s) map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s");
+  m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, NumberRule::NonNegative());
+  m.early_detection_window_s =
+      map.GetNumber("early_detection_window_s", m.early_detection_window_s, NumberRule::NonNegative());
+  m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, NumberRule::Positive());
+  m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, NumberRule::Positive());
+  m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, NumberRule::Positive());
+  m.stable_force_band = map.GetNumber("stable_force_band", m.stable_force_band, NumberRule{0.0, 1.0, true});
+  map.RejectUnknownKeys();
+  return m;
+}
+
+// Wraps a std::invalid_argument from a loader that only knows field names into a file:line message.
+template <typename Fn>
+void AtMap(const YamlMap& map, Fn&& fn) {
+  try {
+    fn();
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const std::invalid_argument& error) {
+    map.FailHere(error.what());
+  }
+}
+
+std::string ShippedLayoutPath(const std::string& name) {
+  return std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/" + name + ".yaml";
+}
+
+bool IsShippedLayout(const std::string& name) {
+  return name.find('/') == std::string::npos && name.find(".yaml") == std::string::npos &&
+         std::filesystem::exists(ShippedLayoutPath(name));
+}
+
+SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_file, int* unit_count) {
+  SensorOptions s;
+  s.layout = map.GetString("layout", s.layout);
+  if (!IsShippedLayout(s.layout)) {
+    std::filesystem::path path(s.layout);
+    if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
+    if (!std::filesystem::exists(path)) {
+      map.Fail("layout", "no such layout: give default_20, paper_3x3 or a layout file path (relative to "
+                         "the scenario file)");
+    }
+    s.layout = std::filesystem::absolute(path).lexically_normal().string();
+  }
+  const std::string layout_path = IsShippedLayout(s.layout) ? ShippedLayoutPath(s.layout) : s.layout;
+  *unit_count = sensor::LoadLayout(layout_path).unit_count();
+  s.sample_rate_hz = map.GetNumber("sample_rate_hz", s.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
+  s.latency_s = map.GetNumber("latency_s", s.latency_s, NumberRule::Between(0.0, 1.0));
+  s.drop_probability = map.GetNumber("drop_probability", s.drop_probability, NumberRule::Between(0.0, 1.0));
+  if (auto sub = map.GetMap("strain_model")) {
+    s.strain_model = sensor::LoadStrainModelConfig(*sub, *unit_count);
+  }
+  if (auto sub = map.GetMap("readout")) s.readout = sensor::LoadReadoutConfig(*sub);
+  if (auto sub = map.GetMap("inversion")) s.inversion = sensor::LoadInversionConfig(*sub);
+  map.RejectUnknownKeys();
+  return s;
+}
+
+ControllerOptions LoadControllerOptions(const YamlMap& map) {
+  ControllerOptions c;
+  c.name = map.GetString("name", c.name, controller::ControllerNames());
+  const std::vector<controller::ControllerParameter> declared = controller::ControllerParameters(c.name);
+  for (const auto& parameter : declared) c.params[parameter.name] = parameter.default_value;
+  if (auto params = map.GetMap("params")) {
+    std::vector<std::string> valid;
+    for (const auto& parameter : declared) valid.push_back(parameter.name);
+    for (const std::string& key : params->Keys()) {
+      const auto match = std::find_if(declared.begin(), declared.end(),
+                                      [&](const auto& p) { return p.name == key; });
+      if (match == declared.end()) {
+        params->Fail(key, "controller '" + c.name + "' has no such parameter; valid parameters: " +
+                              (valid.empty() ? std::string("(none)") : Join(valid)));
+      }
+      c.params[key] = params->GetNumber(key, match->default_value, NumberRule::Between(match->min, match->max));
+    }
+  }
+  c.grip_ceiling_n = map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::NonNegative());
+  c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, 100000.0));
+  c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, NumberRule::Positive());
+  map.RejectUnknownKeys();
+  return c;
+}
+
+ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
+  const YamlMap map(root, file, "");
+  ScenarioConfig config;
+  config.source_file = file;
+  config.name = map.GetString("name", FileStem(file));
+  config.description = map.GetString("description", "");
+  const double seed = map.GetNumber("seed", 1.0, NumberRule::Between(0.0, kMaxSeed));
+  if (seed != std::floor(seed)) map.Fail("seed", "expected a whole number");
+  config.seed = static_cast<uint64_t>(seed);
+  config.duration_s = map.GetNumber("duration_s", config.duration_s, NumberRule{0.0, kMaxDurationS, true});
+
+  // The scene sections go to the sim loader as one map; their nodes keep their file positions.
+  YAML::Node scene_node(YAML::NodeType::Map);
+  for (const char* key : {"object", "hand", "physics"}) {
+    if (map.Has(key)) scene_node[key] = map.Raw(key);
+  }
+  const YamlMap scene_map(scene_node, file, "");
+  AtMap(scene_map, [&] { config.scene = sim::LoadSceneConfig(scene_map); });
+
+  int unit_count = sensor::kMaxUnits;
+  if (auto sensor_map = map.GetMap("sensor")) {
+    config.sensor = LoadSensorOptions(*sensor_map, file, &unit_count);
+  } else {
+    YAML::Node empty(YAML::NodeType::Map);
+    config.sensor = LoadSensorOptions(YamlMap(empty, file, "sensor"), file, &unit_count);
+  }
+  if (auto controller_map = map.GetMap("controller")) {
+    config.controller = LoadControllerOptions(*controller_map);
+  } else {
+    YAML::Node empty(YAML::NodeType::Map);
+    config.controller = LoadControllerOptions(YamlMap(empty, file, "controller"));
+  }
+  for (const YamlMap& action_map : map.GetMapList("script")) {
+    config.script.push_back(LoadAction(action_map, config, unit_count));
+  }
+  std::stable_sort(config.script.begin(), config.script.end(),
+                   [](const Action& a, const Action& b) { return a.at_s < b.at_s; });
+  if (auto metrics_map = map.GetMap("metrics")) config.metrics = LoadMetricsConfig(*metrics_map);
+  if (auto expectations_map = map.GetMap("expectations")) {
+    config.expectations = LoadExpectations(*expectations_map, config);
+  }
+  map.RejectUnknownKeys();
+  AtMap(map, [&] { config.Validate(); });
+  return config;
+}
+
+YAML::Node ParseRoot(const std::string& text, const std::string& source_name) {
+  try {
+    YAML::Node root = YAML::Load(text);
+    if (!root.IsNull() && !root.IsMap()) {
+      throw ConfigError(common::Where(source_name, root) + "expected a mapping of keys at the top level");
+    }
+    if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+    return root;
+  } catch (const YAML::Exception& error) {
+    throw ConfigError(source_name + ":" + std::to_string(error.mark.line + 1) +
+                      ": YAML syntax error: " + error.msg);
+  }
+}
+
+// A copy of `node` built from scratch, so no position of the --set text can pose as a file line.
+YAML::Node WithoutMarks(const YAML::Node& node) {
+  if (node.IsScalar()) return YAML::Node(node.Scalar());
+  if (node.IsSequence()) {
+    YAML::Node copy(YAML::NodeType::Sequence);
+    for (const auto& item : node) copy.push_back(WithoutMarks(item));
+    return copy;
+  }
+  if (node.IsMap()) {
+    YAML::Node copy(YAML::NodeType::Map);
+    for (const auto& entry : node) copy[entry.first.Scalar()] = WithoutMarks(entry.second);
+    return copy;
+  }
+  return YAML::Node(YAML::NodeType::Null);
+}
+
+// One step of a dotted key path: a map key, optionally followed by [index] parts.
+struct PathStep {
+  std::string key;
+  std::vector<int> indices;
+};
+
+std::vector<PathStep> ParsePath(const std::string& key) {
+  std::vector<PathStep> steps;
+  std::stringstream stream(key);
+  std::string part;
+  while (std::getline(stream, part, '.')) {
+    PathStep step;
+    const size_t bracket = part.find('[');
+    step.key = part.substr(0, bracket);
+    if (step.key.empty()) throw std::invalid_argument("--set " + key + ": empty key in the path");
+    size_t position = bracket;
+    while (position != std::string::npos) {
+      const size_t close = part.find(']', position);
+      if (close == std::string::npos) throw std::invalid_argument("--set " + key + ": missing ']'");
+      const std::string digits = part.substr(position + 1, close - position - 1);
+      int index = 0;
+      const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
+      if (error != std::errc() || end != digits.data() + digits.size() || digits.empty() || index < 0) {
+        throw std::invalid_argument("--set " + key + ": bad list index '" + digits + "'");
+      }
+      step.indices.push_back(index);
+      position = close + 1 < part.size() ? close + 1 : std::string::npos;
+      if (position != std::string::npos && part[position] != '[') {
+        throw std::invalid_argument("--set " + key + ": unexpected text after ']'");
+      }
+    }
+    steps.push_back(step);
+  }
+  if (steps.empty()) throw std::invalid_argument("--set: empty key");
+  return steps;
+}
+
+void EnsureMap(YAML::Node& node, const std::string& what) {
+  if (!node.IsDefined() || node.IsNull()) {
+    node = YAML::Node(YAML::NodeType::Map);
+  } else if (!node.IsMap()) {
+    throw std::invalid_argument("--set " + what + ": not a mapping in the scenario");
+  }
+}
+
+std::string FormatDouble(double value) {
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  if (std::isnan(value)) return ".nan";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+void EmitNumber(YAML::Emitter& out, const char* key, double value) {
+  out << YAML::Key << key << YAML::Value << FormatDouble(value);
+}
+
+template <size_t N>
+void EmitVector(YAML::Emitter& out, const char* key, const std::array<double, N>& values) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (double value : values) out << FormatDouble(value);
+  out << YAML::EndSeq;
+}
+
+void EmitIntList(YAML::Emitter& out, const char* key, const std::vector<int>& values) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (int value : values) out << value;
+  out << YAML::EndSeq;
+}
+
+void EmitScene(YAML::Emitter& out, const sim::SceneConfig& scene) {
+  const sim::ObjectConfig& o = scene.object;
+  out << YAML::Key << "object" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "shape" << YAML::Value << sim::ToString(o.shape);
+  EmitVector(out, "size_m", o.size_m);
+  EmitNumber(out, "mass_kg", o.mass_kg);
+  EmitNumber(out, "friction", o.friction);
+  EmitNumber(out, "torsional_friction", o.torsional_friction);
+  EmitNumber(out, "solref_timeconst_s", o.solref_timeconst_s);
+  EmitNumber(out, "solref_dampratio", o.solref_dampratio);
+  EmitVector(out, "solimp", o.solimp);
+  EmitVector(out, "initial_position_m", o.initial_position_m);
+  EmitNumber(out, "initial_yaw_rad", o.initial_yaw_rad);
+  EmitNumber(out, "crush_limit_n", o.crush_limit_n);
+  out << YAML::EndMap;
+
+  const sim::HandConfig& h = scene.hand;
+  out << YAML::Key << "hand" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "open_gap_m", h.open_gap_m);
+  EmitNumber(out, "palm_mass_kg", h.palm_mass_kg);
+  EmitNumber(out, "digit_mass_kg", h.digit_mass_kg);
+  EmitNumber(out, "friction", h.friction);
+  // NaN entries mean "automatic pre-grasp pose"; they are left out so the loader picks them again.
+  if (std::none_of(h.initial_wrist_position_m.begin(), h.initial_wrist_position_m.end(),
+                   [](double v) { return std::isnan(v); })) {
+    EmitVector(out, "initial_wrist_position_m", h.initial_wrist_position_m);
+  }
+  EmitNumber(out, "wrist_stiffness_n_m", h.wrist_stiffness_n_m);
+  EmitNumber(out, "wrist_damping_n_s_m", h.wrist_damping_n_s_m);
+  out << YAML::Key << "motor" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "stall_force_n", h.motor.stall_force_n);
+  EmitNumber(out, "no_load_speed_m_s", h.motor.no_load_speed_m_s);
+  EmitNumber(out, "armature_kg", h.motor.armature_kg);
+  EmitNumber(out, "damping_n_s_m", h.motor.damping_n_s_m);
+  out << YAML::EndMap << YAML::EndMap;
+
+  const sim::PhysicsConfig& p = scene.physics;
+  out << YAML::Key << "physics" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "timestep_s", p.timestep_s);
+  out << YAML::Key << "elliptic_cones" << YAML::Value << p.elliptic_cones;
+  EmitNumber(out, "impratio", p.impratio);
+  out << YAML::Key << "noslip_iterations" << YAML::Value << p.noslip_iterations;
+  out << YAML::Key << "solver_iterations" << YAML::Value << p.solver_iterations;
+  EmitNumber(out, "tolerance", p.tolerance);
+  out << YAML::Key << "condim" << YAML::Value << p.condim;
+  EmitNumber(out, "gravity_m_s2", p.gravity_m_s2);
+  out << YAML::Key << "table" << YAML::Value << p.table;
+  out << YAML::EndMap;
+}
+
+void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
+  out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "layout" << YAML::Value << s.layout;
+  EmitNumber(out, "sample_rate_hz", s.sample_rate_hz);
+  EmitNumber(out, "latency_s", s.latency_s);
+  EmitNumber(out, "drop_probability", s.drop_probability);
+  const sensor::StrainModelConfig& m = s.strain_model;
+  out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "r0_ohm", m.nominal.r0_ohm);
+  EmitNumber(out, "gauge_factor", m.nominal.gauge_factor);
+  EmitNumber(out, "kn_per_n", m.nominal.kn_per_n);
+  EmitNumber(out, "kt_per_n", m.nominal.kt_per_n);
+  EmitNumber(out, "rated_force_n", m.nominal.rated_force_n);
+  EmitNumber(out, "r0_spread_fraction", m.r0_spread_fraction);
+  EmitNumber(out, "sensitivity_spread_fraction", m.sensitivity_spread_fraction);
+  EmitNumber(out, "noise_ohm", m.noise_ohm);
+  out << YAML::Key << "adc_bits" << YAML::Value << m.adc_bits;
+  EmitNumber(out, "adc_full_scale_ohm", m.adc_full_scale_ohm);
+  EmitNumber(out, "temperature_coefficient_per_k", m.temperature_coefficient_per_k);
+  EmitNumber(out, "temperature_offset_k", m.temperature_offset_k);
+  EmitNumber(out, "temperature_ramp_k_per_s", m.temperature_ramp_k_per_s);
+  EmitNumber(out, "saturation_force_n", m.saturation_force_n);
+  EmitNumber(out, "cross_talk_shear_fraction", m.cross_talk_shear_fraction);
+  EmitNumber(out, "cross_talk_offset_per_mm", m.cross_talk_offset_per_mm);
+  EmitIntList(out, "dead_units", m.dead_units);
+  EmitIntList(out, "shorted_units", m.shorted_units);
+  out << YAML::EndMap;
+  const sensor::ReadoutConfig& r = s.readout;
+  out << YAML::Key << "readout" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "baseline_frames" << YAML::Value << r.baseline_frames;
+  EmitNumber(out, "short_circuit_ohm", r.short_circuit_ohm);
+  EmitNumber(out, "open_circuit_ohm", r.open_circuit_ohm);
+  EmitNumber(out, "min_plausible_fraction", r.min_plausible_fraction);
+  EmitNumber(out, "max_plausible_fraction", r.max_plausible_fraction);
+  EmitNumber(out, "max_baseline_deviation_fraction", r.max_baseline_deviation_fraction);
+  EmitNumber(out, "min_mean_dr_rel", r.min_mean_dr_rel);
+  EmitNumber(out, "max_abs_dr_rel", r.max_abs_dr_rel);
+  EmitNumber(out, "adc_full_scale_ohm", r.adc_full_scale_ohm);
+  out << YAML::EndMap;
+  const sensor::InversionConfig& i = s.inversion;
+  out << YAML::Key << "inversion" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "contact_threshold_n", i.contact_threshold_n);
+  EmitNumber(out, "rated_force_n", i.rated_force_n);
+  EmitNumber(out, "out_of_range_margin_fraction", i.out_of_range_margin_fraction);
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+}
+
+void EmitAction(YAML::Emitter& out, const Action& a) {
+  out << YAML::BeginMap;
+  EmitNumber(out, "at_s", a.at_s);
+  out << YAML::Key << "action" << YAML::Value << ActionName(a.kind);
+  const auto profile = [&] { out << YAML::Key << "profile" << YAML::Value << ToString(a.profile); };
+  switch (a.kind) {
+    case ActionKind::kClose:
+    case ActionKind::kOpen:
+    case ActionKind::kIdle:
+      break;
+    case ActionKind::kMove:
+      EmitVector(out, a.relative ? "offset_m" : "position_m", a.vector);
+      EmitNumber(out, "duration_s", a.duration_s);
+      profile();
+      break;
+    case ActionKind::kLift:
+      EmitNumber(out, "height_m", a.height_m);
+      EmitNumber(out, "duration_s", a.duration_s);
+      profile();
+      break;
+    case ActionKind::kShake:
+      EmitNumber(out, "frequency_hz", a.frequency_hz);
+      EmitNumber(out, "amplitude_m", a.amplitude_m);
+      EmitNumber(out, "duration_s", a.duration_s);
+      EmitVector(out, "axis", a.vector);
+      break;
+    case ActionKind::kAddMass:
+      EmitNumber(out, "mass_kg", a.mass_kg);
+      EmitNumber(out, "ramp_s", a.ramp_s);
+      profile();
+      break;
+    case ActionKind::kPull:
+      EmitVector(out, "force_n", a.vector);
+      EmitNumber(out, "ramp_s", a.ramp_s);
+      EmitNumber(out, "duration_s", a.duration_s);
+      profile();
+      break;
+    case ActionKind::kSetFriction:
+      EmitNumber(out, "friction", a.friction);
+      EmitNumber(out, "ramp_s", a.ramp_s);
+      profile();
+      break;
+    case ActionKind::kDeadUnit:
+    case ActionKind::kShortUnit:
+    case ActionKind::kRestoreUnit:
+      out << YAML::Key << "unit" << YAML::Value << a.unit;
+      break;
+    case ActionKind::kBias:
+      out << YAML::Key << "unit" << YAML::Value << a.unit;
+      EmitNumber(out, "r1_ohm", a.r1_bias_ohm);
+      EmitNumber(out, "r2_ohm", a.r2_bias_ohm);
+      break;
+    case ActionKind::kNoiseBurst:
+      EmitNumber(out, "scale", a.noise_scale);
+      EmitNumber(out, "duration_s", a.duration_s);
+      break;
+    case ActionKind::kDropFrames:
+      EmitNumber(out, "duration_s", a.duration_s);
+      EmitNumber(out, "probability", a.probability);
+      break;
+    case ActionKind::kAddLatency:
+      EmitNumber(out, "latency_s", a.latency_s);
+      break;
+  }
+  out << YAML::EndMap;
+}
+
+}  // namespace
+
+const char* ActionName(ActionKind kind) {
+  for (const ActionEntry& entry : kActions) {
+    if (entry.kind == kind) return entry.name;
+  }
+  return "?";
+}
+
+std::vector<std::string> ActionNames() {
+  std::vector<std::string> names;
+  for (const ActionEntry& entry : kActions) names.emplace_back(entry.name);
+  return names;
+}
+
+const char* ToString(Profile profile) { return profile == Profile::kLinear ? "linear" : "minimum_jerk"; }
+
+bool Expectations::empty() const {
+  return !not_dropped && !max_slip_mm && !max_peak_grip_n && !not_crushed && !slip_detected_within_ms &&
+         !max_estimation_error_n && !stable_within_s && !max_false_slip_per_min;
+}
+
+void ScenarioConfig::Validate() const {
+  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("duration_s = " + FormatDouble(duration_s) + ": must be > 0");
+  }
+  scene.Validate();
+  sensor.strain_model.Validate();
+  sensor.readout.Validate();
+  sensor.inversion.Validate();
+  if (controller.stale_timeout_s < 1.0 / sensor.sample_rate_hz) {
+    throw std::invalid_argument("controller.stale_timeout_s = " + FormatDouble(controller.stale_timeout_s) +
+                                ": must be >= one sensor period (1 / sensor.sample_rate_hz = " +
+                                FormatDouble(1.0 / sensor.sample_rate_hz) + " s)");
+  }
+  for (const Action& action : script) {
+    if (action.at_s > duration_s) {
+      throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' at_s = " +
+                                  FormatDouble(action.at_s) + ": after duration_s");
+    }
+  }
+}
+
+Override ParseOverride(const std::string& text) {
+  const size_t equals = text.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw std::invalid_argument("--set " + text + ": expected key=value, e.g. object.mass_kg=0.3");
+  }
+  return {text.substr(0, equals), text.substr(equals + 1)};
+}
+
+void ApplyOverride(YAML::Node& root, const Override& override_value) {
+  const std::vector<PathStep> steps = ParsePath(override_value.key);
+  YAML::Node value;
+  try {
+    value = WithoutMarks(YAML::Load(override_value.value));
+  } catch (const YAML::Exception& error) {
+    throw std::invalid_argument("--set " + override_value.key + "=" + override_value.value +
+                                ": YAML syntax error: " + error.msg);
+  }
+  // Walk with explicit node handles; yaml-cpp's operator[] on a non-const node creates entries.
+  YAML::Node node;
+  node.reset(root);
+  for (size_t s = 0; s < steps.size(); ++s) {
+    const PathStep& step = steps[s];
+    const bool last_step = s + 1 == steps.size();
+    EnsureMap(node, override_value.key);
+    YAML::Node child = node[step.key];
+    if (step.indices.empty()) {
+      if (last_step) {
+        node[step.key] = value;
+        return;
+      }
+      if (!child.IsDefined() || child.IsNull()) node[step.key] = YAML::Node(YAML::NodeType::Map);
+      // reset() rebinds the handle; operator= would overwrite the node it points at.
+      node.reset(node[step.key]);
+      continue;
+    }
+    YAML::Node list;
+    list.reset(child);
+    for (size_t i = 0; i < step.indices.size(); ++i) {
+      if (!list.IsSequence() || step.indices[i] >= static_cast<int>(list.size())) {
+        throw std::invalid_argument("--set " + override_value.key + ": index " +
+                                    std::to_string(step.indices[i]) + " out of range (list has " +
+                                    std::to_string(list.IsSequence() ? list.size() : 0) + " entries)");
+      }
+      if (last_step && i + 1 == step.indices.size()) {
+        list[step.indices[i]] = value;
+        return;
+      }
+      list.reset(list[step.indices[i]]);
+    }
+    node.reset(list);
+  }
+}
+
+ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string& source_name,
+                                      const std::vector<Override>& overrides) {
+  // The file alone first, so its own errors carry its lines; then each override in turn, so an error
+  // it causes names it.
+  ScenarioConfig config = LoadFromRoot(ParseRoot(text, source_name), source_name);
+  for (size_t count = 1; count <= overrides.size(); ++count) {
+    const Override& latest = overrides[count - 1];
+    YAML::Node root = ParseRoot(text, source_name);
+    for (size_t i = 0; i < count; ++i) {
+      const Override& o = overrides[i];
+      // A different controller does not take the file's parameters of the old one.
+      if (o.key == "controller.name" && root["controller"].IsMap() && root["controller"]["params"] &&
+          !(root["controller"]["name"] && root["controller"]["name"].IsScalar() &&
+            root["controller"]["name"].Scalar() == o.value)) {
+        root["controller"].remove("params");
+      }
+      ApplyOverride(root, o);
+    }
+    try {
+      config = LoadFromRoot(root, source_name);
+    } catch (const ConfigError& error) {
+      throw ConfigError("--set " + latest.key + "=" + latest.value + ": " + error.what());
+    }
+  }
+  return config;
+}
+
+ScenarioConfig LoadScenario(const std::string& path, const std::vector<Override>& overrides) {
+  std::ifstream stream(path);
+  if (!stream) throw ConfigError(path + ": cannot open scenario file");
+  std::stringstream text;
+  text << stream.rdbuf();
+  return LoadScenarioFromString(text.str(), path, overrides);
+}
+
+std::string ResolveLayoutPath(const ScenarioConfig& config) {
+  return IsShippedLayout(config.sensor.layout) ? ShippedLayoutPath(config.sensor.layout)
+                                               : config.sensor.layout;
+}
+
+std::string EmitScenarioYaml(const ScenarioConfig& config) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "name" << YAML::Value << config.name;
+  out << YAML::Key << "description" << YAML::Value << config.description;
+  out << YAML::Key << "seed" << YAML::Value << config.seed;
+  EmitNumber(out, "duration_s", config.duration_s);
+  EmitScene(out, config.scene);
+  EmitSensor(out, config.sensor);
+
+  out << YAML::Key << "controller" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "name" << YAML::Value << config.controller.name;
+  out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
+  for (const auto& [key, value] : config.controller.params) EmitNumber(out, key.c_str(), value);
+  out << YAML::EndMap;
+  EmitNumber(out, "grip_ceiling_n", config.controller.grip_ceiling_n);
+  EmitNumber(out, "rate_hz", config.controller.rate_hz);
+  EmitNumber(out, "stale_timeout_s", config.controller.stale_timeout_s);
+  out << YAML::EndMap;
+
+  out << YAML::Key << "script" << YAML::Value << YAML::BeginSeq;
+  for (const Action& action : config.script) EmitAction(out, action);
+  out << YAML::EndSeq;
+
+  const Expectations& e = config.expectations;
+  out << YAML::Key << "expectations" << YAML::Value << YAML::BeginMap;
+  if (e.not_dropped) out << YAML::Key << "not_dropped" << YAML::Value << *e.not_dropped;
+  if (e.max_slip_mm) EmitNumber(out, "max_slip_mm", *e.max_slip_mm);
+  if (e.max_peak_grip_n) EmitNumber(out, "max_peak_grip_n", *e.max_peak_grip_n);
+  if (e.not_crushed) out << YAML::Key << "not_crushed" << YAML::Value << *e.not_crushed;
+  if (e.slip_detected_within_ms) EmitNumber(out, "slip_detected_within_ms", *e.slip_detected_within_ms);
+  if (e.max_estimation_error_n) EmitNumber(out, "max_estimation_error_n", *e.max_estimation_error_n);
+  if (e.stable_within_s) EmitNumber(out, "stable_within_s", *e.stable_within_s);
+  if (e.max_false_slip_per_min) EmitNumber(out, "max_false_slip_per_min", *e.max_false_slip_per_min);
+  out << YAML::EndMap;
+
+  const MetricsConfig& m = config.metrics;
+  out << YAML::Key << "metrics" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "creep_speed_m_s", m.creep_speed_m_s);
+  EmitNumber(out, "slip_speed_m_s", m.slip_speed_m_s);
+  EmitNumber(out, "slip_event_gap_s", m.slip_event_gap_s);
+  EmitNumber(out, "early_detection_window_s", m.early_detection_window_s);
+  EmitNumber(out, "grasp_force_n", m.grasp_force_n);
+  EmitNumber(out, "drop_distance_m", m.drop_distance_m);
+  EmitNumber(out, "stable_window_s", m.stable_window_s);
+  EmitNumber(out, "stable_force_band", m.stable_force_band);
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,201 @@
+#pragma once
+/// ScenarioConfig: one scripted grasp experiment read from a scenario YAML file -- the scene (object,
+/// hand, physics), the sensor (layout, sampling, strain model, readout), the controller, a seed, a
+/// duration, a timed script of actions and the expectations a run is scored against. Every key, its
+/// unit and its default: docs/scenarios.md.
+///
+/// Loading validates everything before anything runs: unknown keys, wrong types, out-of-range
+/// values and unknown action or controller names are common::ConfigError "file:line: key = value:
+/// reason" (with the valid names where there is a list). EmitScenarioYaml writes the fully resolved
+/// configuration (every default filled in), which loads again to the same configuration.
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/yaml_map.h"
+#include "controller/grasp_controller.h"
+#include "controller/control_loop.h"
+#include "sensor/inversion.h"
+#include "sensor/readout.h"
+#include "sensor/strain_model.h"
+#include "sim/scene_config.h"
+
+namespace graspbed::scenario {
+
+/// Every script action. Names in files: ActionName().
+enum class ActionKind {
+  kClose,        ///< intent close: the controller grasps and holds
+  kOpen,         ///< intent open: the controller releases
+  kIdle,         ///< intent idle
+  kMove,         ///< wrist to an absolute position or by an offset over duration_s (smooth profile)
+  kLift,         ///< wrist up by height_m (negative: down) over duration_s (smooth profile)
+  kShake,        ///< sinusoidal wrist oscillation on top of the trajectory
+  kAddMass,      ///< add mass to the object, as a step or a ramp (pouring)
+  kPull,         ///< external force on the object, as a step or a ramp, optionally for a while
+  kSetFriction,  ///< change the object's friction coefficient (step or ramp)
+  kDeadUnit,     ///< a unit's channels read open circuit from now on
+  kShortUnit,    ///< a unit's channels read short circuit from now on
+  kRestoreUnit,  ///< clears a dead/short fault
+  kBias,         ///< constant offset on a unit's R1 and R2
+  kNoiseBurst,   ///< sensor noise multiplied by a factor for a while
+  kDropFrames,   ///< the sensor link loses frames for a while
+  kAddLatency,   ///< extra sensor latency from now on
+};
+
+/// Name of an action in scenario files ("close", "lift", "add_mass", ...).
+const char* ActionName(ActionKind kind);
+/// Every action name, in declaration order (for error messages and docs).
+std::vector<std::string> ActionNames();
+
+/// Velocity profile of wrist moves and ramps.
+enum class Profile {
+  kMinimumJerk,  ///< 10 s^3 - 15 s^4 + 6 s^5: zero velocity and acceleration at both ends
+  kLinear,       ///< constant rate
+};
+const char* ToString(Profile profile);
+
+/// One timed script action. Which fields matter depends on the kind (docs/scenarios.md); the rest
+/// keep their defaults and are not written to config.yaml.
+struct Action {
+  double at_s = 0.0;  ///< start time [s], simulation clock
+  ActionKind kind = ActionKind::kClose;
+  int line = 0;       ///< line in the scenario file (for messages), 0 when built in code
+
+  /// move: target position [m], world frame (absolute) or offset (relative = true).
+  /// pull: force [N], world frame. shake: axis (normalised on load).
+  std::array<double, 3> vector = {0.0, 0.0, 0.0};
+  bool relative = false;  ///< move: vector is an offset from the current wrist target
+  double height_m = 0.0;  ///< lift: vertical displacement [m], + up
+  /// move/lift: time to reach the target [s]; shake/noise_burst/drop_frames: how long it lasts [s];
+  /// pull: how long the force stays after its ramp (0 = until the end or the next pull) [s].
+  double duration_s = 0.0;
+  double ramp_s = 0.0;  ///< add_mass/pull/set_friction: ramp time; 0 = step [s]
+  Profile profile = Profile::kMinimumJerk;
+  double mass_kg = 0.0;         ///< add_mass: mass added [kg] (negative removes, total stays > 0)
+  double friction = 0.0;        ///< set_friction: new coefficient [-]
+  double frequency_hz = 0.0;    ///< shake [Hz]
+  double amplitude_m = 0.0;     ///< shake: peak displacement [m]
+  int unit = 0;                 ///< dead_unit/short_unit/restore_unit/bias: layout index
+  double r1_bias_ohm = 0.0;     ///< bias [Ohm]
+  double r2_bias_ohm = 0.0;     ///< bias [Ohm]
+  double noise_scale = 1.0;     ///< noise_burst: factor on the configured noise (>= 0)
+  double noise_ohm = 0.0;       ///< noise_burst: noise std-dev when none is configured [Ohm]
+  double probability = 1.0;     ///< drop_frames: chance each frame is lost [0..1]
+  double latency_s = 0.0;       ///< add_latency: extra latency [s]
+};
+
+/// What a run must achieve. Every check is optional (absent = not checked).
+struct Expectations {
+  std::optional<bool> not_dropped;             ///< the object stays in the hand while held
+  std::optional<double> max_slip_mm;           ///< accumulated slip distance <= [mm]
+  std::optional<double> max_peak_grip_n;       ///< peak squeeze on the object <= [N]
+  std::optional<bool> not_crushed;             ///< squeeze never above object.crush_limit_n
+  std::optional<double> slip_detected_within_ms;  ///< every slip event flagged within [ms]
+  std::optional<double> max_estimation_error_n;   ///< fn_rmse_n and ft_rmse_n <= [N]
+  std::optional<double> stable_within_s;       ///< time_to_stable_s <= [s] after the first close
+  std::optional<double> max_false_slip_per_min;   ///< false slip alarms per minute held <= [1/min]
+
+  /// True when no check is configured.
+  bool empty() const;
+};
+
+/// Thresholds that define the metrics (docs/scenarios.md, "Metrics").
+struct MetricsConfig {
+  /// Relative object/fingertip speed below which motion counts as soft-contact creep, not slip
+  /// [m/s]; slip distance accumulates only above it.
+  double creep_speed_m_s = 0.5e-3;
+  /// Relative speed above which a slip event starts [m/s].
+  double slip_speed_m_s = 2e-3;
+  /// A slip event ends after the speed stays below slip_speed_m_s this long [s].
+  double slip_event_gap_s = 0.05;
+  /// A controller slip flag up to this long before a ground-truth onset counts as detecting it
+  /// (incipient slip); later flags count from the onset [s].
+  double early_detection_window_s = 0.05;
+  /// Finger normal force above which the object counts as grasped [N].
+  double grasp_force_n = 0.3;
+  /// Object displacement relative to the wrist, from where it was when grasped, that counts as
+  /// dropped [m].
+  double drop_distance_m = 0.02;
+  /// Stable grasp: no slip event and the squeeze within +-stable_force_band of its mean over a
+  /// window this long [s].
+  double stable_window_s = 0.2;
+  double stable_force_band = 0.1;  ///< relative band for the stable squeeze [-]
+};
+
+/// Sensor options of a scenario: which layout, how the simulated backend samples, the strain
+/// model's non-ideal effects, the readout and the inversion.
+struct SensorOptions {
+  /// Layout: "default_20", "paper_3x3" (shipped in sensor/layouts/) or a path to a layout file
+  /// (relative to the scenario file).
+  std::string layout = "default_20";
+  double sample_rate_hz = 1000.0;     ///< sensor frames per second [Hz]
+  double latency_s = 0.0;             ///< delay from sampling to delivery [s]
+  double drop_probability = 0.0;      ///< chance each frame is lost on the link [0..1]
+  sensor::StrainModelConfig strain_model;
+  sensor::ReadoutConfig readout;
+  sensor::InversionConfig inversion;
+};
+
+/// The controller under test.
+struct ControllerOptions {
+  std::string name = "open_loop";
+  /// Parameters by name (controller's declared parameters; unknown ones refused). Defaults of the
+  /// controller fill the rest (written out in config.yaml).
+  controller::ControllerParams params;
+  /// Grip ceiling for the task [N] (e.g. a fragile object); 0 = none.
+  double grip_ceiling_n = 0.0;
+  double rate_hz = 1000.0;          ///< control ticks per second [Hz]
+  double stale_timeout_s = 0.02;    ///< no frame for this long: state stale, controller holds [s]
+};
+
+/// A complete scenario.
+struct ScenarioConfig {
+  std::string name;          ///< default: the file name without .yaml
+  std::string description;
+  std::string source_file;   ///< file it was loaded from ("" when built in code)
+  uint64_t seed = 1;         ///< seeds the sensor noise, spreads and frame drops
+  double duration_s = 3.0;   ///< simulated time [s]
+  sim::SceneConfig scene;
+  SensorOptions sensor;
+  ControllerOptions controller;
+  std::vector<Action> script;  ///< sorted by at_s (stable)
+  Expectations expectations;
+  MetricsConfig metrics;
+
+  /// Throws std::invalid_argument naming the field and value (cross-field checks).
+  void Validate() const;
+};
+
+/// One --set override: dotted key path (object.mass_kg, script[2].at_s) and YAML value text.
+struct Override {
+  std::string key;
+  std::string value;
+};
+
+/// Parses "key=value"; throws std::invalid_argument for text without '=' or an empty key.
+Override ParseOverride(const std::string& text);
+
+/// Loads and validates a scenario file, applying `overrides` in order. Errors in the file are
+/// common::ConfigError "file:line: key = value: reason"; errors caused by an override are
+/// "--set key=value: key = value: reason".
+ScenarioConfig LoadScenario(const std::string& path, const std::vector<Override>& overrides = {});
+/// Like LoadScenario, from YAML text; `source_name` stands for the file name in messages and
+/// relative layout paths are resolved from its directory.
+ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string& source_name,
+                                      const std::vector<Override>& overrides = {});
+
+/// Sets `key` (dotted path, list indices as [i]) in `root` to the YAML value `value`, creating
+/// maps on the way. Throws std::invalid_argument for a malformed path or an index out of range.
+void ApplyOverride(YAML::Node& root, const Override& override_value);
+
+/// The fully resolved configuration as YAML (every default filled in; loadable by LoadScenario
+/// to the same configuration).
+std::string EmitScenarioYaml(const ScenarioConfig& config);
+
+/// Absolute path of the layout file `config.sensor.layout` names.
+std::string ResolveLayoutPath(const ScenarioConfig& config);
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,187 @@
+#include "sim/scenario/script_player.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace graspbed::scenario {
+namespace {
+
+// Distinct stream for frame drops so that adding a drop action does not shift the sensor noise.
+constexpr uint64_t kDropStreamSalt = 0x5ce7a110d20f5ull;
+
+}  // namespace
+
+double ProfileProgress(Profile profile, double s) {
+  s = std::clamp(s, 0.0, 1.0);
+  if (profile == Profile::kLinear) return s;
+  return s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+}
+
+double ScriptPlayer::Ramp::At(double time_s) const {
+  if (!active) return to;
+  if (duration_s <= 0.0) return to;
+  return from + (to - from) * ProfileProgress(profile, (time_s - start_s) / duration_s);
+}
+
+ScriptPlayer::ScriptPlayer(const ScenarioConfig& config)
+    : script_(config.script),
+      sensor_(config.sensor),
+      grip_ceiling_n_(config.controller.grip_ceiling_n),
+      drop_rng_(config.seed ^ kDropStreamSalt) {}
+
+void ScriptPlayer::Start(sim::SimRig& rig) {
+  base_target_ = rig.simulation().wrist_target();
+  const double mass = rig.simulation().object_mass_kg();
+  mass_ = Ramp{mass, mass, 0.0, 0.0, Profile::kLinear, false};
+  const double friction = rig.simulation().scene().object.friction;
+  friction_ = Ramp{friction, friction, 0.0, 0.0, Profile::kLinear, false};
+  if (grip_ceiling_n_ > 0.0) rig.controller().SetGripCeiling(grip_ceiling_n_);
+  rig.controller().SetIntent(intent_);
+}
+
+void ScriptPlayer::Fire(const Action& action, double time_s, sim::SimRig& rig) {
+  switch (action.kind) {
+    case ActionKind::kClose:
+    case ActionKind::kOpen:
+    case ActionKind::kIdle:
+      intent_ = action.kind == ActionKind::kClose  ? controller::GraspIntent::kClose
+                : action.kind == ActionKind::kOpen ? controller::GraspIntent::kOpen
+                                                   : controller::GraspIntent::kIdle;
+      if (action.kind == ActionKind::kClose && first_close_time_s_ < 0.0) first_close_time_s_ = time_s;
+      rig.controller().SetIntent(intent_);
+      break;
+    case ActionKind::kMove:
+    case ActionKind::kLift: {
+      // A new move starts where the wrist target is now (an unfinished move is cut short).
+      move_from_ = base_target_;
+      if (action.kind == ActionKind::kLift) {
+        move_to_ = {base_target_[0], base_target_[1], base_target_[2] + action.height_m};
+      } else if (action.relative) {
+        for (int k = 0; k < 3; ++k) move_to_[k] = base_target_[k] + action.vector[k];
+      } else {
+        move_to_ = action.vector;
+      }
+      move_start_s_ = time_s;
+      move_duration_s_ = action.duration_s;
+      move_profile_ = action.profile;
+      moving_ = true;
+      break;
+    }
+    case ActionKind::kShake:
+      shake_axis_ = action.vector;
+      shake_start_s_ = time_s;
+      shake_end_s_ = time_s + action.duration_s;
+      shake_frequency_hz_ = action.frequency_hz;
+      shake_amplitude_m_ = action.amplitude_m;
+      break;
+    case ActionKind::kAddMass: {
+      // From the mass now to the previous target plus this step: overlapping ramps add up.
+      const double now = mass_.At(time_s);
+      const double target = std::max(mass_.to + action.mass_kg, 1e-6);
+      mass_ = Ramp{now, target, time_s, action.ramp_s, action.profile, true};
+      break;
+    }
+    case ActionKind::kSetFriction:
+      friction_ = Ramp{friction_.At(time_s), action.friction, time_s, action.ramp_s, action.profile, true};
+      break;
+    case ActionKind::kPull:
+      for (int k = 0; k < 3; ++k) {
+        force_[k] = Ramp{force_now_[k], action.vector[k], time_s, action.ramp_s, action.profile, true};
+      }
+      force_release_s_ = action.duration_s > 0.0 ? time_s + action.ramp_s + action.duration_s : -1.0;
+      break;
+    case ActionKind::kDeadUnit:
+      rig.backend().strain_model().SetUnitFault(action.unit, sensor::UnitFault::kOpen);
+      break;
+    case ActionKind::kShortUnit:
+      rig.backend().strain_model().SetUnitFault(action.unit, sensor::UnitFault::kShort);
+      break;
+    case ActionKind::kRestoreUnit:
+      rig.backend().strain_model().SetUnitFault(action.unit, sensor::UnitFault::kNone);
+      break;
+    case ActionKind::kBias:
+      rig.backend().strain_model().SetBiasOhm(action.unit, action.r1_bias_ohm, action.r2_bias_ohm);
+      break;
+    case ActionKind::kNoiseBurst:
+      rig.backend().strain_model().SetNoiseScale(action.noise_scale);
+      noise_end_s_ = time_s + action.duration_s;
+      break;
+    case ActionKind::kDropFrames:
+      drop_start_s_ = time_s;
+      drop_end_s_ = time_s + action.duration_s;
+      drop_probability_ = action.probability;
+      next_drop_sample_ = static_cast<int64_t>(std::ceil(time_s * sensor_.sample_rate_hz - 1e-9));
+      break;
+    case ActionKind::kAddLatency:
+      added_latency_s_ += action.latency_s;
+      rig.backend().SetLatency(sensor_.latency_s + added_latency_s_);
+      break;
+  }
+}
+
+void ScriptPlayer::Update(double time_s, sim::SimRig& rig) {
+  while (next_ < script_.size() && script_[next_].at_s <= time_s) {
+    Fire(script_[next_], time_s, rig);
+    ++next_;
+  }
+
+  // Wrist: trajectory plus shake.
+  if (moving_) {
+    const double s = move_duration_s_ > 0.0 ? (time_s - move_start_s_) / move_duration_s_ : 1.0;
+    const double progress = ProfileProgress(move_profile_, s);
+    for (int k = 0; k < 3; ++k) base_target_[k] = move_from_[k] + (move_to_[k] - move_from_[k]) * progress;
+    if (s >= 1.0) moving_ = false;
+  }
+  std::array<double, 3> target = base_target_;
+  if (time_s < shake_end_s_) {
+    const double offset = shake_amplitude_m_ *
+                          std::sin(2.0 * std::numbers::pi * shake_frequency_hz_ * (time_s - shake_start_s_));
+    for (int k = 0; k < 3; ++k) target[k] += offset * shake_axis_[k];
+  }
+  rig.simulation().SetWristTarget(target);
+
+  // Object.
+  if (mass_.active) {
+    rig.simulation().SetObjectMass(mass_.At(time_s));
+    if (time_s >= mass_.start_s + mass_.duration_s) mass_.active = false;
+  }
+  if (friction_.active) {
+    rig.simulation().SetObjectFriction(friction_.At(time_s));
+    if (time_s >= friction_.start_s + friction_.duration_s) friction_.active = false;
+  }
+  if (force_release_s_ >= 0.0 && time_s >= force_release_s_) {
+    for (Ramp& ramp : force_) ramp = Ramp{0.0, 0.0, time_s, 0.0, Profile::kLinear, true};
+    force_release_s_ = -1.0;
+  }
+  bool force_changing = false;
+  for (int k = 0; k < 3; ++k) {
+    if (!force_[k].active) continue;
+    force_now_[k] = force_[k].At(time_s);
+    force_changing = true;
+    if (time_s >= force_[k].start_s + force_[k].duration_s) force_[k].active = false;
+  }
+  if (force_changing) rig.simulation().SetObjectExternalForce(force_now_);
+
+  // Sensor faults that end.
+  if (noise_end_s_ >= 0.0 && time_s >= noise_end_s_) {
+    rig.backend().strain_model().SetNoiseScale(1.0);
+    noise_end_s_ = -1.0;
+  }
+  if (drop_end_s_ >= 0.0) {
+    // One draw per sensor sample in the window; a drawn loss drops the next sampled frame.
+    while (static_cast<double>(next_drop_sample_) / sensor_.sample_rate_hz <= time_s) {
+      const double sample_time_s = static_cast<double>(next_drop_sample_) / sensor_.sample_rate_hz;
+      if (sample_time_s >= drop_end_s_) {
+        drop_end_s_ = -1.0;
+        break;
+      }
+      if (sample_time_s >= drop_start_s_ && uniform_(drop_rng_) < drop_probability_) {
+        rig.backend().DropNextFrames(1);
+      }
+      ++next_drop_sample_;
+    }
+  }
+}
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,53 @@
+#pragma once
+/// SignalLog: the per-tick signals of a run in storage reserved before the run, so appending a row
+/// in the control loop never allocates. Numeric columns in one row-major block; a few text columns
+/// (static strings such as the controller phase) stored as pointers.
+
+#include <cstddef>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace graspbed::scenario {
+
+class SignalLog {
+ public:
+  /// `numeric_columns` and `text_columns` name the columns (text columns are written first after
+  /// time in CSV order given by the caller); `capacity_rows` rows are reserved up front.
+  SignalLog(std::vector<std::string> numeric_columns, std::vector<std::string> text_columns,
+            size_t capacity_rows);
+
+  /// Starts a new row and returns its numeric cells (numeric_column_count() of them, zeroed) and
+  /// text cells; nullptr when the reserved capacity is used up (the row is counted as lost).
+  /// Allocates nothing.
+  double* AppendRow(const char*** text_cells);
+
+  size_t rows() const { return rows_; }
+  size_t lost_rows() const { return lost_rows_; }
+  size_t numeric_column_count() const { return numeric_columns_.size(); }
+  size_t text_column_count() const { return text_columns_.size(); }
+  const std::vector<std::string>& numeric_columns() const { return numeric_columns_; }
+  const std::vector<std::string>& text_columns() const { return text_columns_; }
+  /// Index of numeric column `name`; throws std::out_of_range when there is none.
+  size_t Column(const std::string& name) const;
+  /// Cell (row, numeric column).
+  double At(size_t row, size_t column) const { return values_[row * numeric_columns_.size() + column]; }
+  const char* TextAt(size_t row, size_t column) const { return texts_[row * text_columns_.size() + column]; }
+  /// A whole numeric column as a vector (for plots; allocates, not for the loop).
+  std::vector<double> ColumnValues(const std::string& name) const;
+
+  /// Writes the log as CSV (header: text columns after the first numeric column "time_s"). Numbers
+  /// with %.9g; inf/nan as "inf"/"nan". Throws std::runtime_error on a write error.
+  void WriteCsv(std::FILE* file) const;
+
+ private:
+  std::vector<std::string> numeric_columns_;
+  std::vector<std::string> text_columns_;
+  size_t capacity_rows_ = 0;
+  size_t rows_ = 0;
+  size_t lost_rows_ = 0;
+  std::vector<double> values_;
+  std::vector<const char*> texts_;
+};
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,169 @@
+#include "sim/scene_config.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace graspbed::sim {
+namespace {
+
+[[noreturn]] void Bad(const std::string& field, double value, const std::string& reason) {
+  std::ostringstream message;
+  message << "scene." << field << " = " << value << ": " << reason;
+  throw std::invalid_argument(message.str());
+}
+
+void RequirePositive(const std::string& field, double value) {
+  if (!(value > 0.0) || !std::isfinite(value)) Bad(field, value, "must be > 0");
+}
+
+void RequireNonNegative(const std::string& field, double value) {
+  if (!(value >= 0.0) || !std::isfinite(value)) Bad(field, value, "must be >= 0");
+}
+
+ObjectShape ParseShape(const std::string& text) {
+  if (text == "box") return ObjectShape::kBox;
+  if (text == "cylinder") return ObjectShape::kCylinder;
+  return ObjectShape::kSphere;  // GetString already restricted the value to the three names
+}
+
+std::array<double, 3> GetTriple(const common::YamlMap& map, std::string_view key, std::array<double, 3> fallback,
+                                common::NumberRule rule = {}) {
+  const std::vector<double> list =
+      map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3, rule);
+  return {list[0], list[1], list[2]};
+}
+
+}  // namespace
+
+const char* ToString(ObjectShape shape) {
+  switch (shape) {
+    case ObjectShape::kBox:
+      return "box";
+    case ObjectShape::kCylinder:
+      return "cylinder";
+    case ObjectShape::kSphere:
+      return "sphere";
+  }
+  return "?";
+}
+
+double ObjectConfig::RestHalfHeightM() const {
+  switch (shape) {
+    case ObjectShape::kBox:
+    case ObjectShape::kCylinder:
+      return 0.5 * size_m[2];
+    case ObjectShape::kSphere:
+      return 0.5 * size_m[0];
+  }
+  return 0.0;
+}
+
+void SceneConfig::Validate() const {
+  const int used_sizes = object.shape == ObjectShape::kBox ? 3 : 1;
+  for (int i = 0; i < used_sizes; ++i) RequirePositive("object.size_m[" + std::to_string(i) + "]", object.size_m[i]);
+  if (object.shape == ObjectShape::kCylinder) RequirePositive("object.size_m[2]", object.size_m[2]);
+  RequirePositive("object.mass_kg", object.mass_kg);
+  RequirePositive("object.friction", object.friction);
+  RequireNonNegative("object.torsional_friction", object.torsional_friction);
+  if (object.solref_timeconst_s < 2.0 * physics.timestep_s) {
+    Bad("object.solref_timeconst_s", object.solref_timeconst_s, "must be >= 2 x physics.timestep_s");
+  }
+  RequirePositive("object.solref_dampratio", object.solref_dampratio);
+  if (!(object.solimp[0] > 0.0 && object.solimp[0] <= object.solimp[1] && object.solimp[1] < 1.0)) {
+    Bad("object.solimp[1]", object.solimp[1], "need 0 < dmin <= dmax < 1");
+  }
+  RequirePositive("object.solimp[2]", object.solimp[2]);
+  RequireNonNegative("object.crush_limit_n", object.crush_limit_n);
+  RequirePositive("hand.open_gap_m", hand.open_gap_m);
+  if (hand.open_gap_m > 0.2) Bad("hand.open_gap_m", hand.open_gap_m, "must be <= 0.2");
+  RequirePositive("hand.palm_mass_kg", hand.palm_mass_kg);
+  RequirePositive("hand.digit_mass_kg", hand.digit_mass_kg);
+  RequirePositive("hand.friction", hand.friction);
+  RequirePositive("hand.wrist_stiffness_n_m", hand.wrist_stiffness_n_m);
+  RequireNonNegative("hand.wrist_damping_n_s_m", hand.wrist_damping_n_s_m);
+  RequirePositive("hand.motor.stall_force_n", hand.motor.stall_force_n);
+  RequirePositive("hand.motor.no_load_speed_m_s", hand.motor.no_load_speed_m_s);
+  RequireNonNegative("hand.motor.armature_kg", hand.motor.armature_kg);
+  RequireNonNegative("hand.motor.damping_n_s_m", hand.motor.damping_n_s_m);
+  RequirePositive("physics.timestep_s", physics.timestep_s);
+  if (physics.timestep_s > 0.01) Bad("physics.timestep_s", physics.timestep_s, "must be <= 0.01");
+  if (physics.impratio < 1.0) Bad("physics.impratio", physics.impratio, "must be >= 1");
+  if (physics.noslip_iterations < 0) Bad("physics.noslip_iterations", physics.noslip_iterations, "must be >= 0");
+  if (physics.solver_iterations < 1) Bad("physics.solver_iterations", physics.solver_iterations, "must be >= 1");
+  RequirePositive("physics.tolerance", physics.tolerance);
+  if (physics.condim != 3 && physics.condim != 4 && physics.condim != 6) {
+    Bad("physics.condim", physics.condim, "must be 3, 4 or 6");
+  }
+  RequireNonNegative("physics.gravity_m_s2", physics.gravity_m_s2);
+}
+
+SceneConfig LoadSceneConfig(const common::YamlMap& map) {
+  using common::NumberRule;
+  SceneConfig scene;
+  if (auto object = map.GetMap("object")) {
+    ObjectConfig& o = scene.object;
+    o.shape = ParseShape(object->GetString("shape", ToString(o.shape), {"box", "cylinder", "sphere"}));
+    o.size_m = GetTriple(*object, "size_m", o.size_m, NumberRule::NonNegative());
+    o.mass_kg = object->GetNumber("mass_kg", o.mass_kg, NumberRule::Positive());
+    o.friction = object->GetNumber("friction", o.friction, NumberRule::Positive());
+    o.torsional_friction = object->GetNumber("torsional_friction", o.torsional_friction, NumberRule::NonNegative());
+    o.solref_timeconst_s = object->GetNumber("solref_timeconst_s", o.solref_timeconst_s, NumberRule::Positive());
+    o.solref_dampratio = object->GetNumber("solref_dampratio", o.solref_dampratio, NumberRule::Positive());
+    const std::vector<double> solimp =
+        object->GetNumberList("solimp", std::vector<double>(o.solimp.begin(), o.solimp.end()), 5);
+    for (int i = 0; i < 5; ++i) o.solimp[i] = solimp[i];
+    o.initial_position_m = GetTriple(*object, "initial_position_m", o.initial_position_m);
+    o.initial_yaw_rad = object->GetNumber("initial_yaw_rad", o.initial_yaw_rad);
+    o.crush_limit_n = object->GetNumber("crush_limit_n", o.crush_limit_n, NumberRule::NonNegative());
+    object->RejectUnknownKeys();
+  }
+  if (auto hand = map.GetMap("hand")) {
+    HandConfig& h = scene.hand;
+    h.open_gap_m = hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(0.001, 0.2));
+    h.palm_mass_kg = hand->GetNumber("palm_mass_kg", h.palm_mass_kg, NumberRule::Positive());
+    h.digit_mass_kg = hand->GetNumber("digit_mass_kg", h.digit_mass_kg, NumberRule::Positive());
+    h.friction = hand->GetNumber("friction", h.friction, NumberRule::Positive());
+    h.initial_wrist_position_m = GetTriple(*hand, "initial_wrist_position_m", h.initial_wrist_position_m);
+    h.wrist_stiffness_n_m = hand->GetNumber("wrist_stiffness_n_m", h.wrist_stiffness_n_m, NumberRule::Positive());
+    h.wrist_damping_n_s_m = hand->GetNumber("wrist_damping_n_s_m", h.wrist_damping_n_s_m, NumberRule::NonNegative());
+    if (auto motor = hand->GetMap("motor")) {
+      MotorConfig& m = h.motor;
+      m.stall_force_n = motor->GetNumber("stall_force_n", m.stall_force_n, NumberRule::Positive());
+      m.no_load_speed_m_s = motor->GetNumber("no_load_speed_m_s", m.no_load_speed_m_s, NumberRule::Positive());
+      m.armature_kg = motor->GetNumber("armature_kg", m.armature_kg, NumberRule::NonNegative());
+      m.damping_n_s_m = motor->GetNumber("damping_n_s_m", m.damping_n_s_m, NumberRule::NonNegative());
+      motor->RejectUnknownKeys();
+    }
+    hand->RejectUnknownKeys();
+  }
+  if (auto physics = map.GetMap("physics")) {
+    PhysicsConfig& p = scene.physics;
+    p.timestep_s = physics->GetNumber("timestep_s", p.timestep_s, NumberRule::Between(1e-5, 0.01));
+    p.elliptic_cones = physics->GetBool("elliptic_cones", p.elliptic_cones);
+    p.impratio = physics->GetNumber("impratio", p.impratio, NumberRule::Between(1.0, 1000.0));
+    p.noslip_iterations = physics->GetInt("noslip_iterations", p.noslip_iterations, 0, 1000);
+    p.solver_iterations = physics->GetInt("solver_iterations", p.solver_iterations, 1, 10000);
+    p.tolerance = physics->GetNumber("tolerance", p.tolerance, NumberRule::Positive());
+    p.condim = physics->GetInt("condim", p.condim, 3, 6);
+    if (p.condim == 5) physics->Fail("condim", "must be 3, 4 or 6");
+    p.gravity_m_s2 = physics->GetNumber("gravity_m_s2", p.gravity_m_s2, NumberRule::NonNegative());
+    p.table = physics->GetBool("table", p.table);
+    physics->RejectUnknownKeys();
+  }
+  map.RejectUnknownKeys();
+  // Cross-field rules (time constant vs timestep) are checked here with the file name in front.
+  try {
+    scene.Validate();
+  } catch (const std::invalid_argument& error) {
+    throw common::ConfigError(map.file() + ": " + error.what());
+  }
+  return scene;
+}
+
+SceneConfig LoadSceneConfigFile(const std::string& path) {
+  return LoadSceneConfig(common::YamlMap::LoadFile(path));
+}
+
+}  // namespace graspbed::sim

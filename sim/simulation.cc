@@ -1,0 +1,389 @@
+#include "sim/simulation.h"
+
+#include <Eigen/Geometry>
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+
+#include "sim/model_generator.h"
+
+namespace graspbed::sim {
+namespace {
+
+// MuJoCo's handlers are process-wide C function pointers; the text of the latest warning goes to a
+// thread-local buffer that the Simulation stepping on this thread picks up.
+thread_local char tls_last_warning[160] = {0};
+
+void WarningHandler(const char* message) {
+  std::snprintf(tls_last_warning, sizeof(tls_last_warning), "%s", message);
+}
+
+// mju_error must not return into MuJoCo; an exception unwinds to our load/step boundary.
+void ErrorHandler(const char* message) { throw std::runtime_error(std::string("MuJoCo error: ") + message); }
+
+void InstallHandlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    mju_user_warning = &WarningHandler;
+    mju_user_error = &ErrorHandler;
+  });
+}
+
+enum GeomSide : int { kOther = 0, kFinger = 1, kThumb = 2, kHandOther = 3 };
+
+int RequireId(const mjModel* m, int type, const char* name) {
+  const int id = mj_name2id(m, type, name);
+  if (id < 0) throw std::runtime_error(std::string("generated model lacks '") + name + "'");
+  return id;
+}
+
+// Velocity of the material point at world position `p` of body `body` [m/s], world frame.
+void PointVelocity(const mjModel* m, const mjData* d, int body, const mjtNum p[3], mjtNum v[3]) {
+  mjtNum vel[6];
+  mj_objectVelocity(m, d, mjOBJ_BODY, body, vel, 0);  // [angular; linear] at the body origin
+  const mjtNum* origin = d->xpos + 3 * body;
+  const mjtNum r[3] = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+  mjtNum w_cross_r[3];
+  mju_cross(w_cross_r, vel, r);
+  for (int k = 0; k < 3; ++k) v[k] = vel[3 + k] + w_cross_r[k];
+}
+
+}  // namespace
+
+Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
+    : layout_(layout), scene_(scene) {
+  InstallHandlers();
+  mjcf_ = GenerateMjcf(layout_, scene_);
+
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  constexpr const char* kFileName = "graspbed_scene.xml";
+  if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf_.size())) != 0) {
+    throw std::runtime_error("cannot create the in-memory model file");
+  }
+  const int file = mj_findFileVFS(vfs.get(), kFileName);
+  std::memcpy(vfs->filedata[file], mjcf_.data(), mjcf_.size());
+  char error[1000] = {0};
+  model_ = mj_loadXML(kFileName, vfs.get(), error, sizeof(error));
+  mj_deleteVFS(vfs.get());
+  if (model_ == nullptr) throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+  data_ = mj_makeData(model_);
+  if (data_ == nullptr) {
+    mj_deleteModel(model_);
+    throw std::runtime_error("MuJoCo could not allocate mjData");
+  }
+
+  const mjModel* m = model_;
+  object_body_ = RequireId(m, mjOBJ_BODY, "object");
+  object_geom_ = RequireId(m, mjOBJ_GEOM, "object_geom");
+  holder_body_ = RequireId(m, mjOBJ_BODY, "holder");
+  holder_shell_geom_ = RequireId(m, mjOBJ_GEOM, "holder_shell");
+  finger_body_ = RequireId(m, mjOBJ_BODY, "finger");
+  thumb_body_ = RequireId(m, mjOBJ_BODY, "thumb");
+  wrist_body_ = RequireId(m, mjOBJ_BODY, "wrist");
+  const int finger_joint = RequireId(m, mjOBJ_JOINT, "finger_slide");
+  const int thumb_joint = RequireId(m, mjOBJ_JOINT, "thumb_slide");
+  finger_joint_qpos_ = m->jnt_qposadr[finger_joint];
+  thumb_joint_qpos_ = m->jnt_qposadr[thumb_joint];
+  finger_joint_dof_ = m->jnt_dofadr[finger_joint];
+  thumb_joint_dof_ = m->jnt_dofadr[thumb_joint];
+  grip_actuator_ = RequireId(m, mjOBJ_ACTUATOR, "grip_motor");
+  grip_tendon_ = RequireId(m, mjOBJ_TENDON, "grip");
+  brake_equality_ = RequireId(m, mjOBJ_EQUALITY, "grip_brake");
+  const char* servo_names[3] = {"wrist_x_servo", "wrist_y_servo", "wrist_z_servo"};
+  const char* joint_names[3] = {"wrist_x", "wrist_y", "wrist_z"};
+  for (int k = 0; k < 3; ++k) {
+    wrist_actuators_[k] = RequireId(m, mjOBJ_ACTUATOR, servo_names[k]);
+    wrist_joint_qpos_[k] = m->jnt_qposadr[RequireId(m, mjOBJ_JOINT, joint_names[k])];
+  }
+
+  // geom -> unit and geom -> side tables, built once.
+  geom_unit_.assign(m->ngeom, -1);
+  geom_side_.assign(m->ngeom, kOther);
+  for (int i = 0; i < layout_.unit_count(); ++i) {
+    const std::string name = "unit_" + std::to_string(i);
+    geom_unit_[RequireId(m, mjOBJ_GEOM, name.c_str())] = i;
+  }
+  const int palm_body = RequireId(m, mjOBJ_BODY, "palm");
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int body = m->geom_bodyid[g];
+    if (body == finger_body_ || body == holder_body_) {
+      geom_side_[g] = kFinger;
+    } else if (body == thumb_body_) {
+      geom_side_[g] = kThumb;
+    } else if (body == palm_body || body == wrist_body_) {
+      geom_side_[g] = kHandOther;
+    }
+  }
+  unit_frames_.resize(layout_.unit_count());
+  for (int i = 0; i < layout_.unit_count(); ++i) {
+    const sensor::UnitPose& unit = layout_.units[i];
+    const Eigen::Vector3d n = unit.inward_normal.normalized();
+    const Eigen::Vector3d beam = unit.beam_axis.normalized();
+    const Eigen::Vector3d cross = n.cross(beam);  // UnitLoad: cross shear along normal x beam
+    for (int k = 0; k < 3; ++k) {
+      unit_frames_[i][k] = n[k];
+      unit_frames_[i][3 + k] = beam[k];
+      unit_frames_[i][6 + k] = cross[k];
+      unit_frames_[i][9 + k] = unit.position_m[k];
+    }
+  }
+
+  object_mass_ = m->body_mass[object_body_];
+  for (int k = 0; k < 3; ++k) object_inertia_[k] = m->body_inertia[3 * object_body_ + k];
+  hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
+  for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
+  mj_forward(model_, data_);
+}
+
+Simulation::~Simulation() {
+  if (data_ != nullptr) mj_deleteData(data_);
+  if (model_ != nullptr) mj_deleteModel(model_);
+}
+
+double Simulation::time_s() const { return data_->time; }
+double Simulation::timestep_s() const { return model_->opt.timestep; }
+
+void Simulation::SetGripEffort(double effort) {
+  grip_effort_ = std::isfinite(effort) ? std::clamp(effort, -1.0, 1.0) : 0.0;
+}
+
+void Simulation::SetGripBrake(bool engaged) {
+  if (engaged && !brake_engaged_) {
+    // Joint equality with only joint1: finger_slide = qpos0 + polycoef[0].
+    model_->eq_data[brake_equality_ * mjNEQDATA + 0] =
+        data_->qpos[finger_joint_qpos_] - model_->qpos0[finger_joint_qpos_];
+  }
+  model_->eq_active[brake_equality_] = engaged ? 1 : 0;
+  brake_engaged_ = engaged;
+}
+
+void Simulation::SetWristTarget(const std::array<double, 3>& position_m) { wrist_target_ = position_m; }
+
+void Simulation::SetObjectExternalForce(const std::array<double, 3>& force_n) {
+  for (int k = 0; k < 3; ++k) {
+    data_->xfrc_applied[6 * object_body_ + k] = force_n[k];
+    external_force_[k] = force_n[k];
+  }
+}
+
+void Simulation::SetObjectMass(double mass_kg) {
+  if (!(mass_kg > 0.0) || !std::isfinite(mass_kg)) {
+    throw std::invalid_argument("object mass = " + std::to_string(mass_kg) + " kg: must be > 0");
+  }
+  const double scale = mass_kg / object_mass_;
+  model_->body_mass[object_body_] = mass_kg;
+  for (int k = 0; k < 3; ++k) model_->body_inertia[3 * object_body_ + k] = object_inertia_[k] * scale;
+}
+
+double Simulation::object_mass_kg() const { return model_->body_mass[object_body_]; }
+
+void Simulation::SetObjectFriction(double friction) {
+  if (!(friction > 0.0) || !std::isfinite(friction)) {
+    throw std::invalid_argument("object friction = " + std::to_string(friction) + ": must be > 0");
+  }
+  model_->geom_friction[3 * object_geom_] = friction;
+}
+
+void Simulation::ApplyControls() {
+  data_->ctrl[grip_actuator_] = brake_engaged_ ? 0.0 : grip_effort_;
+  for (int k = 0; k < 3; ++k) {
+    // Joint zero is the initial wrist position; z carries the hand's weight in the target.
+    double target = wrist_target_[k] - model_->body_pos[3 * wrist_body_ + k];
+    if (k == 2) target += hand_weight_n_ / scene_.hand.wrist_stiffness_n_m;
+    data_->ctrl[wrist_actuators_[k]] = target;
+  }
+  for (int k = 0; k < 3; ++k) data_->xfrc_applied[6 * object_body_ + k] = external_force_[k];
+}
+
+void Simulation::Step() {
+  ApplyControls();
+  tls_last_warning[0] = '\0';
+  mj_step(model_, data_);
+  CheckFault();
+}
+
+void Simulation::StepUntil(double time_s) {
+  // Half a step of slack so floating-point time sums do not add a step.
+  while (data_->time < time_s - 0.5 * model_->opt.timestep) Step();
+}
+
+void Simulation::RecordFault(const char* cause) {
+  if (fault_.occurred) return;
+  fault_.occurred = true;
+  fault_.time_s = data_->time;
+  std::snprintf(fault_.cause.data(), fault_.cause.size(), "%.150s", cause);
+}
+
+void Simulation::CheckFault() {
+  for (int w = 0; w < mjNWARNING; ++w) {
+    const uint64_t count = static_cast<uint64_t>(data_->warning[w].number);
+    if (count > warning_seen_[w]) {
+      fault_.warning_count += count - warning_seen_[w];
+      warning_seen_[w] = count;
+      char cause[400];
+      std::snprintf(cause, sizeof(cause), "MuJoCo warning: %.100s%s%.100s",
+                    mju_warningText(w, data_->warning[w].lastinfo), tls_last_warning[0] != '\0' ? " | " : "",
+                    tls_last_warning);
+      RecordFault(cause);
+    }
+  }
+  for (int i = 0; i < model_->nq; ++i) {
+    if (!std::isfinite(data_->qpos[i])) {
+      RecordFault("NaN/inf in qpos");
+      return;
+    }
+  }
+  for (int i = 0; i < model_->nv; ++i) {
+    if (!std::isfinite(data_->qvel[i])) {
+      RecordFault("NaN/inf in qvel");
+      return;
+    }
+  }
+}
+
+void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
+  const int n_units = layout_.unit_count();
+  if (static_cast<int>(loads.size()) != n_units) {
+    throw std::invalid_argument("ComputeUnitLoads: " + std::to_string(loads.size()) + " loads for " +
+                                std::to_string(n_units) + " units");
+  }
+  std::array<double, sensor::kMaxUnits> moment{};  // sum of Fn x offset per unit [N m]
+  for (auto& load : loads) load = sensor::UnitLoad{};
+  const mjtNum* holder_rot = data_->xmat + 9 * holder_body_;  // holder -> world, row-major
+  const mjtNum* holder_pos = data_->xpos + 3 * holder_body_;
+  for (int c = 0; c < data_->ncon; ++c) {
+    const mjContact& contact = data_->contact[c];
+    const int unit1 = geom_unit_[contact.geom1];
+    const int unit2 = geom_unit_[contact.geom2];
+    if (unit1 < 0 && unit2 < 0) continue;
+    if (unit1 >= 0 && unit2 >= 0) continue;  // mesa on mesa: internal to the finger
+    mjtNum local[6];
+    mj_contactForce(model_, data_, c, local);
+    // Rows of contact.frame are the contact axes (normal from geom1 to geom2, then the tangents);
+    // the force acts on geom2 along +normal, on geom1 opposite.
+    mjtNum world[3];
+    mju_mulMatTVec(world, contact.frame, local, 3, 3);
+    const int unit = unit1 >= 0 ? unit1 : unit2;
+    const double sign = unit1 >= 0 ? -1.0 : 1.0;
+    mjtNum force_holder[3];
+    mju_mulMatTVec(force_holder, holder_rot, world, 3, 3);  // world -> holder frame
+    mjtNum rel[3] = {contact.pos[0] - holder_pos[0], contact.pos[1] - holder_pos[1], contact.pos[2] - holder_pos[2]};
+    mjtNum pos_holder[3];
+    mju_mulMatTVec(pos_holder, holder_rot, rel, 3, 3);
+    const auto& f = unit_frames_[unit];
+    const double fn = sign * mju_dot3(force_holder, f.data());
+    sensor::UnitLoad& load = loads[unit];
+    load.fn_n += fn;
+    load.ft_n += sign * mju_dot3(force_holder, f.data() + 3);
+    load.cross_shear_n += sign * mju_dot3(force_holder, f.data() + 6);
+    const mjtNum offset_vec[3] = {pos_holder[0] - f[9], pos_holder[1] - f[10], pos_holder[2] - f[11]};
+    moment[unit] += fn * mju_dot3(offset_vec, f.data() + 3);
+  }
+  for (int i = 0; i < n_units; ++i) {
+    if (loads[i].fn_n > 1e-9) loads[i].offset_along_beam_m = moment[i] / loads[i].fn_n;
+  }
+}
+
+GroundTruth Simulation::truth() const {
+  const mjModel* m = model_;
+  const mjData* d = data_;
+  GroundTruth t;
+  t.time_s = d->time;
+  mjtNum object_vel[6];
+  mj_objectVelocity(m, d, mjOBJ_BODY, object_body_, object_vel, 0);
+  for (int k = 0; k < 3; ++k) {
+    t.object_position_m[k] = d->xipos[3 * object_body_ + k];
+    t.object_angular_velocity_rad_s[k] = object_vel[k];
+    t.object_velocity_m_s[k] = object_vel[3 + k];
+    t.wrist_position_m[k] = d->xpos[3 * wrist_body_ + k];
+  }
+  // Lowest point of the object geom: centre z minus its half extent along world z.
+  const mjtNum* rot = d->geom_xmat + 9 * object_geom_;  // row-major; row 2 = world z in geom axes
+  const mjtNum* size = m->geom_size + 3 * object_geom_;
+  double half_extent = 0.0;
+  switch (scene_.object.shape) {
+    case ObjectShape::kBox:
+      half_extent = std::abs(rot[6]) * size[0] + std::abs(rot[7]) * size[1] + std::abs(rot[8]) * size[2];
+      break;
+    case ObjectShape::kCylinder:
+      half_extent = std::abs(rot[8]) * size[1] + size[0] * std::sqrt(std::max(0.0, 1.0 - rot[8] * rot[8]));
+      break;
+    case ObjectShape::kSphere:
+      half_extent = size[0];
+      break;
+  }
+  t.object_height_above_table_m = d->geom_xpos[3 * object_geom_ + 2] - half_extent;
+  t.grip_closure_m = d->qpos[finger_joint_qpos_] + d->qpos[thumb_joint_qpos_];
+  t.grip_velocity_m_s = d->qvel[finger_joint_dof_] + d->qvel[thumb_joint_dof_];
+  // Stall force x effort minus the back-EMF term carried by the slides' damping.
+  t.grip_motor_force_n = d->actuator_force[grip_actuator_] -
+                         scene_.hand.motor.stall_force_n * t.grip_velocity_m_s / scene_.hand.motor.no_load_speed_m_s;
+
+  double finger_on_object = 0.0;
+  double thumb_on_object = 0.0;
+  double slip_weighted = 0.0;
+  double slip_weight = 0.0;
+  for (int c = 0; c < d->ncon; ++c) {
+    const mjContact& contact = d->contact[c];
+    const int side1 = geom_side_[contact.geom1];
+    const int side2 = geom_side_[contact.geom2];
+    const bool digit1 = side1 == kFinger || side1 == kThumb;
+    const bool digit2 = side2 == kFinger || side2 == kThumb;
+    if (digit1 == digit2) continue;  // hand on hand, or nothing of the digits
+    if (side1 == kHandOther || side2 == kHandOther) continue;
+    const int digit_geom = digit1 ? contact.geom1 : contact.geom2;
+    const int other_geom = digit1 ? contact.geom2 : contact.geom1;
+    const int side = digit1 ? side1 : side2;
+    mjtNum local[6];
+    mj_contactForce(m, d, c, local);
+    const double normal = local[0];
+    if (side == kFinger) {
+      t.finger_normal_force_n += normal;
+      if (geom_unit_[digit_geom] >= 0) {
+        t.sensed_normal_force_n += normal;
+        t.holder_normal_force_n += normal;
+      } else if (digit_geom == holder_shell_geom_) {
+        t.holder_normal_force_n += normal;
+      }
+    } else {
+      t.thumb_normal_force_n += normal;
+    }
+    if (other_geom != object_geom_) continue;
+    if (side == kFinger) {
+      finger_on_object += normal;
+      ++t.finger_contacts;
+      if (geom_unit_[digit_geom] >= 0) {
+        t.max_mesa_penetration_m = std::max(t.max_mesa_penetration_m, -contact.dist);
+      } else if (digit_geom == holder_shell_geom_ && contact.dist < 0.0) {
+        t.object_touches_holder_shell = true;
+      }
+    } else {
+      thumb_on_object += normal;
+      ++t.thumb_contacts;
+    }
+    mjtNum v_object[3];
+    mjtNum v_digit[3];
+    PointVelocity(m, d, object_body_, contact.pos, v_object);
+    PointVelocity(m, d, m->geom_bodyid[digit_geom], contact.pos, v_digit);
+    mjtNum rel[3] = {v_object[0] - v_digit[0], v_object[1] - v_digit[1], v_object[2] - v_digit[2]};
+    const mjtNum along_normal = mju_dot3(rel, contact.frame);
+    for (int k = 0; k < 3; ++k) rel[k] -= along_normal * contact.frame[k];
+    const double slip = mju_norm3(rel);
+    t.slip_speed_m_s = std::max(t.slip_speed_m_s, slip);
+    slip_weighted += slip * std::max(normal, 0.0);
+    slip_weight += std::max(normal, 0.0);
+  }
+  if (slip_weight > 0.0) t.mean_slip_speed_m_s = slip_weighted / slip_weight;
+  if (t.holder_normal_force_n > 1e-9) t.sensed_share = t.sensed_normal_force_n / t.holder_normal_force_n;
+  t.object_squeeze_n = std::max(finger_on_object, thumb_on_object);
+  return t;
+}
+
+}  // namespace graspbed::sim
