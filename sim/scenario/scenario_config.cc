@@ -290,7 +290,8 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   // The scene sections go to the sim loader as one map; their nodes keep their file positions.
   YAML::Node scene_node(YAML::NodeType::Map);
   for (const char* key : {"object", "hand", "physics"}) {
-    if (map.Has(key)) scene_node[key] = map.Raw(key);
+    const YAML::Node section = map.Raw(key);  // marks the key valid even when absent
+    if (section.IsDefined()) scene_node[key] = section;
   }
   const YamlMap scene_map(scene_node, file, "");
   AtMap(scene_map, [&] { config.scene = sim::LoadSceneConfig(scene_map); });

@@ -1,0 +1,235 @@
+// Scenario schema: defaults, validation messages (file:line: key = value: reason), --set overrides
+// and the resolved config.yaml round trip.
+#include "sim/scenario/scenario_config.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace graspbed::scenario {
+namespace {
+
+// Loads `text` as scenario "test.yaml" and returns the error message ("" if it loaded).
+std::string ErrorOf(const std::string& text, const std::vector<Override>& overrides = {}) {
+  try {
+    LoadScenarioFromString(text, "test.yaml", overrides);
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(ScenarioConfigTest, MinimalFileGetsEveryDefault) {
+  const ScenarioConfig config = LoadScenarioFromString("duration_s: 1.5\n", "dir/lift_box.yaml");
+  EXPECT_EQ(config.name, "lift_box");
+  EXPECT_EQ(config.seed, 1u);
+  EXPECT_DOUBLE_EQ(config.duration_s, 1.5);
+  EXPECT_EQ(config.controller.name, "open_loop");
+  // The controller's declared defaults are filled in, so config.yaml lists them.
+  for (const auto& parameter : controller::ControllerParameters("open_loop")) {
+    ASSERT_TRUE(config.controller.params.count(parameter.name)) << parameter.name;
+    EXPECT_DOUBLE_EQ(config.controller.params.at(parameter.name), parameter.default_value);
+  }
+  EXPECT_EQ(config.sensor.layout, "default_20");
+  EXPECT_DOUBLE_EQ(config.sensor.sample_rate_hz, 1000.0);
+  EXPECT_TRUE(config.script.empty());
+  EXPECT_TRUE(config.expectations.empty());
+}
+
+TEST(ScenarioConfigTest, ShippedDefaultScenarioLoads) {
+  const ScenarioConfig config = LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/default.yaml");
+  EXPECT_EQ(config.name, "default");
+  EXPECT_FALSE(config.script.empty());
+  EXPECT_FALSE(config.expectations.empty());
+}
+
+TEST(ScenarioConfigTest, ScriptIsSortedByTimeAndActionsKeepTheirParameters) {
+  const ScenarioConfig config = LoadScenarioFromString(R"(duration_s: 5
+script:
+  - {at_s: 2.0, action: add_mass, mass_kg: 0.05, ramp_s: 0.5}
+  - {at_s: 0.2, action: close}
+  - {at_s: 1.0, action: move, offset_m: [0, 0, 0.03], duration_s: 0.4, profile: linear}
+  - {at_s: 3.0, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, axis: [2, 0, 0]}
+  - {at_s: 3.5, action: bias, unit: 3, r1_ohm: 20}
+)",
+                                                       "t.yaml");
+  ASSERT_EQ(config.script.size(), 5u);
+  EXPECT_EQ(config.script[0].kind, ActionKind::kClose);
+  EXPECT_EQ(config.script[1].kind, ActionKind::kMove);
+  EXPECT_TRUE(config.script[1].relative);
+  EXPECT_DOUBLE_EQ(config.script[1].vector[2], 0.03);
+  EXPECT_EQ(config.script[1].profile, Profile::kLinear);
+  EXPECT_EQ(config.script[2].kind, ActionKind::kAddMass);
+  EXPECT_DOUBLE_EQ(config.script[2].ramp_s, 0.5);
+  EXPECT_DOUBLE_EQ(config.script[3].vector[0], 1.0);  // axis normalised
+  EXPECT_EQ(config.script[4].unit, 3);
+  EXPECT_DOUBLE_EQ(config.script[4].r2_bias_ohm, 0.0);
+  EXPECT_EQ(config.script[2].line, 3);
+}
+
+TEST(ScenarioConfigTest, UnknownTopLevelKeyNamesLineAndValidKeys) {
+  const std::string error = ErrorOf("duration_s: 1\nobjekt:\n  mass_kg: 0.2\n");
+  EXPECT_NE(error.find("test.yaml:2: objekt: unknown key; valid keys: "), std::string::npos) << error;
+  EXPECT_NE(error.find("object"), std::string::npos) << error;
+  EXPECT_NE(error.find("expectations"), std::string::npos) << error;
+}
+
+TEST(ScenarioConfigTest, WrongTypeAndOutOfRangeNameKeyAndValue) {
+  EXPECT_NE(ErrorOf("object:\n  mass_kg: heavy\n").find("test.yaml:2: object.mass_kg = heavy: expected a number"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("object:\n  shape: box\n  mass_kg: -0.1\n").find("test.yaml:3: object.mass_kg = -0.1: must be > 0"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("duration_s: 0\n").find("test.yaml:1: duration_s = 0: must be > 0"), std::string::npos);
+  EXPECT_NE(ErrorOf("seed: 1.5\n").find("test.yaml:1: seed = 1.5: expected a whole number"), std::string::npos);
+  EXPECT_NE(ErrorOf("sensor:\n  strain_model:\n    noise_ohm: -2\n")
+                .find("test.yaml:3: sensor.strain_model.noise_ohm = -2: must be >= 0"),
+            std::string::npos);
+}
+
+TEST(ScenarioConfigTest, UnknownActionListsValidActions) {
+  const std::string error = ErrorOf("duration_s: 2\nscript:\n  - {at_s: 0.1, action: close}\n  - {at_s: 0.5, action: jump}\n");
+  EXPECT_NE(error.find("test.yaml:4: script[1].action = jump: unknown name; valid names: close, open, idle, move, "
+                       "lift, shake, add_mass, pull, set_friction, dead_unit"),
+            std::string::npos)
+      << error;
+}
+
+TEST(ScenarioConfigTest, ActionParametersAreCheckedPerAction) {
+  // A key that belongs to another action.
+  std::string error = ErrorOf("script:\n  - at_s: 0.1\n    action: close\n    height_m: 0.1\n");
+  EXPECT_NE(error.find("test.yaml:4: script[0].height_m: unknown key; valid keys: action, at_s"), std::string::npos)
+      << error;
+  // Missing required parameter.
+  error = ErrorOf("script:\n  - {at_s: 0.1, action: lift}\n");
+  EXPECT_NE(error.find("script[0].height_m = null: missing required key"), std::string::npos) << error;
+  // Unit index beyond the layout (default layout has 20 units).
+  error = ErrorOf("script:\n  - {at_s: 0.1, action: dead_unit, unit: 20}\n");
+  EXPECT_NE(error.find("test.yaml:2: script[0].unit = 20: must be <= 19"), std::string::npos) << error;
+  // Action after the end of the run.
+  error = ErrorOf("duration_s: 1\nscript:\n  - {at_s: 1.5, action: open}\n");
+  EXPECT_NE(error.find("test.yaml:3: script[0].at_s = 1.5: must be <= 1"), std::string::npos) << error;
+  // move needs exactly one of position_m / offset_m.
+  error = ErrorOf("script:\n  - {at_s: 0.1, action: move, position_m: [0, 0, 0.1], offset_m: [0, 0, 0.1]}\n");
+  EXPECT_NE(error.find("test.yaml:2: script[0]: move needs exactly one of position_m"), std::string::npos) << error;
+  // Vector of the wrong length.
+  error = ErrorOf("script:\n  - {at_s: 0.1, action: pull, force_n: [0, 1]}\n");
+  EXPECT_NE(error.find("script[0].force_n = [...]: expected 3 numbers, got 2"), std::string::npos) << error;
+  // A noise burst needs noise to scale.
+  error = ErrorOf("script:\n  - {at_s: 0.1, action: noise_burst, duration_s: 0.1}\n");
+  EXPECT_NE(error.find("noise_burst scales sensor.strain_model.noise_ohm"), std::string::npos) << error;
+}
+
+TEST(ScenarioConfigTest, ControllerNameAndParametersAreValidated) {
+  std::string error = ErrorOf("controller:\n  name: pid\n");
+  EXPECT_NE(error.find("test.yaml:2: controller.name = pid: unknown name; valid names: "), std::string::npos) << error;
+  EXPECT_NE(error.find("open_loop"), std::string::npos) << error;
+  error = ErrorOf("controller:\n  name: open_loop\n  params:\n    gain: 3\n");
+  EXPECT_NE(error.find("test.yaml:4: controller.params.gain = 3: controller 'open_loop' has no such parameter; "
+                       "valid parameters: close_effort"),
+            std::string::npos)
+      << error;
+  error = ErrorOf("controller:\n  params:\n    close_effort: 2\n");
+  EXPECT_NE(error.find("test.yaml:3: controller.params.close_effort = 2: must be <= 1"), std::string::npos) << error;
+}
+
+TEST(ScenarioConfigTest, ExpectationsAreValidated) {
+  std::string error = ErrorOf("expectations:\n  max_slip: 2\n");
+  EXPECT_NE(error.find("test.yaml:2: expectations.max_slip: unknown key; valid keys: "), std::string::npos) << error;
+  EXPECT_NE(error.find("max_slip_mm"), std::string::npos) << error;
+  error = ErrorOf("expectations:\n  not_crushed: true\n");
+  EXPECT_NE(error.find("test.yaml:2: expectations.not_crushed = true: needs object.crush_limit_n > 0"),
+            std::string::npos)
+      << error;
+  error = ErrorOf("expectations:\n  not_dropped: maybe\n");
+  EXPECT_NE(error.find("expectations.not_dropped = maybe: expected true or false"), std::string::npos) << error;
+}
+
+TEST(ScenarioConfigTest, UnknownLayoutIsRefused) {
+  const std::string error = ErrorOf("sensor:\n  layout: no_such_layout\n");
+  EXPECT_NE(error.find("test.yaml:2: sensor.layout = no_such_layout: no such layout"), std::string::npos) << error;
+}
+
+TEST(ScenarioConfigTest, OverridesUseDottedKeysAndAreValidatedLikeTheFile) {
+  const std::string text = "duration_s: 2\nobject:\n  mass_kg: 0.1\nscript:\n  - {at_s: 0.2, action: close}\n";
+  const ScenarioConfig config = LoadScenarioFromString(
+      text, "t.yaml",
+      {{"object.mass_kg", "0.3"}, {"object.friction", "0.4"}, {"script[0].at_s", "0.5"}, {"seed", "7"},
+       {"sensor.strain_model.noise_ohm", "2"}, {"object.size_m", "[0.04, 0.04, 0.06]"}});
+  EXPECT_DOUBLE_EQ(config.scene.object.mass_kg, 0.3);
+  EXPECT_DOUBLE_EQ(config.scene.object.friction, 0.4);
+  EXPECT_DOUBLE_EQ(config.script[0].at_s, 0.5);
+  EXPECT_EQ(config.seed, 7u);
+  EXPECT_DOUBLE_EQ(config.sensor.strain_model.noise_ohm, 2.0);
+  EXPECT_DOUBLE_EQ(config.scene.object.size_m[2], 0.06);
+
+  std::string error = ErrorOf(text, {{"object.mass_kg", "-1"}});
+  EXPECT_NE(error.find("--set object.mass_kg=-1: "), std::string::npos) << error;
+  EXPECT_NE(error.find("object.mass_kg = -1: must be > 0"), std::string::npos) << error;
+  error = ErrorOf(text, {{"object.mas", "1"}});
+  EXPECT_NE(error.find("--set object.mas=1: "), std::string::npos) << error;
+  EXPECT_NE(error.find("object.mas: unknown key"), std::string::npos) << error;
+  error = ErrorOf(text, {{"script[3].at_s", "1"}});
+  EXPECT_NE(error.find("index 3 out of range"), std::string::npos) << error;
+  EXPECT_THROW(ParseOverride("object.mass_kg"), std::invalid_argument);
+  EXPECT_EQ(ParseOverride("a.b=c=d").value, "c=d");
+}
+
+TEST(ScenarioConfigTest, ChangingTheControllerDropsTheOldControllersParameters) {
+  const std::string text = "controller:\n  name: open_loop\n  params:\n    close_effort: 0.7\n";
+  const auto names = controller::ControllerNames();
+  const ScenarioConfig same = LoadScenarioFromString(text, "t.yaml", {{"controller.name", "open_loop"}});
+  EXPECT_DOUBLE_EQ(same.controller.params.at("close_effort"), 0.7);
+  for (const std::string& name : names) {
+    if (name == "open_loop") continue;
+    const ScenarioConfig other = LoadScenarioFromString(text, "t.yaml", {{"controller.name", name}});
+    EXPECT_EQ(other.controller.name, name);
+  }
+}
+
+TEST(ScenarioConfigTest, ResolvedYamlLoadsBackToTheSameConfiguration) {
+  const ScenarioConfig config = LoadScenarioFromString(R"(name: round_trip
+description: "every action once"
+seed: 42
+duration_s: 6
+object: {shape: cylinder, size_m: [0.04, 0, 0.1], mass_kg: 0.15, friction: 0.45, crush_limit_n: 8}
+sensor: {latency_s: 0.002, strain_model: {noise_ohm: 1.5, dead_units: [2]}}
+controller: {grip_ceiling_n: 6}
+script:
+  - {at_s: 0.1, action: close}
+  - {at_s: 0.5, action: lift, height_m: 0.04}
+  - {at_s: 1.0, action: move, position_m: [0.01, 0, 0.2], duration_s: 0.3}
+  - {at_s: 1.5, action: shake, frequency_hz: 3, amplitude_m: 0.005, duration_s: 0.5}
+  - {at_s: 2.0, action: add_mass, mass_kg: 0.1, ramp_s: 1}
+  - {at_s: 2.2, action: pull, force_n: [0, 0, -1], ramp_s: 0.5, duration_s: 0.2}
+  - {at_s: 2.5, action: set_friction, friction: 0.3}
+  - {at_s: 2.6, action: dead_unit, unit: 4}
+  - {at_s: 2.7, action: short_unit, unit: 5}
+  - {at_s: 2.8, action: restore_unit, unit: 5}
+  - {at_s: 2.9, action: bias, unit: 6, r1_ohm: 10, r2_ohm: -5}
+  - {at_s: 3.0, action: noise_burst, scale: 5, duration_s: 0.2}
+  - {at_s: 3.1, action: drop_frames, duration_s: 0.05, probability: 0.5}
+  - {at_s: 3.2, action: add_latency, latency_s: 0.003}
+  - {at_s: 4.0, action: open}
+  - {at_s: 4.5, action: idle}
+expectations: {not_dropped: true, max_slip_mm: 1, max_peak_grip_n: 7, not_crushed: true,
+               slip_detected_within_ms: 30, max_estimation_error_n: 0.5, stable_within_s: 0.8,
+               max_false_slip_per_min: 2}
+metrics: {slip_speed_m_s: 0.003}
+)",
+                                                       "rt.yaml");
+  const std::string first = EmitScenarioYaml(config);
+  const ScenarioConfig again = LoadScenarioFromString(first, "config.yaml");
+  const std::string second = EmitScenarioYaml(again);
+  EXPECT_EQ(first, second);
+  EXPECT_EQ(again.script.size(), 16u);
+  EXPECT_EQ(again.seed, 42u);
+  EXPECT_DOUBLE_EQ(again.scene.object.crush_limit_n, 8.0);
+  EXPECT_DOUBLE_EQ(*again.expectations.slip_detected_within_ms, 30.0);
+  EXPECT_DOUBLE_EQ(again.metrics.slip_speed_m_s, 0.003);
+  EXPECT_EQ(again.sensor.strain_model.dead_units, std::vector<int>{2});
+  EXPECT_NE(first.find("close_effort"), std::string::npos);  // controller defaults written out
+}
+
+}  // namespace
+}  // namespace graspbed::scenario
