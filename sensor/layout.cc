@@ -24,7 +24,7 @@ constexpr std::array<double, 5> kGaussNodes = {0.1488743389816312, 0.43339539412
                                                0.6794095682990244, 0.8650633666889845,
                                                0.9739065285171717};
 constexpr std::array<double, 5> kGaussWeights = {0.2955242247147529, 0.2692667193099963,
-                                                 0.2190863625159820, 0.1494513471899184,
+                                                 0.2190863625159820, 0.1494513491505806,
                                                  0.0666713443086881};
 // Sub-intervals per radian: the integrand is analytic, so 10-point rules on 16 pieces per radian
 // are exact to rounding for any sensible aspect ratio.
