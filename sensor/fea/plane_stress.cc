@@ -132,7 +132,7 @@ PlaneStressModel::PlaneStressModel(Mesh mesh, PlaneStressMaterial material,
   solver_ = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(stiffness);
   if (solver_->info() != Eigen::Success) {
     throw std::runtime_error("PlaneStressModel: the stiffness matrix could not be factorised (" +
-                             std::to_string(free_count) + " free dofs); is the part constrained?");
+                             std::to_string(free_count) + " free dofs); the part is not fully constrained");
   }
   // LDLT of a singular matrix can "succeed" with a zero pivot: check the pivots.
   const Eigen::VectorXd pivots = solver_->vectorD();
