@@ -82,6 +82,13 @@ size_t EncodePacket(const StreamControlPacket& packet, std::span<uint8_t> out) {
   return Finish(body, kStreamControlBodySize, out);
 }
 
+size_t EncodeBody(std::span<const uint8_t> body, std::span<uint8_t> out) {
+  if (body.empty() || body.size() > kMaxPacketSize - kCrcSize) return 0;
+  std::array<uint8_t, kMaxPacketSize> scratch;
+  std::copy(body.begin(), body.end(), scratch.begin());
+  return Finish(scratch, body.size(), out);
+}
+
 const char* ToString(PacketError error) {
   switch (error) {
     case PacketError::kNone: return "none";

@@ -91,6 +91,11 @@ size_t EncodePacket(const HelloPacket& packet, std::span<uint8_t> out);
 size_t EncodePacket(const MotorCommandPacket& packet, std::span<uint8_t> out);
 size_t EncodePacket(const StreamControlPacket& packet, std::span<uint8_t> out);
 
+/// Frames an arbitrary body (header included): appends its CRC, COBS-encodes, adds the delimiter.
+/// For packets this version does not define (tests, fault injection). Returns bytes written or 0
+/// when the body is empty or over kMaxPacketSize - kCrcSize, or `out` is too small.
+size_t EncodeBody(std::span<const uint8_t> body, std::span<uint8_t> out);
+
 /// Why a decoded packet was refused.
 enum class PacketError : uint8_t {
   kNone,

@@ -7,17 +7,16 @@ void StreamDecoder::StartPacket() {
   block_remaining_ = 0;
   block_code_ = 0;
   discarding_ = false;
-  silent_discard_ = false;
 }
 
 void StreamDecoder::Reset() {
   StartPacket();
-  discarding_ = true;
-  silent_discard_ = true;
+  synced_ = false;
 }
 
 void StreamDecoder::Fail(PacketError error) {
   last_error_ = error;
+  if (!synced_) return;
   switch (error) {
     case PacketError::kCobs: ++stats_.cobs_errors; break;
     case PacketError::kCrc: ++stats_.crc_errors; break;
@@ -63,6 +62,7 @@ bool StreamDecoder::Complete(DecodedPacket* packet) {
     return false;
   }
   ++stats_.packets;
+  synced_ = true;
   return true;
 }
 

@@ -43,8 +43,8 @@ class StreamDecoder {
   /// goes to `*packet`), or all of it. Never looks past that delimiter, never allocates.
   FeedResult Feed(std::span<const uint8_t> input, DecodedPacket* packet);
 
-  /// Forgets any partial packet (e.g. after reopening the port); the next bytes up to the first 0x00
-  /// are treated as the tail of an unknown packet and discarded without being counted.
+  /// Forgets any partial packet (after opening a port). Until the next valid packet, refused bytes
+  /// are start-up junk (the tail of a packet sent before we listened) and are dropped uncounted.
   void Reset();
 
   const DecoderStats& stats() const { return stats_; }
@@ -62,7 +62,7 @@ class StreamDecoder {
   int block_remaining_ = 0;  // data bytes still due in the current COBS block
   uint8_t block_code_ = 0;   // code byte of the current block (0: none yet in this packet)
   bool discarding_ = false;  // skipping to the next delimiter after an error
-  bool silent_discard_ = false;  // discarding after Reset(): not counted
+  bool synced_ = true;       // false after Reset() until a valid packet: errors are not counted
   DecoderStats stats_;
   PacketError last_error_ = PacketError::kNone;
 };

@@ -1,0 +1,400 @@
+#include "sensor/serial/device_emulator.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+namespace graspbed::serial {
+namespace {
+
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+int64_t SecondsToNs(double s) { return static_cast<int64_t>(std::llround(s * 1e9)); }
+
+}  // namespace
+
+void EmulatorConfig::Validate() const {
+  auto fail = [](const std::string& field, double value, const char* reason) {
+    throw std::invalid_argument("emulator config: " + field + " = " + std::to_string(value) + ": " + reason);
+  };
+  if (link_path.empty()) throw std::invalid_argument("emulator config: link_path is empty");
+  if (unit_count < 1 || unit_count > kMaxFrameUnits) fail("unit_count", unit_count, "must be in 1..64");
+  if (frame_rate_hz < 1 || frame_rate_hz > 10000) fail("frame_rate_hz", frame_rate_hz, "must be in 1..10000");
+  if (!(hello_period_s > 0)) fail("hello_period_s", hello_period_s, "must be > 0");
+  if (!(connect_delay_s >= 0)) fail("connect_delay_s", connect_delay_s, "must be >= 0");
+  if (!(watchdog_s > 0)) fail("watchdog_s", watchdog_s, "must be > 0");
+  if (!(nominal_r0_ohm > 0)) fail("nominal_r0_ohm", nominal_r0_ohm, "must be > 0");
+}
+
+DeviceEmulator::DeviceEmulator(const EmulatorConfig& config, FrameSource source, MotorSink sink)
+    : config_(config), source_(std::move(source)), sink_(std::move(sink)) {
+  config_.Validate();
+  if (!source_) throw std::invalid_argument("emulator: no frame source");
+}
+
+DeviceEmulator::~DeviceEmulator() { Stop(); }
+
+void DeviceEmulator::OpenPty() {
+  int master = -1;
+  int slave = -1;
+  char name[256] = {};
+  if (openpty(&master, &slave, name, nullptr, nullptr) != 0) {
+    throw std::runtime_error(std::string("emulator: openpty failed: ") + std::strerror(errno));
+  }
+  // Raw before any host opens it: a cooked slave would echo our HELLOs back to us.
+  termios raw{};
+  tcgetattr(slave, &raw);
+  cfmakeraw(&raw);
+  tcsetattr(slave, TCSANOW, &raw);
+  // Without a slave open the master polls POLLHUP; that is how host connects and leaves are seen.
+  ::close(slave);
+  fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK);
+  fcntl(master, F_SETFD, FD_CLOEXEC);
+  struct stat info {};
+  if (lstat(config_.link_path.c_str(), &info) == 0) {
+    if (!S_ISLNK(info.st_mode)) {
+      ::close(master);
+      throw std::runtime_error("emulator: " + config_.link_path + " exists and is not a symlink; refusing to replace it");
+    }
+    ::unlink(config_.link_path.c_str());
+  }
+  if (symlink(name, config_.link_path.c_str()) != 0) {
+    const int error = errno;
+    ::close(master);
+    throw std::runtime_error("emulator: cannot create symlink " + config_.link_path + ": " + std::strerror(error));
+  }
+  master_fd_ = master;
+  slave_path_ = name;
+  symlink_made_ = true;
+  decoder_.Reset();
+  out_size_ = 0;
+  stats_.host_connected = false;
+  stats_.streaming = false;
+}
+
+void DeviceEmulator::ClosePty() {
+  if (symlink_made_) {
+    // Only remove the link if it is still ours.
+    char target[256] = {};
+    const ssize_t n = readlink(config_.link_path.c_str(), target, sizeof(target) - 1);
+    if (n > 0 && slave_path_ == std::string(target, static_cast<size_t>(n))) ::unlink(config_.link_path.c_str());
+    symlink_made_ = false;
+  }
+  if (master_fd_ >= 0) ::close(master_fd_);
+  master_fd_ = -1;
+  slave_path_.clear();
+  out_size_ = 0;
+  if (stats_.host_connected || motor_.enable) SetMotor({});
+  stats_.host_connected = false;
+  stats_.streaming = false;
+}
+
+void DeviceEmulator::Start() {
+  if (running_) return;
+  {
+    std::lock_guard lock(mutex_);
+    OpenPty();
+  }
+  running_ = true;
+  thread_ = std::thread([this] { Run(); });
+}
+
+void DeviceEmulator::Stop() {
+  if (running_.exchange(false) && thread_.joinable()) thread_.join();
+  std::lock_guard lock(mutex_);
+  ClosePty();
+}
+
+void DeviceEmulator::SetMotor(const EmulatedMotor& motor) {
+  motor_ = motor;
+  if (sink_) sink_(motor_);
+}
+
+void DeviceEmulator::Queue(std::span<const uint8_t> bytes) {
+  if (out_size_ + bytes.size() > out_.size()) return;  // host not reading: drop, as a full USB FIFO would
+  std::copy(bytes.begin(), bytes.end(), out_.begin() + static_cast<long>(out_size_));
+  out_size_ += bytes.size();
+}
+
+void DeviceEmulator::QueueHello() {
+  HelloPacket hello;
+  hello.sequence = hello_seq_++;
+  hello.firmware_version = config_.firmware_version;
+  hello.unit_count = static_cast<uint8_t>(config_.unit_count);
+  hello.nominal_rate_hz = static_cast<uint16_t>(config_.frame_rate_hz);
+  hello.nominal_r0_milliohm = OhmToMilliohm(config_.nominal_r0_ohm);
+  std::array<uint8_t, kMaxWirePacketSize> out;
+  Queue(std::span<const uint8_t>(out.data(), EncodePacket(hello, out)));
+  ++stats_.hellos_sent;
+  hello_sent_this_connection_ = true;
+}
+
+void DeviceEmulator::Flush() {
+  if (master_fd_ < 0 || out_size_ == 0) return;
+  const ssize_t n = ::write(master_fd_, out_.data(), out_size_);
+  if (n <= 0) return;  // EAGAIN: the host is not reading; try again next tick
+  std::memmove(out_.data(), out_.data() + n, out_size_ - static_cast<size_t>(n));
+  out_size_ -= static_cast<size_t>(n);
+}
+
+void DeviceEmulator::HandleHostPacket(const DecodedPacket& packet, int64_t now_ns) {
+  if (!hello_sent_this_connection_) ++stats_.commands_before_hello;
+  switch (packet.type) {
+    case PacketType::kMotorCommand: {
+      ++stats_.motor_commands;
+      if (last_command_enabled_) {  // the watchdog was armed since the previous command
+        stats_.max_command_interval_s =
+            std::max(stats_.max_command_interval_s, static_cast<double>(now_ns - last_motor_ns_) * 1e-9);
+      }
+      last_motor_ns_ = now_ns;
+      EmulatedMotor motor;
+      motor.enable = (packet.motor.flags & kMotorEnable) != 0;
+      motor.brake = (packet.motor.flags & kMotorBrake) != 0;
+      motor.effort = motor.enable ? EffortFromWire(packet.motor.effort) : 0.0;
+      if (!motor.enable) ++stats_.motor_off_commands;
+      last_command_enabled_ = motor.enable;
+      SetMotor(motor);
+      break;
+    }
+    case PacketType::kStreamControl:
+      if (packet.stream.start) {
+        ++stats_.stream_starts;
+        stats_.streaming = true;
+      } else {
+        ++stats_.stream_stops;
+        stats_.streaming = false;
+      }
+      break;
+    case PacketType::kTactileFrame:
+    case PacketType::kHello:
+      break;  // device-to-host types: a confused host; ignore
+  }
+}
+
+void DeviceEmulator::CheckWatchdog(int64_t now_ns) {
+  // The motor watchdog runs whether or not a host is there.
+  if (motor_.enable && now_ns - last_motor_ns_ > SecondsToNs(config_.watchdog_s)) {
+    ++stats_.watchdog_trips;
+    SetMotor({});
+  }
+}
+
+void DeviceEmulator::Tick(int64_t now_ns) {
+  ++tick_;
+  const double period_s = 1.0 / config_.frame_rate_hz;
+  const uint64_t device_tick = tick_ - time_base_tick_;
+  const double device_time_s = static_cast<double>(device_tick) * period_s;
+  frame_.unit_count = config_.unit_count;
+  source_(device_time_s, &frame_);  // every period, so a simulation behind it keeps real time
+
+  if (master_fd_ < 0) {  // vanished
+    CheckWatchdog(now_ns);
+    return;
+  }
+
+  pollfd fd{master_fd_, POLLIN, 0};
+  ::poll(&fd, 1, 0);
+  const bool host_present = (fd.revents & POLLHUP) == 0;
+  if (host_present && !stats_.host_connected) {
+    stats_.host_connected = true;
+    ++stats_.connects;
+    hello_sent_this_connection_ = false;
+    hello_due_ns_ = now_ns + SecondsToNs(config_.connect_delay_s);
+    decoder_.Reset();
+  }
+  // Read before acting on a hangup: a host's last words (stream stop, motor off) come just before it.
+  if (fd.revents & POLLIN) {
+    std::array<uint8_t, 4096> in;
+    for (;;) {
+      const ssize_t n = ::read(master_fd_, in.data(), in.size());
+      if (n <= 0) break;
+      std::span<const uint8_t> rest(in.data(), static_cast<size_t>(n));
+      while (!rest.empty()) {
+        const FeedResult fed = decoder_.Feed(rest, &packet_);
+        rest = rest.subspan(fed.consumed);
+        if (fed.packet) HandleHostPacket(packet_, now_ns);
+      }
+    }
+    stats_.host_corrupt = decoder_.stats().corrupt();
+  }
+  // After reading: a command that waited in the pty while this thread was descheduled still counts.
+  CheckWatchdog(now_ns);
+  if (!host_present) {
+    if (stats_.host_connected) {
+      // The host closed the port: a real device would see the USB session end.
+      stats_.host_connected = false;
+      stats_.streaming = false;
+      out_size_ = 0;
+    }
+    return;
+  }
+  if (now_ns >= hello_due_ns_) {
+    QueueHello();
+    hello_due_ns_ = now_ns + SecondsToNs(config_.hello_period_s);
+  }
+  if (stats_.streaming && !paused_) {
+    const uint16_t sequence = frame_seq_++;
+    if (drop_frames_ > 0) {
+      --drop_frames_;
+      ++stats_.frames_dropped;
+    } else {
+      FromRawFrame(frame_, sequence, static_cast<uint32_t>(device_tick * static_cast<uint64_t>(1e6 * period_s)),
+                   &wire_frame_);
+      if (frame_unit_count_ > 0) wire_frame_.unit_count = static_cast<uint8_t>(frame_unit_count_);
+      std::array<uint8_t, kMaxWirePacketSize> out;
+      size_t size = EncodePacket(wire_frame_, out);
+      if (size > 0 && corrupt_frames_ > 0) {
+        --corrupt_frames_;
+        ++stats_.frames_corrupted;
+        uint8_t& byte = out[size / 2];
+        byte = (byte ^ 0x5A) != 0 ? static_cast<uint8_t>(byte ^ 0x5A) : static_cast<uint8_t>(byte ^ 0xA5);
+      }
+      if (size > 0 && truncate_bytes_ > 0) {
+        // Remove bytes just before the delimiter: the packet ends early.
+        const size_t cut = std::min<size_t>(static_cast<size_t>(truncate_bytes_), size - 2);
+        out[size - 1 - cut] = 0x00;
+        size -= cut;
+        truncate_bytes_ = 0;
+        ++stats_.frames_corrupted;
+      }
+      if (out_size_ + size <= out_.size()) {
+        Queue(std::span<const uint8_t>(out.data(), size));
+        ++stats_.frames_sent;
+      } else {
+        ++stats_.frames_overflowed;
+      }
+      stats_.last_frame_sequence = sequence;
+    }
+  }
+  Flush();
+}
+
+void DeviceEmulator::Run() {
+  const int64_t period_ns = SecondsToNs(1.0 / config_.frame_rate_hz);
+  int64_t next_ns = NowNs();
+  while (running_.load()) {
+    next_ns += period_ns;
+    const int64_t now_ns = NowNs();
+    if (next_ns > now_ns) {
+      std::this_thread::sleep_for(std::chrono::nanoseconds(next_ns - now_ns));
+    } else if (now_ns - next_ns > 50 * period_ns) {
+      next_ns = now_ns;  // far behind (machine busy): skip, do not burst
+    }
+    std::lock_guard lock(mutex_);
+    Tick(NowNs());
+  }
+}
+
+void DeviceEmulator::CorruptFrames(int count) {
+  std::lock_guard lock(mutex_);
+  corrupt_frames_ += count;
+}
+
+void DeviceEmulator::DropFrames(int count) {
+  std::lock_guard lock(mutex_);
+  drop_frames_ += count;
+}
+
+void DeviceEmulator::InjectGarbage(int bytes, bool delimited) {
+  std::lock_guard lock(mutex_);
+  for (int i = 0; i < bytes; ++i) {
+    rng_ = rng_ * 1664525u + 1013904223u;  // fixed LCG: reproducible garbage
+    const uint8_t byte = static_cast<uint8_t>(1 + (rng_ >> 24) % 255);
+    Queue(std::span<const uint8_t>(&byte, 1));
+  }
+  if (delimited) {
+    const uint8_t zero = 0;
+    Queue(std::span<const uint8_t>(&zero, 1));
+  }
+}
+
+void DeviceEmulator::InjectOversize(int bytes) {
+  std::lock_guard lock(mutex_);
+  const uint8_t filler = 0x42;
+  for (int i = 0; i < bytes; ++i) Queue(std::span<const uint8_t>(&filler, 1));
+  const uint8_t zero = 0;
+  Queue(std::span<const uint8_t>(&zero, 1));
+}
+
+void DeviceEmulator::InjectUnknownType(uint8_t type) {
+  std::lock_guard lock(mutex_);
+  const uint8_t body[] = {type, kProtocolVersion, 0, 0, 0xAB, 0xCD};
+  std::array<uint8_t, kMaxWirePacketSize> out;
+  Queue(std::span<const uint8_t>(out.data(), EncodeBody(body, out)));
+}
+
+void DeviceEmulator::InjectBadVersion(uint8_t version) {
+  std::lock_guard lock(mutex_);
+  std::array<uint8_t, kHelloBodySize> body{};
+  body[0] = static_cast<uint8_t>(PacketType::kHello);
+  body[1] = version;
+  body[6] = static_cast<uint8_t>(config_.unit_count);
+  std::array<uint8_t, kMaxWirePacketSize> out;
+  Queue(std::span<const uint8_t>(out.data(), EncodeBody(body, out)));
+}
+
+void DeviceEmulator::TruncateNextFrame(int bytes) {
+  std::lock_guard lock(mutex_);
+  truncate_bytes_ = bytes;
+}
+
+void DeviceEmulator::PauseFrames(bool paused) {
+  std::lock_guard lock(mutex_);
+  paused_ = paused;
+}
+
+void DeviceEmulator::SetFrameUnitCount(int unit_count) {
+  std::lock_guard lock(mutex_);
+  frame_unit_count_ = unit_count;
+}
+
+void DeviceEmulator::Vanish() {
+  std::lock_guard lock(mutex_);
+  ClosePty();
+}
+
+void DeviceEmulator::Return() {
+  std::lock_guard lock(mutex_);
+  if (master_fd_ < 0) OpenPty();
+}
+
+void DeviceEmulator::Reboot() {
+  std::lock_guard lock(mutex_);
+  frame_seq_ = 0;
+  hello_seq_ = 0;
+  time_base_tick_ = tick_;
+  stats_.streaming = false;
+  SetMotor({});
+  hello_due_ns_ = NowNs();  // a booting device says HELLO at once
+}
+
+EmulatorStats DeviceEmulator::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+EmulatedMotor DeviceEmulator::motor() const {
+  std::lock_guard lock(mutex_);
+  return motor_;
+}
+
+std::string DeviceEmulator::slave_path() const {
+  std::lock_guard lock(mutex_);
+  return slave_path_;
+}
+
+}  // namespace graspbed::serial

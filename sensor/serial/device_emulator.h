@@ -1,0 +1,163 @@
+#pragma once
+/// DeviceEmulator: a tactile readout and hand electronics in software, behind a pseudo-terminal. It
+/// speaks PROTOCOL.md as the device does: HELLO on connect and every second, TACTILE_FRAMEs at the
+/// nominal rate (from a frame-source callback) while streaming, MOTOR_COMMANDs to a motor-sink
+/// callback, the 100 ms motor watchdog, STREAM_CONTROL. The pty's slave is exposed at a symlink so a
+/// host opens it like a real port. Fault-injection knobs reproduce every fault the host must survive.
+/// No MuJoCo here: `graspbed emulate` plugs the simulation in through the callbacks.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "sensor/raw_frame.h"
+#include "sensor/serial/protocol.h"
+#include "sensor/serial/stream_decoder.h"
+
+namespace graspbed::serial {
+
+struct EmulatorConfig {
+  std::string link_path;            ///< where the symlink to the pty slave is created (removed on Stop)
+  int unit_count = 20;              ///< units reported in HELLO and carried in frames (1..64)
+  int frame_rate_hz = 1000;         ///< nominal frame rate [Hz]
+  double hello_period_s = 1.0;      ///< HELLO repeat period while a host is connected [s]
+  double connect_delay_s = 0.02;    ///< HELLO this long after a host opens the port [s]
+  double watchdog_s = 0.1;          ///< motor off when no MOTOR_COMMAND for this long [s]
+  uint16_t firmware_version = 0x0100;
+  double nominal_r0_ohm = 3400.0;   ///< reported in HELLO [Ohm]
+
+  /// Throws std::invalid_argument naming the field and value.
+  void Validate() const;
+};
+
+/// The grip motor as the device drives it.
+struct EmulatedMotor {
+  double effort = 0.0;  ///< [-1, 1], + closes
+  bool enable = false;  ///< false: motor off
+  bool brake = false;
+};
+
+/// What the emulator has done; read with stats().
+struct EmulatorStats {
+  uint64_t frames_sent = 0;       ///< frames written to the pty (including corrupted ones)
+  uint64_t frames_dropped = 0;    ///< frames skipped by DropFrames (sequence numbers still advance)
+  uint64_t frames_corrupted = 0;  ///< frames sent with a flipped byte
+  uint64_t frames_overflowed = 0; ///< frames not sent because the host did not read (pty full)
+  uint64_t hellos_sent = 0;
+  uint64_t motor_commands = 0;    ///< valid MOTOR_COMMANDs received
+  uint64_t motor_off_commands = 0;  ///< of those, with enable = 0
+  /// Longest time between two MOTOR_COMMANDs received while the motor ran [s] (what the watchdog sees).
+  double max_command_interval_s = 0.0;
+  uint64_t commands_before_hello = 0;  ///< host packets that arrived before our first HELLO of a connection
+  uint64_t stream_starts = 0;
+  uint64_t stream_stops = 0;
+  uint64_t watchdog_trips = 0;
+  uint64_t connects = 0;          ///< times a host opened the port
+  uint64_t host_corrupt = 0;      ///< host packets refused by our decoder
+  uint16_t last_frame_sequence = 0;
+  bool streaming = false;
+  bool host_connected = false;
+};
+
+class DeviceEmulator {
+ public:
+  /// Fills `frame` (unit_count preset) with R1/R2 [Ohm] for device time `device_time_s`. Called once
+  /// per frame period on the emulator thread, streaming or not (so a simulation keeps real time).
+  using FrameSource = std::function<void(double device_time_s, sensor::RawFrame* frame)>;
+  /// Receives the motor state whenever it changes (command, watchdog, stream loss, reboot).
+  using MotorSink = std::function<void(const EmulatedMotor& motor)>;
+
+  DeviceEmulator(const EmulatorConfig& config, FrameSource source, MotorSink sink = {});
+  ~DeviceEmulator();
+  DeviceEmulator(const DeviceEmulator&) = delete;
+  DeviceEmulator& operator=(const DeviceEmulator&) = delete;
+
+  /// Creates the pty and the symlink, starts the device thread. Throws std::runtime_error when the
+  /// link path exists and is not a symlink, or the pty cannot be made.
+  void Start();
+  /// Stops the thread, closes the pty, removes the symlink. Safe to call twice.
+  void Stop();
+
+  // Fault injection (thread-safe; applied to the next frames sent).
+  /// Sends the next `count` frames with one byte flipped (the host sees CRC/COBS errors).
+  void CorruptFrames(int count);
+  /// Skips the next `count` frames; their sequence numbers are used up (the host sees a gap).
+  void DropFrames(int count);
+  /// Writes `bytes` random non-zero bytes before the next frame, followed by 0x00 when `delimited`.
+  void InjectGarbage(int bytes, bool delimited);
+  /// Writes `bytes` non-zero bytes and then a delimiter (longer than the maximum packet when > 515).
+  void InjectOversize(int bytes);
+  /// Sends a valid packet of undefined type `type` (version 1).
+  void InjectUnknownType(uint8_t type);
+  /// Sends a valid-CRC HELLO with protocol version `version`.
+  void InjectBadVersion(uint8_t version);
+  /// Truncates the next frame by `bytes` bytes before its delimiter (bytes lost mid-packet).
+  void TruncateNextFrame(int bytes);
+  /// Pauses (true) or resumes the frame stream without telling the host (stale data).
+  void PauseFrames(bool paused);
+  /// Frames carry `unit_count` units (0: as configured), HELLO keeps the configured count.
+  void SetFrameUnitCount(int unit_count);
+  /// The device disappears: the pty closes (the host reads EIO/POLLHUP) and the symlink goes.
+  void Vanish();
+  /// The device comes back on a new pty behind the same symlink; it waits for a host again.
+  void Return();
+  /// The device restarts: sequence numbers and device time start again from 0, streaming stops,
+  /// the motor is off, and a HELLO follows at once.
+  void Reboot();
+
+  EmulatorStats stats() const;
+  EmulatedMotor motor() const;
+  /// The pty slave the symlink points to ("" while vanished).
+  std::string slave_path() const;
+
+ private:
+  void Run();
+  void Tick(int64_t now_ns);
+  void CheckWatchdog(int64_t now_ns);
+  void OpenPty();
+  void ClosePty();
+  void Queue(std::span<const uint8_t> bytes);
+  void QueueHello();
+  void Flush();
+  void HandleHostPacket(const DecodedPacket& packet, int64_t now_ns);
+  void SetMotor(const EmulatedMotor& motor);
+
+  const EmulatorConfig config_;
+  FrameSource source_;
+  MotorSink sink_;
+  std::thread thread_;
+  std::atomic<bool> running_{false};
+
+  mutable std::mutex mutex_;  // everything below; held by the device thread for one tick
+  int master_fd_ = -1;
+  std::string slave_path_;
+  bool symlink_made_ = false;
+  StreamDecoder decoder_;
+  DecodedPacket packet_;
+  sensor::RawFrame frame_;
+  TactileFramePacket wire_frame_;
+  std::array<uint8_t, 65536> out_{};
+  size_t out_size_ = 0;
+  uint64_t tick_ = 0;
+  uint64_t time_base_tick_ = 0;
+  uint16_t frame_seq_ = 0;
+  uint16_t hello_seq_ = 0;
+  bool hello_sent_this_connection_ = false;
+  int64_t hello_due_ns_ = 0;
+  int64_t last_motor_ns_ = 0;
+  bool last_command_enabled_ = false;
+  EmulatedMotor motor_;
+  EmulatorStats stats_;
+  uint32_t rng_ = 0x12345678u;
+  // Pending faults.
+  int corrupt_frames_ = 0;
+  int drop_frames_ = 0;
+  int truncate_bytes_ = 0;
+  bool paused_ = false;
+  int frame_unit_count_ = 0;
+};
+
+}  // namespace graspbed::serial

@@ -1,0 +1,166 @@
+#pragma once
+/// SerialLink: one serial port and the I/O thread that owns it. It opens the port, waits for the
+/// device's HELLO, checks the unit count, starts the stream, decodes packets, keeps the counters,
+/// publishes the newest frame for the control loop, sends motor commands, and survives the faults of
+/// PROTOCOL.md ("What the host must survive"): corrupt bytes, gaps, reboots, a vanishing device.
+/// HardwareBackend and HardwareActuator (hardware_backend.h) are thin faces on one or two links.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "controller/hand_command.h"
+#include "sensor/raw_frame.h"
+#include "sensor/tactile_backend.h"
+#include "sensor/serial/hardware_config.h"
+#include "sensor/serial/protocol.h"
+#include "sensor/serial/serial_port.h"
+#include "sensor/serial/stream_decoder.h"
+
+namespace graspbed::serial {
+
+/// What a link carries.
+enum class LinkRole {
+  kSensorAndMotor,  ///< tactile frames in, motor commands out (one port for both)
+  kSensor,          ///< tactile frames only
+  kMotor,           ///< motor commands only (the hand electronics on a port of their own)
+};
+
+/// One decoded frame with the device session it belongs to (for loggers that see every frame).
+struct TappedFrame {
+  sensor::RawFrame frame;
+  uint64_t session = 0;
+};
+
+class SerialLink {
+ public:
+  /// `expected_units`: units of the configured layout (ignored for kMotor); `layout_name` for messages.
+  SerialLink(std::string path, const HardwareConfig& config, LinkRole role, int expected_units,
+             std::string layout_name);
+  ~SerialLink();
+  SerialLink(const SerialLink&) = delete;
+  SerialLink& operator=(const SerialLink&) = delete;
+
+  /// Opens the port (PortError: missing, permission, busy), starts the I/O thread and waits for the
+  /// first HELLO. Throws std::runtime_error when no HELLO arrives within hello_timeout_s or its unit
+  /// count does not match the layout. Then sends STREAM_CONTROL start (sensor roles).
+  void Start();
+  /// Stream stop, motor off, drain, restore the port settings, close, join. Safe to call twice.
+  void Stop();
+
+  /// Copies the newest frame when it is newer than `*last_id` (updating it). Never blocks: when the
+  /// I/O thread is publishing right now, returns false and the frame is taken at the next call.
+  bool TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id);
+  /// Blocks up to `timeout_s` until a frame newer than `last_id` is published (for drivers that tick
+  /// on frame arrival; never called by the control loop itself). True when one is there.
+  bool WaitForFrame(uint64_t last_id, double timeout_s);
+  /// Seconds since the newest valid frame arrived (since the handshake when none has).
+  double SecondsSinceLastFrame() const;
+  /// True while the port is open, the handshake is done and the device was not refused.
+  bool connected() const { return connected_.load(std::memory_order_acquire); }
+  /// Device session: 1 after the first handshake, +1 on every detected reboot.
+  uint64_t session() const { return counter_sessions_.load(std::memory_order_acquire); }
+  sensor::BackendCounters counters() const;
+  /// The newest HELLO (firmware, unit count, nominal rate and R0).
+  HelloPacket hello() const;
+  /// The newest refusal or fault worth telling the user ("" when none).
+  std::string last_error() const;
+  const std::string& path() const { return path_; }
+  const HardwareConfig& config() const { return config_; }
+
+  /// Keeps a copy of every decoded frame in a ring of `capacity` (allocated now, before Start());
+  /// frames that do not fit are counted in tap_overflows().
+  void EnableTap(size_t capacity);
+  /// Takes the oldest tapped frame; false when none.
+  bool PopTap(TappedFrame* out);
+  uint64_t tap_overflows() const { return tap_overflows_.load(); }
+
+  /// Queues `command` as the next MOTOR_COMMAND (the newest wins). kDisconnected, and nothing is
+  /// queued, while no HELLO has been seen on the current connection. Never blocks.
+  controller::WriteStatus SendMotor(const controller::HandCommand& command);
+  /// Queues motor off and waits up to `timeout_s` until it has been written.
+  void MotorOff(double timeout_s);
+  /// MOTOR_COMMAND packets written since Start().
+  uint64_t motor_commands_sent() const { return motor_sent_.load(); }
+
+ private:
+  void Run();
+  void Wake();
+  void HandlePacket(const DecodedPacket& packet);
+  void HandleHello(const HelloPacket& hello);
+  void HandleFrame(const TactileFramePacket& frame);
+  void NewSession();
+  void OnLost();
+  void SendPendingMotor();
+  void SendStream(bool start);
+  bool WritePacket(std::span<const uint8_t> bytes);
+  void CheckStale();
+  void SetError(const std::string& message);
+  void Shutdown();
+  bool has_sensor() const { return role_ != LinkRole::kMotor; }
+  bool has_motor() const { return role_ != LinkRole::kSensor; }
+  int64_t NowNs() const;
+
+  const std::string path_;
+  const HardwareConfig config_;
+  const LinkRole role_;
+  const int expected_units_;
+  const std::string layout_name_;
+
+  SerialPort port_;
+  StreamDecoder decoder_;
+  DecodedPacket packet_;  // decoder output, reused
+  sensor::RawFrame scratch_;  // converted frame before publishing, reused
+  int wake_fd_ = -1;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  bool started_ = false;
+
+  // I/O-thread state.
+  bool handshake_ = false;       // HELLO seen on the current connection
+  bool ever_connected_ = false;  // a handshake happened before (so the next one is a reconnect)
+  bool have_last_frame_ = false;
+  uint16_t last_frame_seq_ = 0;
+  uint32_t last_frame_time_us_ = 0;
+  bool have_last_hello_ = false;
+  uint16_t last_hello_seq_ = 0;
+  bool stale_ = false;
+  bool first_frame_seen_ = false;
+  uint16_t motor_seq_ = 0;
+  uint16_t stream_seq_ = 0;
+  uint64_t extra_corrupt_ = 0;  // frames refused for a wrong unit count
+  uint64_t extra_unknown_ = 0;  // host-to-device packets echoed back to us
+
+  // Shared with other threads.
+  std::atomic<bool> connected_{false};
+  std::atomic<bool> refused_{false};
+  std::atomic<int64_t> last_frame_ns_{0};
+  std::atomic<uint32_t> pending_motor_{0};  // bit 31: pending; bits 8..23 effort; bits 0..7 flags
+  std::atomic<uint64_t> motor_sent_{0};
+  std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0},
+      counter_unknown_{0}, counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
+
+  mutable std::mutex frame_mutex_;  // guards slot_, slot_id_; the loop only try_locks it
+  sensor::RawFrame slot_;
+  uint64_t slot_id_ = 0;
+  std::atomic<uint64_t> published_{0};
+  std::mutex wait_mutex_;
+  std::condition_variable frame_cv_;
+
+  mutable std::mutex info_mutex_;  // guards hello_, error_, and the start handshake
+  std::condition_variable info_cv_;
+  HelloPacket hello_;
+  std::string error_;
+
+  std::mutex tap_mutex_;
+  std::vector<TappedFrame> tap_;
+  size_t tap_head_ = 0, tap_size_ = 0;
+  std::atomic<uint64_t> tap_overflows_{0};
+};
+
+}  // namespace graspbed::serial

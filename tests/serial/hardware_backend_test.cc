@@ -1,0 +1,359 @@
+// HardwareBackend / HardwareActuator against the DeviceEmulator over real pseudo-terminals: the
+// handshake, every fault of PROTOCOL.md "What the host must survive" with exact counters, the
+// watchdog, and clean shutdown.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "sensor/serial/device_emulator.h"
+#include "sensor/serial/hardware_backend.h"
+#include "tests/serial/serial_test_util.h"
+
+namespace graspbed::serial {
+namespace {
+
+using testing::WaitFor;
+
+constexpr int kUnits = 20;
+constexpr double kResistanceTolOhm = 1e-3;  // wire resolution is 1 mOhm
+
+class HardwareTest : public ::testing::Test {
+ protected:
+  void StartEmulator(int units = kUnits, double connect_delay_s = 0.02) {
+    EmulatorConfig config;
+    config.link_path = testing::UniqueLinkPath("hw");
+    config.unit_count = units;
+    config.connect_delay_s = connect_delay_s;
+    emulator_ = std::make_unique<DeviceEmulator>(config, testing::TestFrameSource);
+    emulator_->Start();
+    hw_config_.port = config.link_path;
+  }
+
+  void StartHost() {
+    backend_ = std::make_unique<HardwareBackend>(hw_config_, kUnits, "test_20");
+    actuator_ = std::make_unique<HardwareActuator>(*backend_, hw_config_);
+    backend_->Start();
+    actuator_->Start();
+  }
+
+  // Waits until the host has taken in every frame the emulator sent, minus `lost` ones.
+  bool WaitHostCaughtUp(uint64_t frames_before_host, uint64_t sent_before, uint64_t lost) {
+    return WaitFor([&] {
+      const uint64_t sent = emulator_->stats().frames_sent - sent_before;
+      return backend_->counters().frames - frames_before_host + lost == sent;
+    });
+  }
+
+  void TearDown() override {
+    actuator_.reset();
+    backend_.reset();
+    emulator_.reset();
+  }
+
+  HardwareConfig hw_config_;
+  std::unique_ptr<DeviceEmulator> emulator_;
+  std::unique_ptr<HardwareBackend> backend_;
+  std::unique_ptr<HardwareActuator> actuator_;
+};
+
+TEST_F(HardwareTest, HandshakeThenFramesArriveIntact) {
+  StartEmulator();
+  StartHost();
+  EXPECT_EQ(backend_->session(), 1u);
+  EXPECT_DOUBLE_EQ(backend_->nominal_r0_ohm(), 3400.0);
+  EXPECT_EQ(backend_->link()->hello().unit_count, kUnits);
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  EXPECT_EQ(frame.unit_count, kUnits);
+  for (int k = 0; k < kUnits; ++k) {
+    EXPECT_NEAR(frame.r1_ohm[k], 3400.0 + k + frame.time_s, kResistanceTolOhm) << k;
+    EXPECT_NEAR(frame.r2_ohm[k], 3400.0 - k, kResistanceTolOhm) << k;
+  }
+  const auto stats = emulator_->stats();
+  EXPECT_GE(stats.stream_starts, 1u);
+  EXPECT_EQ(stats.commands_before_hello, 0u);
+  const auto counters = backend_->counters();
+  EXPECT_EQ(counters.corrupt, 0u);
+  EXPECT_EQ(counters.dropped, 0u);
+  EXPECT_EQ(counters.reconnects, 0u);
+}
+
+TEST_F(HardwareTest, UnitCountMismatchIsRefusedClearly) {
+  StartEmulator(/*units=*/9);
+  backend_ = std::make_unique<HardwareBackend>(hw_config_, kUnits, "test_20");
+  try {
+    backend_->Start();
+    FAIL() << "a 9-unit device was accepted for a 20-unit layout";
+  } catch (const std::runtime_error& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("reports 9 units"), std::string::npos) << message;
+    EXPECT_NE(message.find("layout 'test_20' has 20"), std::string::npos) << message;
+    EXPECT_NE(message.find(hw_config_.port), std::string::npos) << message;
+  }
+  EXPECT_EQ(emulator_->stats().stream_starts, 0u);  // refused before asking for frames
+}
+
+TEST_F(HardwareTest, NoHelloMeansATimeoutErrorNotAHang) {
+  StartEmulator(kUnits, /*connect_delay_s=*/30.0);
+  hw_config_.hello_timeout_s = 0.3;
+  backend_ = std::make_unique<HardwareBackend>(hw_config_, kUnits, "test_20");
+  try {
+    backend_->Start();
+    FAIL() << "started without a HELLO";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("no HELLO"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(HardwareTest, NoCommandBeforeHello) {
+  StartEmulator(kUnits, /*connect_delay_s=*/0.3);
+  backend_ = std::make_unique<HardwareBackend>(hw_config_, kUnits, "test_20");
+  actuator_ = std::make_unique<HardwareActuator>(*backend_, hw_config_);
+  EXPECT_EQ(actuator_->Write({.grip_effort = 0.5}), controller::WriteStatus::kDisconnected);
+  std::atomic<bool> started{false};
+  std::thread starter([&] {
+    backend_->Start();
+    started = true;
+  });
+  // Hammer the actuator during the handshake: nothing may reach the device before its HELLO.
+  int refused = 0;
+  while (!started) {
+    if (actuator_->Write({.grip_effort = 0.5}) == controller::WriteStatus::kDisconnected) ++refused;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  starter.join();
+  EXPECT_GT(refused, 10);
+  ASSERT_TRUE(WaitFor([&] {
+    actuator_->Write({.grip_effort = 0.5});
+    return emulator_->stats().motor_commands > 0;
+  }));
+  EXPECT_EQ(emulator_->stats().commands_before_hello, 0u);
+  EXPECT_NEAR(emulator_->motor().effort, 0.5, 1.0 / 32767);
+  EXPECT_TRUE(emulator_->motor().enable);
+}
+
+TEST_F(HardwareTest, MotorWatchdogStopsTheMotorWhenCommandsStop) {
+  StartEmulator();
+  StartHost();
+  ASSERT_EQ(actuator_->Write({.grip_effort = 0.8}), controller::WriteStatus::kOk);
+  ASSERT_TRUE(WaitFor([&] { return emulator_->motor().enable; }));
+  // Commands every 10 ms keep it running for 300 ms. A loaded machine can stall a thread beyond the
+  // watchdog; the emulator records the longest gap it saw, and the watchdog must agree with it.
+  for (int i = 0; i < 30; ++i) {
+    actuator_->Write({.grip_effort = 0.8});
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  // One more command so the gap since the loop's last one (this thread may have stalled) is measured.
+  const uint64_t before = emulator_->stats().motor_commands;
+  actuator_->Write({.grip_effort = 0.8});
+  ASSERT_TRUE(WaitFor([&] { return emulator_->stats().motor_commands > before; }));
+  const auto fed = emulator_->stats();
+  if (fed.max_command_interval_s < 0.1) {
+    EXPECT_EQ(fed.watchdog_trips, 0u) << "longest gap " << fed.max_command_interval_s << " s";
+  }
+  const uint64_t trips_while_fed = fed.watchdog_trips;
+  // The last command: the watchdog may not fire earlier than 100 ms after it was written.
+  const uint64_t received = emulator_->stats().motor_commands;
+  const auto silent_from = std::chrono::steady_clock::now();
+  actuator_->Write({.grip_effort = 0.8});
+  ASSERT_TRUE(WaitFor([&] { return emulator_->stats().motor_commands > received; }));
+  EXPECT_TRUE(emulator_->motor().enable);
+  ASSERT_TRUE(WaitFor([&] { return !emulator_->motor().enable; }));
+  EXPECT_GE(std::chrono::steady_clock::now() - silent_from, std::chrono::milliseconds(100));
+  EXPECT_EQ(emulator_->stats().watchdog_trips, trips_while_fed + 1);
+  EXPECT_EQ(emulator_->motor().effort, 0.0);
+}
+
+TEST_F(HardwareTest, ScriptedFaultsGiveExactCounters) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 20; }));
+  // Baseline with nothing in flight: pause, wait for the host to hold the last frame sent.
+  emulator_->PauseFrames(true);
+  const auto emu0 = emulator_->stats();
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] {
+    backend_->Read(&frame);
+    return frame.sequence == emu0.last_frame_sequence;
+  }));
+  const auto host0 = backend_->counters();
+  emulator_->PauseFrames(false);
+  uint64_t lost = 0;  // frames sent but not decodable
+
+  // Each step waits until its effect is on the wire and a good frame followed it.
+  auto step = [&](const std::function<void()>& fault, uint64_t corrupt_after, uint64_t frames_lost) {
+    fault();
+    lost += frames_lost;
+    ASSERT_TRUE(WaitFor([&] { return backend_->counters().corrupt - host0.corrupt >= corrupt_after; }));
+    const uint64_t frames = backend_->counters().frames;
+    ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > frames + 2; }));
+  };
+  step([&] { emulator_->CorruptFrames(3); }, 3, 3);          // CRC/COBS errors: corrupt 3, dropped 3
+  step([&] { emulator_->DropFrames(4); }, 3, 0);             // never sent: dropped 4
+  step([&] { emulator_->InjectGarbage(40, true); }, 4, 0);   // garbage + 0x00: corrupt 1
+  step([&] { emulator_->InjectGarbage(40, false); }, 5, 1);  // eats the next frame: corrupt 1, dropped 1
+  step([&] { emulator_->InjectOversize(2000); }, 6, 0);      // over 512 bytes: corrupt 1
+  step([&] { emulator_->TruncateNextFrame(7); }, 7, 1);      // bytes lost mid-packet: corrupt 1, dropped 1
+  step([&] { emulator_->InjectUnknownType(0x33); }, 7, 0);   // unknown 1
+  step([&] { emulator_->InjectBadVersion(2); }, 7, 0);       // unknown 1 (rejected version)
+
+  emulator_->PauseFrames(true);
+  const auto emu = emulator_->stats();
+  ASSERT_TRUE(WaitHostCaughtUp(host0.frames, emu0.frames_sent, lost))
+      << "sent " << emu.frames_sent - emu0.frames_sent << " host " << backend_->counters().frames - host0.frames;
+  const auto host = backend_->counters();
+  EXPECT_EQ(host.corrupt - host0.corrupt, 7u);
+  // A loaded machine may make the emulator overflow its FIFO (a real device would too): those
+  // frames are gaps as well, and counted by both sides.
+  const uint64_t overflowed = emu.frames_overflowed - emu0.frames_overflowed;
+  EXPECT_EQ(host.dropped - host0.dropped, 3u + 4u + 1u + 1u + overflowed);
+  EXPECT_EQ(host.unknown_packets - host0.unknown_packets, 2u);
+  EXPECT_EQ(host.sessions, 1u);
+  EXPECT_EQ(host.reconnects, 0u);
+  EXPECT_EQ(emulator_->stats().frames_dropped - emu0.frames_dropped, 4u);
+}
+
+TEST_F(HardwareTest, StaleThenDisconnectedThenRecovers) {
+  hw_config_.stale_timeout_s = 0.05;
+  hw_config_.disconnect_timeout_s = 0.3;
+  StartEmulator();
+  StartHost();
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  emulator_->PauseFrames(true);
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kStale; }));
+  EXPECT_TRUE(WaitFor([&] { return backend_->counters().stale_periods == 1u; }));
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kDisconnected; }));
+  EXPECT_EQ(backend_->counters().stale_periods, 1u);  // one period, however long
+  emulator_->PauseFrames(false);
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  emulator_->PauseFrames(true);
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kStale; }));
+  // The I/O thread counts the period on its own poll cycle, a moment after Read() saw it.
+  EXPECT_TRUE(WaitFor([&] { return backend_->counters().stale_periods == 2u; }));
+  EXPECT_EQ(backend_->counters().dropped, 0u);  // a pause is not a gap
+}
+
+TEST_F(HardwareTest, DeviceVanishesAndReturns) {
+  StartEmulator();
+  StartHost();
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  emulator_->Vanish();
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kDisconnected; }));
+  EXPECT_FALSE(backend_->link()->connected());
+  EXPECT_EQ(actuator_->Write({.grip_effort = 0.3}), controller::WriteStatus::kDisconnected);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few failed reopen attempts
+  emulator_->Return();
+  ASSERT_TRUE(WaitFor([&] { return backend_->link()->connected(); }));
+  const uint64_t frames = backend_->counters().frames;
+  ASSERT_TRUE(WaitFor([&] {
+    return backend_->Read(&frame) == sensor::ReadStatus::kOk && backend_->counters().frames > frames + 5;
+  }));
+  const auto counters = backend_->counters();
+  EXPECT_EQ(counters.reconnects, 1u);
+  EXPECT_EQ(counters.sessions, 1u);  // sequence numbers went on: the same device session
+  // Frames in flight when the pty closed are lost: exactly those show up as dropped, no more.
+  emulator_->PauseFrames(true);
+  ASSERT_TRUE(WaitFor([&] {
+    const auto c = backend_->counters();
+    return c.frames + c.dropped == emulator_->stats().frames_sent;
+  }));
+  EXPECT_LE(backend_->counters().dropped, 10u);
+  EXPECT_EQ(backend_->counters().corrupt, 0u);
+  EXPECT_EQ(emulator_->stats().commands_before_hello, 0u);
+  EXPECT_EQ(emulator_->stats().stream_starts >= 2, true);
+}
+
+TEST_F(HardwareTest, RebootStartsANewSession) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 50; }));
+  emulator_->Reboot();
+  ASSERT_TRUE(WaitFor([&] { return backend_->session() == 2; }));
+  const uint64_t frames = backend_->counters().frames;
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > frames + 10; }));  // streaming again
+  const auto counters = backend_->counters();
+  EXPECT_EQ(counters.sessions, 2u);
+  EXPECT_EQ(counters.dropped, 0u);  // the restart is not a gap
+  EXPECT_EQ(counters.reconnects, 0u);
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  EXPECT_LT(frame.time_s, 5.0);  // device time restarted
+}
+
+TEST_F(HardwareTest, FramesWithTheWrongUnitCountAreRefused) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 5; }));
+  emulator_->SetFrameUnitCount(9);
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().corrupt >= 5; }));
+  const std::string error = backend_->link()->last_error();
+  EXPECT_NE(error.find("frames carry 9 units"), std::string::npos) << error;
+  sensor::RawFrame frame;
+  while (backend_->Read(&frame) == sensor::ReadStatus::kOk) {
+  }
+  const uint64_t frames = backend_->counters().frames;
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  EXPECT_EQ(backend_->counters().frames, frames);  // nothing of them reaches the readout
+}
+
+TEST_F(HardwareTest, CleanShutdownStopsStreamMotorAndRestoresThePort) {
+  StartEmulator();
+  const std::string slave = [&] {
+    std::string s;
+    WaitFor([&] { return !(s = emulator_->slave_path()).empty(); });
+    return s;
+  }();
+  StartHost();
+  ASSERT_EQ(actuator_->Write({.grip_effort = 0.6}), controller::WriteStatus::kOk);
+  ASSERT_TRUE(WaitFor([&] { return emulator_->motor().enable; }));
+  actuator_->Stop();
+  backend_->Stop();
+  backend_->Stop();  // twice is fine
+  // The emulator reads the host's last words on its next tick.
+  EXPECT_TRUE(WaitFor([&] { return emulator_->stats().stream_stops == 1u; }));
+  EXPECT_TRUE(WaitFor([&] { return emulator_->stats().motor_off_commands >= 1u; }));  // by command
+  EXPECT_FALSE(emulator_->motor().enable);
+  // The emulator left the slave raw at its default speed; the host's 2 Mbaud must be gone.
+  const int fd = ::open(slave.c_str(), O_RDWR | O_NOCTTY);
+  ASSERT_GE(fd, 0);
+  termios t{};
+  ASSERT_EQ(tcgetattr(fd, &t), 0);
+  EXPECT_NE(cfgetospeed(&t), static_cast<speed_t>(B2000000));
+  ::close(fd);
+}
+
+TEST_F(HardwareTest, SeparateMotorPort) {
+  StartEmulator();
+  EmulatorConfig motor_config;
+  motor_config.link_path = testing::UniqueLinkPath("motor");
+  motor_config.unit_count = 1;  // the hand electronics' HELLO; its unit count is not checked
+  DeviceEmulator motor_device(motor_config, testing::TestFrameSource);
+  motor_device.Start();
+  hw_config_.motor_port = motor_config.link_path;
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] {
+    actuator_->Write({.grip_effort = -0.25});
+    return motor_device.stats().motor_commands > 0;
+  }));
+  EXPECT_NEAR(motor_device.motor().effort, -0.25, 1.0 / 32767);
+  EXPECT_EQ(emulator_->stats().motor_commands, 0u);
+  EXPECT_EQ(motor_device.stats().stream_starts, 0u);  // the motor link asks for no frames
+  EXPECT_GT(backend_->counters().frames + 1, 1u);
+  actuator_.reset();
+  EXPECT_TRUE(WaitFor([&] { return motor_device.stats().motor_off_commands >= 1u; }));
+  EXPECT_FALSE(motor_device.motor().enable);
+}
+
+}  // namespace
+}  // namespace graspbed::serial
