@@ -123,6 +123,9 @@ StrainModel::StrainModel(const Layout& layout, const StrainModelConfig& config, 
     throw std::invalid_argument("strain model: layout has " + std::to_string(unit_count_) +
                                 " units; expected 1.." + std::to_string(kMaxUnits));
   }
+  // Codes 0 .. 2^bits - 1 span 0 .. full scale; the top code also means "at or above full scale".
+  adc_max_code_ = std::ldexp(1.0, config_.adc_bits) - 1.0;
+  adc_lsb_ohm_ = config_.adc_bits > 0 ? config_.adc_full_scale_ohm / adc_max_code_ : 0.0;
   const size_t count = static_cast<size_t>(unit_count_);
   r0_r1_.resize(count);
   r0_r2_.resize(count);
@@ -183,11 +186,8 @@ double StrainModel::TemperatureOffsetK(double time_s) const {
 
 double StrainModel::Quantise(double resistance_ohm) const {
   if (config_.adc_bits == 0) return resistance_ohm;
-  // Codes 0 .. 2^bits - 1 span 0 .. full scale; the top code also means "at or above full scale".
-  const double max_code = std::ldexp(1.0, config_.adc_bits) - 1.0;
-  const double lsb_ohm = config_.adc_full_scale_ohm / max_code;
-  const double code = std::clamp(std::round(resistance_ohm / lsb_ohm), 0.0, max_code);
-  return code * lsb_ohm;
+  const double code = std::clamp(std::nearbyint(resistance_ohm / adc_lsb_ohm_), 0.0, adc_max_code_);
+  return code * adc_lsb_ohm_;
 }
 
 void StrainModel::Sample(std::span<const UnitLoad> loads, double time_s, RawFrame* frame) {

@@ -134,6 +134,8 @@ class StrainModel {
   std::vector<double> r0_r1_, r0_r2_, kn_, kt_;
   std::vector<double> bias_r1_, bias_r2_;
   std::vector<UnitFault> faults_;
+  double adc_max_code_ = 0.0;  // 2^bits - 1
+  double adc_lsb_ohm_ = 0.0;   // full scale / max code
   double noise_scale_ = 1.0;
   double extra_temperature_k_ = 0.0;
   uint32_t sequence_ = 0;

@@ -1,0 +1,81 @@
+// Per-frame cost of the sensor path for one 20-unit frame (default layout):
+//   BM_ReadoutAndInversion: Readout::Process + Inversion::Invert (the hardware path's cost)
+//   BM_StrainModelSample:   StrainModel::Sample, ideal and with every non-ideal option on
+// Run: build/bench/readout_bench   (docs/sensor.md)
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "sensor/calibration.h"
+#include "sensor/inversion.h"
+#include "sensor/readout.h"
+#include "sensor/strain_model.h"
+
+namespace graspbed::sensor {
+namespace {
+
+std::vector<UnitLoad> Loads(int count) {
+  std::vector<UnitLoad> loads(static_cast<size_t>(count));
+  for (int u = 0; u < count; ++u) loads[static_cast<size_t>(u)] = {0.4 * u, 0.3 * u - 3.0, 0.1, 0.1e-3};
+  return loads;
+}
+
+void BM_ReadoutAndInversion(benchmark::State& bench) {
+  const Layout layout = LoadLayout(DefaultLayoutPath());
+  StrainModelConfig config;
+  config.noise_ohm = 0.5;
+  StrainModel model(layout, config, 1);
+  Readout readout(ReadoutConfig{}, layout.unit_count(), 3400);
+  readout.SetBaseline(model.r0_ohm_r1(), model.r0_ohm_r2());
+  const Inversion inversion(layout, PaperCalibration(layout.unit_count()), InversionConfig{});
+  // A small ring of distinct frames so the branch predictor does not see one frame forever.
+  constexpr int kFrames = 64;
+  std::vector<RawFrame> frames(kFrames);
+  const std::vector<UnitLoad> loads = Loads(layout.unit_count());
+  for (int i = 0; i < kFrames; ++i) model.Sample(loads, i * 1e-3, &frames[static_cast<size_t>(i)]);
+  ReadoutFrame readout_frame;
+  TactileState state;
+  int index = 0;
+  for (auto _ : bench) {
+    readout.Process(frames[static_cast<size_t>(index)], &readout_frame);
+    inversion.Invert(readout_frame, &state);
+    benchmark::DoNotOptimize(state.total_fn_n);
+    index = (index + 1) % kFrames;
+  }
+  bench.SetItemsProcessed(bench.iterations());
+  bench.SetLabel("20 units, ns per frame");
+}
+BENCHMARK(BM_ReadoutAndInversion);
+
+void BM_StrainModelSample(benchmark::State& bench) {
+  const bool non_ideal = bench.range(0) != 0;
+  const Layout layout = LoadLayout(DefaultLayoutPath());
+  StrainModelConfig config;
+  if (non_ideal) {
+    config.r0_spread_fraction = 0.01;
+    config.noise_ohm = 0.5;
+    config.adc_bits = 16;
+    config.temperature_coefficient_per_k = 1e-4;
+    config.temperature_ramp_k_per_s = 0.01;
+    config.saturation_force_n = 11;
+    config.cross_talk_shear_fraction = 0.05;
+    config.cross_talk_offset_per_mm = 0.1;
+  }
+  StrainModel model(layout, config, 1);
+  const std::vector<UnitLoad> loads = Loads(layout.unit_count());
+  RawFrame frame;
+  double time_s = 0.0;
+  for (auto _ : bench) {
+    model.Sample(loads, time_s, &frame);
+    benchmark::DoNotOptimize(frame.r1_ohm[0]);
+    time_s += 1e-3;
+  }
+  bench.SetItemsProcessed(bench.iterations());
+  bench.SetLabel(non_ideal ? "20 units, all non-ideal options on" : "20 units, ideal");
+}
+BENCHMARK(BM_StrainModelSample)->Arg(0)->Arg(1);
+
+}  // namespace
+}  // namespace graspbed::sensor
+
+BENCHMARK_MAIN();
