@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "controller/grasp_controller.h"
+#include "controller/grip_slip_controller.h"
 #include "controller/open_loop_controller.h"
 
 namespace graspbed::controller {
@@ -23,6 +24,10 @@ const std::vector<ControllerEntry>& Entries() {
        [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
          return std::make_unique<OpenLoopController>(
              OpenLoopConfig{.close_effort = p.at("close_effort"), .open_effort = p.at("open_effort")});
+       }},
+      {"grip_slip", &GripSlipController::Parameters,
+       [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
+         return std::make_unique<GripSlipController>(GripSlipController::ConfigFromParams(p));
        }},
   };
   return entries;

@@ -1,0 +1,459 @@
+#include "controller/grip_slip_controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace graspbed::controller {
+namespace {
+
+using sensor::TactileState;
+using sensor::UnitValidity;
+
+/// Longest time step the integrator accepts [s]; a larger gap (first call, a pause of the clock)
+/// is not integrated as if the error had persisted all along.
+constexpr double kMaxStepS = 0.01;
+/// Loading ends once the measured grip reaches this fraction of the target.
+constexpr double kLoadedFraction = 0.9;
+
+/// One declared parameter bound to its field of GripSlipConfig.
+struct Binding {
+  const char* name;
+  double min;
+  double max;
+  const char* unit;
+  const char* doc;
+  bool integer;  ///< the field is an int or a bool: the value must be a whole number
+  double (*get)(const GripSlipConfig&);
+  void (*set)(GripSlipConfig&, double);
+};
+
+template <typename Field>
+constexpr bool kIsInteger = std::is_integral_v<Field>;
+
+// Binds a parameter name to a config field in one line; ints and bools take whole numbers.
+#define GRASPBED_BIND(name, field, min, max, unit, doc)                                              \
+  Binding {                                                                                          \
+    name, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,                         \
+        [](const GripSlipConfig& c) { return static_cast<double>(c.field); },                       \
+        [](GripSlipConfig& c, double v) {                                                            \
+          using Field = decltype(GripSlipConfig{}.field);                                            \
+          if constexpr (std::is_same_v<Field, bool>) {                                               \
+            c.field = v != 0.0;                                                                      \
+          } else if constexpr (std::is_integral_v<Field>) {                                          \
+            c.field = static_cast<Field>(std::lround(v));                                            \
+          } else {                                                                                   \
+            c.field = v;                                                                             \
+          }                                                                                          \
+        }                                                                                            \
+  }
+
+const std::vector<Binding>& Bindings() {
+  static const std::vector<Binding> bindings = {
+      GRASPBED_BIND("close_effort", close_effort, 0.01, 1.0, "", "motor effort while closing towards the object"),
+      GRASPBED_BIND("open_effort", open_effort, 0.01, 1.0, "", "motor effort magnitude while releasing"),
+      GRASPBED_BIND("release_time_s", release_time_s, 0.01, 10.0, "s",
+                    "opening effort is applied this long after an open command, then 0"),
+      GRASPBED_BIND("contact_unit_threshold_n", slip.contact_unit_threshold_n, 0.01, 5.0, "N",
+                    "a valid unit is in contact above this normal force (keep >= 5x the noise)"),
+      GRASPBED_BIND("contact_min_units", contact_min_units, 1, 64, "units",
+                    "units in contact that mean the hand touches the object"),
+      GRASPBED_BIND("contact_confirm_frames", contact_confirm_frames, 1, 100, "frames",
+                    "consecutive frames with contact before loading starts"),
+      GRASPBED_BIND("contact_lost_s", contact_lost_s, 0.005, 10.0, "s",
+                    "no unit in contact this long while holding: close again"),
+      GRASPBED_BIND("min_valid_units", min_valid_units, 1, 64, "units",
+                    "fewer valid units than this: safe hold (last safe command kept)"),
+      GRASPBED_BIND("initial_grip_n", initial_grip_n, 0.05, 100.0, "N", "grip reached in the loading phase"),
+      GRASPBED_BIND("load_rate_n_per_s", load_rate_n_per_s, 0.1, 1000.0, "N/s",
+                    "ramp rate of the grip target while loading"),
+      GRASPBED_BIND("load_timeout_s", load_timeout_s, 0.01, 10.0, "s",
+                    "loading ends after this long even if the grip lags"),
+      GRASPBED_BIND("min_grip_n", min_grip_n, 0.05, 100.0, "N", "grip target floor while holding"),
+      GRASPBED_BIND("max_grip_n", max_grip_n, 0.1, 200.0, "N",
+                    "overall grip ceiling (sum of normal force over the units), honoured while slipping"),
+      GRASPBED_BIND("safety_margin", safety_margin, 1.0, 5.0, "",
+                    "grip target = tangential load / friction estimate x safety_margin"),
+      GRASPBED_BIND("grip_decrease_rate_n_per_s", grip_decrease_rate_n_per_s, 0.0, 1000.0, "N/s",
+                    "how fast the coupled grip target may fall when the load drops"),
+      GRASPBED_BIND("unit_range_n", unit_range_n, 0.1, 1000.0, "N",
+                    "a saturated (out-of-range) unit is counted at this force; effort may not rise"),
+      GRASPBED_BIND("friction_initial", friction_initial, 0.02, 5.0, "",
+                    "friction coefficient assumed at the start of each grasp"),
+      GRASPBED_BIND("friction_min", friction_min, 0.01, 5.0, "", "lower bound of the friction estimate"),
+      GRASPBED_BIND("friction_learn_rate", friction_learn_rate, 0.0, 1.0, "",
+                    "fraction of the way the estimate moves towards the ratio seen at slip"),
+      GRASPBED_BIND("friction_learn_min_load_n", friction_learn_min_load_n, 0.0, 100.0, "N",
+                    "the estimate is learned only from slips under at least this tangential load"),
+      GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N",
+                    "feed-forward effort per newton of grip target (about 1 / stall pinch force)"),
+      GRASPBED_BIND("kp_effort_per_n", kp_effort_per_n, 0.0, 1.0, "1/N", "proportional gain of the force loop"),
+      GRASPBED_BIND("ki_effort_per_n_s", ki_effort_per_n_s, 0.0, 100.0, "1/(N s)",
+                    "integral gain of the force loop"),
+      GRASPBED_BIND("integrator_limit", integrator_limit, 0.0, 1.0, "", "bound of the integral term"),
+      GRASPBED_BIND("max_effort", max_effort, 0.01, 1.0, "", "largest closing effort ever commanded"),
+      GRASPBED_BIND("ceiling_effort_margin", ceiling_effort_margin, 1.0, 100.0, "",
+                    "effort cap = this x effort_per_newton x grip ceiling (guards against a blind sensor)"),
+      GRASPBED_BIND("grip_filter_s", grip_filter_s, 0.0, 0.1, "s", "low-pass time constant of the measured grip"),
+      GRASPBED_BIND("slip_grip_gain", slip_grip_gain, 0.0, 5.0, "",
+                    "on slip: grip target = max(target, grip) x (1 + slip_grip_gain) + slip_grip_step_n"),
+      GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N", "additive part of the slip response"),
+      GRASPBED_BIND("slip_refractory_s", slip_refractory_s, 0.001, 1.0, "s",
+                    "a further slip event is counted no sooner than this"),
+      GRASPBED_BIND("slip_floor_decay_n_per_s", slip_floor_decay_n_per_s, 0.0, 1000.0, "N/s",
+                    "how fast the grip raised by a slip response relaxes back to the coupled target"),
+      GRASPBED_BIND("sample_rate_hz", slip.sample_rate_hz, 10.0, 100000.0, "Hz",
+                    "tactile frame rate the detector filters are designed for"),
+      GRASPBED_BIND("grid_columns", slip.grid_columns, 1, 64, "units",
+                    "units per row in layout order (unit index = row x columns + column)"),
+      GRASPBED_BIND("even_units_axial", slip.even_units_axial, 0, 1, "",
+                    "1: units with (row + column) even have an axial beam (checkerboard); 0: odd ones"),
+      GRASPBED_BIND("ratio_detector", slip.ratio_enabled, 0, 1, "", "1: use the shear/normal ratio cue"),
+      GRASPBED_BIND("ratio_filter_s", slip.ratio_filter_s, 0.0, 1.0, "s", "low-pass time constant of the ratio"),
+      GRASPBED_BIND("ratio_slip_fraction", slip.ratio_slip_fraction, 0.1, 2.0, "",
+                    "ratio cue fires above this fraction of the friction estimate"),
+      GRASPBED_BIND("ratio_noise_sigmas", slip.ratio_noise_sigmas, 0.0, 20.0, "sigma",
+                    "ratio threshold raised by this many standard deviations of the ratio estimate"),
+      GRASPBED_BIND("ratio_min_grip_n", slip.ratio_min_grip_n, 0.01, 100.0, "N",
+                    "ratio evaluated only above this measured grip"),
+      GRASPBED_BIND("vibration_detector", slip.vibration_enabled, 0, 1, "",
+                    "1: use the high-passed shear energy cue"),
+      GRASPBED_BIND("vibration_highpass_hz", slip.vibration_highpass_hz, 1.0, 10000.0, "Hz",
+                    "cutoff of the 2nd-order high-pass on each unit's shear"),
+      GRASPBED_BIND("vibration_window_s", slip.vibration_window_s, 0.0005, 1.0, "s",
+                    "time constant of the high-passed shear energy average"),
+      GRASPBED_BIND("vibration_factor", slip.vibration_factor, 1.0, 100.0, "",
+                    "vibration cue fires above this multiple of the learned noise RMS"),
+      GRASPBED_BIND("vibration_confirm_frames", slip.vibration_confirm_frames, 1, 100, "frames",
+                    "vibration cue fires after this many consecutive frames above its threshold"),
+      GRASPBED_BIND("vibration_min_rms_n", slip.vibration_min_rms_n, 0.0001, 10.0, "N",
+                    "lower bound of the vibration threshold"),
+      GRASPBED_BIND("noise_floor_time_s", slip.noise_floor_time_s, 0.01, 100.0, "s",
+                    "time constant of the learned noise floor"),
+      GRASPBED_BIND("centroid_detector", slip.centroid_enabled, 0, 1, "",
+                    "1: use the contact-centroid movement cue"),
+      GRASPBED_BIND("centroid_filter_s", slip.centroid_filter_s, 0.0, 0.1, "s",
+                    "low-pass time constant of the normal-force centroid"),
+      GRASPBED_BIND("centroid_window_s", slip.centroid_window_s, 0.001, 0.5, "s",
+                    "centroid movement is measured over this window"),
+      GRASPBED_BIND("centroid_shift_units", slip.centroid_shift_units, 0.01, 10.0, "pitch",
+                    "centroid cue fires above this movement, in unit pitches"),
+      GRASPBED_BIND("centroid_drift_units", slip.centroid_drift_units, 0.01, 10.0, "pitch",
+                    "centroid cue also fires when the contact has drifted this far since the cues were armed"),
+      GRASPBED_BIND("centroid_noise_sigmas", slip.centroid_noise_sigmas, 0.0, 20.0, "sigma",
+                    "centroid thresholds raised by this many standard deviations of noise-induced movement"),
+      GRASPBED_BIND("centroid_min_weight_n", slip.centroid_min_weight_n, 0.01, 100.0, "N",
+                    "minimum contact normal force for a centroid"),
+      GRASPBED_BIND("detector_settle_s", slip.settle_s, 0.0, 1.0, "s",
+                    "slip cues stay silent this long after contact onset or after stale data"),
+  };
+  return bindings;
+}
+
+#undef GRASPBED_BIND
+
+void Require(bool ok, const char* name, double value, const std::string& rule) {
+  if (ok) return;
+  std::ostringstream message;
+  message << "controller 'grip_slip' parameter " << name << " = " << value << ": " << rule;
+  throw std::invalid_argument(message.str());
+}
+
+/// The detector's part of `config`, after validating all of it (so the first message names a
+/// controller parameter).
+const SlipDetectorConfig& ValidatedSlipConfig(const GripSlipConfig& config) {
+  config.Validate();
+  return config.slip;
+}
+
+}  // namespace
+
+void GripSlipConfig::Validate() const {
+  for (const Binding& binding : Bindings()) {
+    const double value = binding.get(*this);
+    std::ostringstream range;
+    range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
+    Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value, range.str());
+  }
+  Require(min_grip_n <= max_grip_n, "min_grip_n", min_grip_n, "must not exceed max_grip_n");
+  Require(initial_grip_n <= max_grip_n, "initial_grip_n", initial_grip_n, "must not exceed max_grip_n");
+  Require(friction_min <= friction_initial, "friction_min", friction_min, "must not exceed friction_initial");
+  slip.Validate();
+}
+
+std::vector<ControllerParameter> GripSlipController::Parameters() {
+  const GripSlipConfig defaults;
+  std::vector<ControllerParameter> parameters;
+  for (const Binding& binding : Bindings()) {
+    parameters.push_back({binding.name, binding.get(defaults), binding.min, binding.max, binding.unit, binding.doc});
+  }
+  return parameters;
+}
+
+GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& params) {
+  GripSlipConfig config;
+  for (const Binding& binding : Bindings()) {
+    const auto found = params.find(binding.name);
+    if (found == params.end()) continue;
+    const double value = found->second;
+    if (binding.integer) {
+      Require(std::isfinite(value) && value == std::round(value), binding.name, value, "must be a whole number");
+    }
+    binding.set(config, value);
+  }
+  config.Validate();
+  return config;
+}
+
+GripSlipController::GripSlipController(const GripSlipConfig& config)
+    : config_(config), detector_(ValidatedSlipConfig(config)) {
+  grip_filter_ = LowPassFilter(config_.grip_filter_s, 1.0 / config_.slip.sample_rate_hz);
+  Reset();
+}
+
+const char* GripSlipController::PhaseName(Phase phase) {
+  switch (phase) {
+    case Phase::kIdle: return "idle";
+    case Phase::kClosing: return "closing";
+    case Phase::kLoading: return "loading";
+    case Phase::kHolding: return "holding";
+    case Phase::kSlip: return "slip";
+    case Phase::kReleasing: return "releasing";
+    case Phase::kOpen: return "open";
+  }
+  return "unknown";
+}
+
+void GripSlipController::Reset() {
+  detector_.Reset();
+  grip_filter_.Clear();
+  intent_ = GraspIntent::kIdle;
+  phase_ = Phase::kIdle;
+  phase_start_s_ = 0.0;
+  safe_hold_ = false;
+  have_time_ = false;
+  have_frame_ = false;
+  contact_frames_ = 0;
+  last_contact_s_ = 0.0;
+  friction_ = config_.friction_initial;
+  load_target_n_ = 0.0;
+  coupled_target_n_ = 0.0;
+  slip_floor_n_ = 0.0;
+  target_n_ = 0.0;
+  integrator_ = 0.0;
+  refractory_until_s_ = 0.0;
+  last_good_command_ = HandCommand{.grip_effort = 0.0};
+  telemetry_ = ControllerTelemetry{};
+  telemetry_.friction_estimate = friction_;
+  diagnostics_ = GripSlipDiagnostics{};
+  diagnostics_.ceiling_n = CeilingN();
+}
+
+void GripSlipController::SetIntent(GraspIntent intent) { intent_ = intent; }
+
+void GripSlipController::SetGripCeiling(double ceiling_n) {
+  if (std::isnan(ceiling_n)) throw std::invalid_argument("grip ceiling = nan: must be a number of newtons");
+  task_ceiling_n_ = (ceiling_n > 0.0 && std::isfinite(ceiling_n)) ? ceiling_n : 0.0;
+  diagnostics_.ceiling_n = CeilingN();
+}
+
+double GripSlipController::CeilingN() const {
+  return task_ceiling_n_ > 0.0 ? std::min(task_ceiling_n_, config_.max_grip_n) : config_.max_grip_n;
+}
+
+void GripSlipController::Enter(Phase phase, double time_s) {
+  phase_ = phase;
+  phase_start_s_ = time_s;
+}
+
+double GripSlipController::EffortCap() const {
+  return std::min(config_.max_effort, config_.ceiling_effort_margin * config_.effort_per_newton * CeilingN());
+}
+
+double GripSlipController::ForceLoop(double target_n, double grip_n, double dt_s, bool may_increase) {
+  const double effort_cap = EffortCap();
+  const double error_n = target_n - grip_n;
+  const double feed_forward = config_.effort_per_newton * target_n;
+  const double proportional = config_.kp_effort_per_n * error_n;
+  double effort = feed_forward + proportional + integrator_;
+  // Anti-windup: integrate only while the output is not pinned in the direction the error pushes,
+  // and keep the integral term bounded.
+  const bool pinned_high = effort >= effort_cap && error_n > 0.0;
+  const bool pinned_low = effort <= 0.0 && error_n < 0.0;
+  const bool blocked = !may_increase && error_n > 0.0;
+  if (!pinned_high && !pinned_low && !blocked) {
+    integrator_ = std::clamp(integrator_ + config_.ki_effort_per_n_s * error_n * dt_s, -config_.integrator_limit,
+                             config_.integrator_limit);
+  }
+  effort = std::clamp(feed_forward + proportional + integrator_, 0.0, effort_cap);
+  // A saturated unit hides how hard we already squeeze: never squeeze harder than last time.
+  if (!may_increase) effort = std::min(effort, std::max(last_good_command_.grip_effort, 0.0));
+  return effort;
+}
+
+void GripSlipController::UpdateHoldTarget(double dt_s) {
+  const SlipSignals& signals = detector_.signals();
+  const double coupled = std::max(config_.min_grip_n, signals.tangential_load_n / friction_ * config_.safety_margin);
+  // Rise at once, fall slowly: a load that drops for a moment must not loosen the grip with it.
+  coupled_target_n_ = coupled >= coupled_target_n_
+                          ? coupled
+                          : std::max(coupled, coupled_target_n_ - config_.grip_decrease_rate_n_per_s * dt_s);
+  slip_floor_n_ = std::max(0.0, slip_floor_n_ - config_.slip_floor_decay_n_per_s * dt_s);
+}
+
+void GripSlipController::RespondToSlip(double time_s) {
+  const SlipSignals& signals = detector_.signals();
+  ++telemetry_.slip_events;
+  refractory_until_s_ = time_s + config_.slip_refractory_s;
+  // At slip the contact sits on its friction cone: the ratio measured now is the friction
+  // coefficient (or an upper bound of the part still sticking). The ratio cue itself compares
+  // against the estimate, so only the independent cues teach the estimate.
+  if ((signals.vibration_slip || signals.centroid_slip) && signals.tangential_load_n >= config_.friction_learn_min_load_n) {
+    const double observed = std::min(signals.ratio, friction_);
+    friction_ = std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+  }
+  const double grip_n = diagnostics_.measured_grip_n;
+  slip_floor_n_ = std::max(target_n_, grip_n) * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
+  Enter(Phase::kSlip, time_s);
+}
+
+HandCommand GripSlipController::Update(const TactileState& state, double time_s) {
+  const double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxStepS) : 0.0;
+  have_time_ = true;
+  last_time_s_ = time_s;
+
+  // The user's intent changes the phase whatever the data say.
+  if (intent_ == GraspIntent::kOpen && phase_ != Phase::kReleasing && phase_ != Phase::kOpen) {
+    Enter(Phase::kReleasing, time_s);
+  } else if (intent_ == GraspIntent::kClose &&
+             (phase_ == Phase::kIdle || phase_ == Phase::kOpen || phase_ == Phase::kReleasing)) {
+    Enter(Phase::kClosing, time_s);
+    contact_frames_ = 0;
+    friction_ = config_.friction_initial;
+    slip_floor_n_ = 0.0;
+    integrator_ = 0.0;
+  }
+
+  HandCommand command;
+  const bool releasing = phase_ == Phase::kReleasing || phase_ == Phase::kOpen;
+  const bool data_ok = !state.stale && state.valid_count >= config_.min_valid_units;
+  if (!data_ok && !releasing) {
+    // Safe hold: keep the last command computed from good data, never opening on its own.
+    safe_hold_ = true;
+    command = last_good_command_;
+    command.grip_effort = std::max(command.grip_effort, 0.0);
+    telemetry_.phase = "safe_hold";
+    telemetry_.safe_hold = true;
+    telemetry_.slip_detected = false;
+    telemetry_.grip_target_n = target_n_;
+    telemetry_.friction_estimate = friction_;
+    diagnostics_.effort = command.grip_effort;
+    return command;
+  }
+  if (safe_hold_ && data_ok) {
+    // Data are back: the filters hold pre-gap samples, so restart them and let them settle.
+    safe_hold_ = false;
+    detector_.Restart();
+    grip_filter_.Clear();
+    last_contact_s_ = time_s;
+  }
+  telemetry_.safe_hold = !data_ok;
+
+  const bool new_frame = data_ok && (!have_frame_ || state.sequence != last_sequence_ || state.time_s != last_frame_time_s_);
+  if (new_frame) {
+    have_frame_ = true;
+    last_sequence_ = state.sequence;
+    last_frame_time_s_ = state.time_s;
+    int saturated = 0;
+    const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
+    for (int i = 0; i < count; ++i) {
+      if (state.validity[static_cast<size_t>(i)] == UnitValidity::kOutOfRange) ++saturated;
+    }
+    diagnostics_.saturated_units = saturated;
+    diagnostics_.measured_grip_n = grip_filter_.Update(state.total_fn_n + saturated * config_.unit_range_n);
+    const bool armed = phase_ == Phase::kLoading || phase_ == Phase::kHolding || phase_ == Phase::kSlip;
+    detector_.Update(state, diagnostics_.measured_grip_n, friction_, armed, phase_ != Phase::kSlip);
+  }
+  const SlipSignals& signals = detector_.signals();
+  const double grip_n = diagnostics_.measured_grip_n;
+  const bool may_increase = diagnostics_.saturated_units == 0;
+  const double ceiling_n = CeilingN();
+  bool slip_now = false;
+
+  switch (phase_) {
+    case Phase::kIdle:
+      target_n_ = 0.0;
+      command.grip_effort = 0.0;
+      break;
+    case Phase::kClosing: {
+      target_n_ = 0.0;
+      command.grip_effort = std::min(config_.close_effort, EffortCap());
+      if (new_frame) contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
+      if (contact_frames_ >= config_.contact_confirm_frames) {
+        Enter(Phase::kLoading, time_s);
+        detector_.Restart();
+        last_contact_s_ = time_s;
+        load_target_n_ = std::min(grip_n, config_.initial_grip_n);
+        coupled_target_n_ = 0.0;
+        // The closing effort drives the finger towards the object, not a force: the force loop
+        // starts fresh from the force measured now, so the closing effort does not become a pinch.
+        integrator_ = 0.0;
+      }
+      break;
+    }
+    case Phase::kLoading:
+    case Phase::kHolding:
+    case Phase::kSlip: {
+      if (signals.in_contact) last_contact_s_ = time_s;
+      if (time_s - last_contact_s_ > config_.contact_lost_s) {
+        // Object gone (or never there): go back to closing rather than squeezing air harder.
+        Enter(Phase::kClosing, time_s);
+        contact_frames_ = 0;
+        target_n_ = 0.0;
+        command.grip_effort = std::min(config_.close_effort, EffortCap());
+        break;
+      }
+      UpdateHoldTarget(dt_s);
+      if (phase_ == Phase::kLoading) {
+        load_target_n_ = std::min(load_target_n_ + config_.load_rate_n_per_s * dt_s, config_.initial_grip_n);
+        const bool loaded = load_target_n_ >= config_.initial_grip_n &&
+                            grip_n >= kLoadedFraction * std::min(config_.initial_grip_n, ceiling_n);
+        if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
+      }
+      slip_now = signals.any();
+      if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
+      if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
+      const double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
+      target_n_ = std::min(std::max(base_n, slip_floor_n_), ceiling_n);
+      command.grip_effort = ForceLoop(target_n_, grip_n, dt_s, may_increase);
+      break;
+    }
+    case Phase::kReleasing:
+      target_n_ = 0.0;
+      integrator_ = 0.0;
+      command.grip_effort = -config_.open_effort;
+      if (time_s - phase_start_s_ >= config_.release_time_s) Enter(Phase::kOpen, time_s);
+      break;
+    case Phase::kOpen:
+      target_n_ = 0.0;
+      command.grip_effort = 0.0;
+      break;
+  }
+
+  if (data_ok) last_good_command_ = command;
+  telemetry_.phase = PhaseName(phase_);
+  telemetry_.grip_target_n = target_n_;
+  telemetry_.friction_estimate = friction_;
+  telemetry_.slip_detected = slip_now;
+  diagnostics_.effort = command.grip_effort;
+  diagnostics_.integrator = integrator_;
+  diagnostics_.ceiling_n = ceiling_n;
+  diagnostics_.slip_floor_n = slip_floor_n_;
+  diagnostics_.signals = signals;
+  return command;
+}
+
+}  // namespace graspbed::controller

@@ -1,0 +1,150 @@
+#pragma once
+/// The reference grip-slip controller (docs/controller.md). Phases as in grasp controllers that have
+/// worked on real hands (Romano et al. 2011 on the PR2; grip-load coupling after Johansson and
+/// Westling): close until contact, load to an initial grip, hold with the grip force coupled to the
+/// measured tangential load over an estimated friction coefficient times a safety margin, respond to
+/// slip by raising the grip within a few milliseconds and learning the friction coefficient from the
+/// ratio at slip, release on command, and hold the last safe command whenever the data are stale or
+/// too few units are valid (it never opens the hand because data stopped).
+///
+/// The grip force is closed-loop on the measured normal force (sum over valid units, saturated units
+/// counted at the rated range) with feed-forward + PI and anti-windup, since the motor effort to
+/// force map depends on the object. Sees only TactileState, time and intent.
+
+#include <string>
+#include <vector>
+
+#include "controller/filters.h"
+#include "controller/grasp_controller.h"
+#include "controller/slip_detector.h"
+
+namespace graspbed::controller {
+
+/// Every setting of the grip-slip controller; each is also a controller parameter (GripSlipController::
+/// Parameters() lists name, default, range, unit and meaning; docs/controller.md has the table).
+struct GripSlipConfig {
+  // Closing and release.
+  double close_effort = 0.3;       ///< motor effort while closing towards the object [-]
+  double open_effort = 0.5;        ///< motor effort magnitude while releasing [-]
+  double release_time_s = 0.5;     ///< opening effort is applied this long after an open command [s]
+  int contact_min_units = 1;       ///< valid units above the contact threshold that mean contact
+  int contact_confirm_frames = 3;  ///< consecutive frames with contact before loading starts
+  double contact_lost_s = 0.1;     ///< no contact unit this long while holding: close again [s]
+  int min_valid_units = 3;         ///< fewer valid units than this: safe hold
+
+  // Grip force targets.
+  double initial_grip_n = 2.0;          ///< grip reached in the loading phase [N]
+  double load_rate_n_per_s = 20.0;      ///< ramp rate of the grip target while loading [N/s]
+  double load_timeout_s = 0.3;          ///< loading ends after this long even if the grip lags [s]
+  double min_grip_n = 1.5;              ///< grip target never drops below this while holding [N]
+  double max_grip_n = 15.0;             ///< overall grip ceiling (sum over the units) [N]
+  double safety_margin = 1.4;           ///< grip = tangential load / friction estimate x this
+  double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
+  double unit_range_n = 10.0;           ///< a saturated (out-of-range) unit counts as this force [N]
+
+  // Friction estimate.
+  double friction_initial = 0.5;      ///< friction coefficient assumed at the start of each grasp
+  double friction_min = 0.15;         ///< the estimate never goes below this
+  double friction_learn_rate = 1.0;   ///< fraction of the way towards the ratio observed at slip
+  double friction_learn_min_load_n = 0.2;  ///< learn only from slips under at least this tangential load [N]
+
+  // Force loop (feed-forward + PI with anti-windup) on the measured grip.
+  double effort_per_newton = 0.06;    ///< feed-forward effort per newton of target (~1 / stall force)
+  double kp_effort_per_n = 0.04;      ///< proportional gain [1/N]
+  double ki_effort_per_n_s = 1.5;     ///< integral gain [1/(N s)]
+  double integrator_limit = 0.5;      ///< bound of the integral term [-]
+  double max_effort = 1.0;            ///< largest closing effort ever commanded [-]
+  double ceiling_effort_margin = 1.3;  ///< effort cap = this x effort_per_newton x grip ceiling
+  double grip_filter_s = 0.002;       ///< low-pass time constant of the measured grip [s]
+
+  // Slip response.
+  double slip_grip_gain = 0.25;            ///< on slip, grip target = grip x (1 + this) + step
+  double slip_grip_step_n = 0.5;           ///< additive part of the slip response [N]
+  double slip_refractory_s = 0.04;         ///< a new slip event is counted no sooner than this [s]
+  double slip_floor_decay_n_per_s = 0.5;   ///< the raised grip after slip relaxes this fast [N/s]
+
+  SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
+
+  /// Throws std::invalid_argument naming the offending parameter and value.
+  void Validate() const;
+};
+
+/// Internals exposed for logging and tests, filled every update.
+struct GripSlipDiagnostics {
+  double measured_grip_n = 0.0;  ///< filtered grip force the loop closes on [N]
+  double effort = 0.0;           ///< commanded effort [-]
+  double integrator = 0.0;       ///< integral term of the force loop [-]
+  double ceiling_n = 0.0;        ///< effective grip ceiling (overall and per task) [N]
+  double slip_floor_n = 0.0;     ///< grip raised by the last slip response, decaying [N]
+  int saturated_units = 0;       ///< units out of range in the newest frame
+  SlipSignals signals;           ///< what the slip detector saw
+};
+
+class GripSlipController final : public GraspController {
+ public:
+  /// Validates `config` (throws std::invalid_argument).
+  explicit GripSlipController(const GripSlipConfig& config);
+
+  /// Parameter declarations for the factory, defaults from GripSlipConfig.
+  static std::vector<ControllerParameter> Parameters();
+  /// Config from a factory-resolved parameter map (every declared name present, values in range).
+  /// Throws std::invalid_argument for a non-integer count or a failed Validate().
+  static GripSlipConfig ConfigFromParams(const ControllerParams& params);
+
+  void Reset() override;
+  void SetIntent(GraspIntent intent) override;
+  HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  /// Per-task ceiling [N]; the effective ceiling is min(this, max_grip_n). A value <= 0 or +inf
+  /// removes the task ceiling; NaN throws std::invalid_argument. Survives Reset().
+  void SetGripCeiling(double ceiling_n) override;
+  ControllerTelemetry telemetry() const override { return telemetry_; }
+  std::string name() const override { return "grip_slip"; }
+
+  const GripSlipDiagnostics& diagnostics() const { return diagnostics_; }
+  const GripSlipConfig& config() const { return config_; }
+
+ private:
+  enum class Phase { kIdle, kClosing, kLoading, kHolding, kSlip, kReleasing, kOpen };
+  static const char* PhaseName(Phase phase);
+
+  void Enter(Phase phase, double time_s);
+  double CeilingN() const;
+  /// Largest closing effort allowed under the current ceiling [-].
+  double EffortCap() const;
+  /// Force loop: effort for `target_n` given the measured grip; updates the integrator.
+  double ForceLoop(double target_n, double grip_n, double dt_s, bool may_increase);
+  void UpdateHoldTarget(double dt_s);
+  void RespondToSlip(double time_s);
+
+  GripSlipConfig config_;
+  SlipDetector detector_;
+  LowPassFilter grip_filter_;
+
+  GraspIntent intent_ = GraspIntent::kIdle;
+  Phase phase_ = Phase::kIdle;
+  double phase_start_s_ = 0.0;
+  bool safe_hold_ = false;
+  double task_ceiling_n_ = 0.0;  ///< 0 = none set
+
+  bool have_time_ = false;
+  double last_time_s_ = 0.0;
+  bool have_frame_ = false;
+  uint32_t last_sequence_ = 0;
+  double last_frame_time_s_ = 0.0;
+
+  int contact_frames_ = 0;
+  double last_contact_s_ = 0.0;
+  double friction_ = 0.0;
+  double load_target_n_ = 0.0;
+  double coupled_target_n_ = 0.0;
+  double slip_floor_n_ = 0.0;
+  double target_n_ = 0.0;
+  double integrator_ = 0.0;
+  double refractory_until_s_ = 0.0;
+  HandCommand last_good_command_;
+
+  ControllerTelemetry telemetry_;
+  GripSlipDiagnostics diagnostics_;
+};
+
+}  // namespace graspbed::controller

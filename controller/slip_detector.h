@@ -1,0 +1,152 @@
+#pragma once
+/// SlipDetector: tells slip from the tactile signals alone, combining three cues the sensor offers.
+///  1. Ratio: tangential load over normal load (shear/normal) against the friction estimate. It sees
+///     slip coming when the load grows faster than the grip, and ignores smooth load changes.
+///  2. Vibration: high-passed shear energy of the contact (matched filter) against a noise floor that the detector
+///     learns on line (stick-slip and the release of stored shear at slip onset are broadband; the
+///     inertial load of arm motion is not).
+///  3. Centroid: movement of the normal-force centroid across the units (the contact travels).
+/// Runs once per new frame; allocates nothing.
+///
+/// Unit positions are taken from layout order alone: the default layouts are row-major grids
+/// (unit index = row * columns + column) with a checkerboard of beam orientations. The detector
+/// checks that assumption against the state's own axial/circumferential shear totals every frame and
+/// falls back to an orientation-free ratio estimate when they disagree (see SlipSignals).
+
+#include <array>
+
+#include "controller/filters.h"
+#include "sensor/tactile_state.h"
+
+namespace graspbed::controller {
+
+/// Settings of the slip detector (documented in docs/controller.md; exposed as controller parameters).
+struct SlipDetectorConfig {
+  double sample_rate_hz = 1000.0;       ///< tactile frame rate the filters are designed for [Hz]
+  int grid_columns = 4;                 ///< units per row in layout order (index = row * columns + column)
+  bool even_units_axial = true;         ///< units with (row + column) even have an axial beam
+  double contact_unit_threshold_n = 0.15;  ///< a unit is in contact above this normal force [N]
+
+  bool ratio_enabled = true;            ///< use the shear/normal ratio cue
+  double ratio_filter_s = 0.01;         ///< low-pass time constant of the ratio [s]
+  double ratio_slip_fraction = 0.9;     ///< ratio cue fires above this fraction of the friction estimate
+  double ratio_min_grip_n = 0.5;        ///< ratio is evaluated only above this measured grip [N]
+  /// The ratio threshold is raised by this many standard deviations of the ratio estimate (from the
+  /// learned shear noise and the contact's normal forces), so a light grip on a noisy sensor does
+  /// not read as slip.
+  double ratio_noise_sigmas = 2.0;
+
+  bool vibration_enabled = true;        ///< use the high-passed shear energy cue
+  double vibration_highpass_hz = 40.0;  ///< cutoff of the 2nd-order high-pass on each unit's shear [Hz]
+  double vibration_window_s = 0.01;     ///< time constant of the energy average [s]
+  double vibration_factor = 1.7;        ///< cue fires when the RMS exceeds this multiple of the noise RMS
+  int vibration_confirm_frames = 3;     ///< cue fires after this many consecutive frames above threshold
+  double vibration_min_rms_n = 0.03;    ///< lower bound of the threshold (noise-free signals) [N]
+  double noise_floor_time_s = 0.5;      ///< time constant of the noise-floor estimate [s]
+
+  bool centroid_enabled = true;         ///< use the contact-centroid movement cue
+  double centroid_filter_s = 0.003;     ///< low-pass time constant of the centroid [s]
+  double centroid_window_s = 0.02;      ///< centroid movement is measured over this window [s]
+  double centroid_shift_units = 0.3;    ///< cue fires above this movement within the window [unit pitches]
+  /// Cue also fires when the centroid has drifted this far from where it was when the cues were
+  /// armed (slow slides) [unit pitches]; the reference then moves to the current centroid.
+  double centroid_drift_units = 0.4;
+  /// Both centroid thresholds are raised by this many standard deviations of the centroid
+  /// movement expected from noise (light contacts on a noisy sensor).
+  double centroid_noise_sigmas = 3.0;
+  double centroid_min_weight_n = 0.2;   ///< minimum contact normal force for a centroid [N]
+
+  double settle_s = 0.05;               ///< cues stay silent this long after Restart() [s]
+
+  /// Longest centroid window the delay line holds [samples].
+  static constexpr int kMaxWindowSamples = 512;
+
+  /// Throws std::invalid_argument naming the offending field and value.
+  void Validate() const;
+};
+
+/// What the detector saw in the newest frame. Which cues fired is reported separately.
+struct SlipSignals {
+  double ratio = 0.0;                  ///< filtered tangential/normal load ratio [-]
+  double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
+  double tangential_load_n = 0.0;      ///< ratio times measured grip: load the grip must hold [N]
+  /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
+  double vibration_rms_n = 0.0;
+  double vibration_threshold_n = 0.0;  ///< current threshold of the vibration cue [N]
+  double noise_rms_n = 0.0;            ///< learned RMS of high-passed shear noise per unit [N]
+  double centroid_row = 0.0;           ///< filtered normal-force centroid, row index (along the axis)
+  double centroid_column = 0.0;        ///< filtered normal-force centroid, column index (around)
+  double centroid_shift_units = 0.0;   ///< centroid movement over the window [unit pitches]
+  double centroid_drift_units = 0.0;   ///< centroid movement since the reference was taken [unit pitches]
+  double centroid_shift_threshold = 0.0;  ///< current threshold of the windowed movement [unit pitches]
+  double centroid_drift_threshold = 0.0;  ///< current threshold of the drift [unit pitches]
+  int contact_units = 0;               ///< valid units above the contact threshold
+  bool in_contact = false;             ///< a unit above the threshold, or the grip above 3x the threshold
+  bool orientation_consistent = true;  ///< layout assumption matched the state's shear totals
+  bool ratio_slip = false;             ///< ratio cue fired
+  bool vibration_slip = false;         ///< vibration cue fired
+  bool centroid_slip = false;          ///< centroid cue fired
+  bool settled = false;                ///< cues are armed (settle time over)
+
+  bool any() const { return ratio_slip || vibration_slip || centroid_slip; }
+};
+
+class SlipDetector {
+ public:
+  /// Validates `config` (throws std::invalid_argument).
+  explicit SlipDetector(const SlipDetectorConfig& config);
+
+  /// Forgets everything, the learned noise floor included.
+  void Reset();
+  /// Restarts filters and histories (keeps the noise floor) and silences the cues for settle_s;
+  /// call at contact onset and when data come back after a stale period.
+  void Restart();
+
+  /// Processes one new frame. `grip_n` is the measured grip force [N]; `friction_estimate` the
+  /// current friction coefficient estimate; `armed` false keeps the cues silent (filters still
+  /// run); `learn_noise` false freezes the noise floor (e.g. while responding to a slip).
+  const SlipSignals& Update(const sensor::TactileState& state, double grip_n, double friction_estimate,
+                            bool armed, bool learn_noise);
+
+  const SlipSignals& signals() const { return signals_; }
+  const SlipDetectorConfig& config() const { return config_; }
+
+ private:
+  struct Centroid {
+    double row = 0.0;
+    double column = 0.0;
+  };
+
+  bool IsAxial(int unit) const;
+  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate);
+  void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
+  void UpdateCentroid(const sensor::TactileState& state, bool live);
+
+  SlipDetectorConfig config_;
+  int centroid_window_samples_ = 1;
+  int settle_samples_ = 0;
+  double noise_floor_alpha_ = 0.0;
+
+  SlipSignals signals_;
+  int settle_remaining_ = 0;
+  int vibration_frames_ = 0;  ///< consecutive frames with the vibration statistic above threshold
+  bool restart_pending_ = true;
+  std::array<bool, sensor::kMaxUnits> was_valid_{};
+
+  LowPassFilter ratio_filter_;  ///< axial component (or the whole ratio without orientations)
+  LowPassFilter ratio_circumferential_filter_;
+  double ratio_variance_reduction_ = 1.0;
+  double centroid_variance_reduction_ = 1.0;
+  std::array<HighPassBiquad, sensor::kMaxUnits> shear_highpass_{};
+  LowPassFilter vibration_energy_;
+  double noise_energy_ = 0.0;  ///< learned mean square of high-passed shear per unit [N^2]
+  long noise_samples_ = 0;     ///< samples in the noise floor so far (fast start)
+
+  LowPassFilter centroid_row_filter_;
+  LowPassFilter centroid_column_filter_;
+  DelayLine<Centroid, SlipDetectorConfig::kMaxWindowSamples> centroid_history_;
+  Centroid centroid_reference_;
+  bool have_reference_ = false;
+};
+
+}  // namespace graspbed::controller

@@ -1,0 +1,412 @@
+#include "controller/grip_slip_controller.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "tests/controller/synthetic_tactile.h"
+
+namespace graspbed::controller {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::HandPlant;
+using testing::SyntheticContact;
+using testing::SyntheticTactile;
+
+constexpr double kPeriodS = 0.001;           // 1 kHz control and sensor rate
+constexpr double kGravity = 9.81;            // [m/s^2]
+constexpr double kSlipLatencyLimitS = 0.030;  // detection target, well under the human 60-90 ms
+constexpr double kGripTolN = 0.25;           // force-loop tracking tolerance in a steady hold
+constexpr double kCeilingTolN = 0.3;         // ceiling overshoot allowed (noise + loop transient)
+constexpr double kSlowSlideLatencyLimitS = 0.100;  // slide seen only by centroid travel, light grip
+constexpr double kAddedMassSlipLimitM = 5e-3;  // slide allowed after a load step of 2x the friction limit
+
+/// Controller + plant + sensor at 1 kHz, with the tangential load given as a function of time.
+class ClosedLoop {
+ public:
+  ClosedLoop(const GripSlipConfig& config, const HandPlant::Options& plant, const SyntheticTactile::Options& sensor)
+      : controller(config), plant(plant), sensor(sensor) {}
+
+  /// Runs until `end_s`; `load_n(t)` is the axial tangential load; `each` sees every tick.
+  void RunUntil(double end_s, const std::function<double(double)>& load_n,
+                const std::function<void(double)>& each = nullptr) {
+    while (time_s < end_s - 1e-9) {
+      time_s += kPeriodS;
+      plant.Step(command, load_n(time_s), kPeriodS);
+      const sensor::TactileState state = sensor.Frame(plant.Contact(), time_s);
+      command = controller.Update(state, time_s);
+      max_grip_n = std::max(max_grip_n, plant.grip_n());
+      if (controller.telemetry().slip_detected && first_slip_s < 0.0) first_slip_s = time_s;
+      if (controller.telemetry().slip_events > events_seen) {
+        events_seen = controller.telemetry().slip_events;
+        const SlipSignals& signals = controller.diagnostics().signals;
+        events_by_cue[0] += signals.ratio_slip;
+        events_by_cue[1] += signals.vibration_slip;
+        events_by_cue[2] += signals.centroid_slip;
+      }
+      if (each) each(time_s);
+    }
+  }
+
+  /// Closes on the resting object, lifts it once the grip holds (the load ramps to `load_n` in
+  /// 0.3 s) and lets the grip settle until `settle_until_s`; then forgets any slip of the plant.
+  void Grasp(double load_n, double settle_until_s = 1.0) {
+    controller.SetIntent(GraspIntent::kClose);
+    double lift_start_s = -1.0;
+    RunUntil(settle_until_s, [&](double t) {
+      if (lift_start_s < 0.0 && std::string(controller.telemetry().phase) == "holding") lift_start_s = t + 0.1;
+      return lift_start_s < 0.0 ? 0.0 : load_n * std::clamp((t - lift_start_s) / 0.3, 0.0, 1.0);
+    });
+    if (load_n > 0.0 && (lift_start_s < 0.0 || lift_start_s + 0.3 > settle_until_s)) {
+      ADD_FAILURE() << "grasp not settled in time";
+    }
+    plant.ClearSlip();
+    first_slip_s = -1.0;
+  }
+
+  GripSlipController controller;
+  HandPlant plant;
+  SyntheticTactile sensor;
+  HandCommand command;
+  double time_s = 0.0;
+  double max_grip_n = 0.0;
+  double first_slip_s = -1.0;
+  int events_seen = 0;
+  int events_by_cue[3] = {0, 0, 0};  ///< slip events in which the ratio, vibration, centroid cue fired
+
+  /// "ratio r, vibration v, centroid c" for messages.
+  std::string Cues() const {
+    return "ratio " + std::to_string(events_by_cue[0]) + ", vibration " + std::to_string(events_by_cue[1]) +
+           ", centroid " + std::to_string(events_by_cue[2]);
+  }
+};
+
+GripSlipConfig DefaultConfig() { return GripSlipConfig{}; }
+
+std::string ErrorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(GripSlipControllerTest, ClosesUntilContactThenLoadsToInitialGrip) {
+  ClosedLoop loop(DefaultConfig(), {}, {});
+  loop.controller.SetIntent(GraspIntent::kClose);
+  double contact_s = -1.0;
+  double loading_s = -1.0;
+  double peak_loading_grip_n = 0.0;
+  loop.RunUntil(0.8, [](double) { return 0.0; }, [&](double t) {
+    if (std::string(loop.controller.telemetry().phase) == "loading") {
+      peak_loading_grip_n = std::max(peak_loading_grip_n, loop.plant.grip_n());
+    }
+    if (contact_s < 0.0 && loop.plant.grip_n() > loop.controller.config().slip.contact_unit_threshold_n * 2.0) {
+      contact_s = t;
+    }
+    if (loading_s < 0.0 && std::string(loop.controller.telemetry().phase) == "loading") loading_s = t;
+  });
+  ASSERT_GT(contact_s, 0.0) << "the plant never touched";
+  ASSERT_GT(loading_s, 0.0) << "contact never detected";
+  // Before the finger touched, noise alone never looked like contact.
+  EXPECT_GE(loading_s, contact_s - 0.003);
+  EXPECT_LT(loading_s - contact_s, 0.010);
+  EXPECT_STREQ(loop.controller.telemetry().phase, "holding");
+  EXPECT_NEAR(peak_loading_grip_n, loop.controller.config().initial_grip_n, kGripTolN);
+  // Nothing to carry yet: the hold relaxes to the minimum grip.
+  EXPECT_NEAR(loop.plant.grip_n(), loop.controller.config().min_grip_n, kGripTolN);
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+}
+
+TEST(GripSlipControllerTest, NoContactFromNoiseWhileClosingInAir) {
+  HandPlant::Options plant;
+  plant.start_gap = 1.0;            // object far away
+  plant.closing_speed_per_s = 0.1;  // never reached in this test
+  ClosedLoop loop(DefaultConfig(), plant, {});
+  loop.controller.SetIntent(GraspIntent::kClose);
+  loop.RunUntil(5.0, [](double) { return 0.0; });
+  EXPECT_STREQ(loop.controller.telemetry().phase, "closing");
+  EXPECT_DOUBLE_EQ(loop.command.grip_effort, loop.controller.config().close_effort);
+}
+
+TEST(GripSlipControllerTest, HoldCouplesGripToLoadOverFrictionTimesMargin) {
+  const GripSlipConfig config = DefaultConfig();
+  ClosedLoop loop(config, {}, {});
+  const double load_n = 1.5;
+  loop.Grasp(load_n, 2.0);
+  const double expected = load_n / config.friction_initial * config.safety_margin;
+  EXPECT_NEAR(loop.controller.telemetry().grip_target_n, expected, 0.1 * expected);
+  EXPECT_NEAR(loop.plant.grip_n(), loop.controller.telemetry().grip_target_n, kGripTolN);
+  EXPECT_FALSE(loop.plant.sliding());
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+}
+
+/// False slips in a long static hold, at the default noise and at twice it.
+TEST(GripSlipControllerTest, NoFalseSlipInLongStaticHold) {
+  for (const double noise_scale : {1.0, 2.0}) {
+    SyntheticTactile::Options sensor;
+    sensor.noise_fn_n *= noise_scale;
+    sensor.noise_ft_n *= noise_scale;
+    sensor.seed = 7;
+    ClosedLoop loop(DefaultConfig(), {}, sensor);
+    loop.Grasp(0.5, 1.0);
+    const int events_after_grasp = loop.controller.telemetry().slip_events;
+    int detected_ticks = 0;
+    int cue_ticks[3] = {0, 0, 0};
+    constexpr double kHoldS = 60.0;
+    loop.RunUntil(1.0 + kHoldS, [](double) { return 0.5; }, [&](double) {
+      if (loop.controller.telemetry().slip_detected) ++detected_ticks;
+      const SlipSignals& signals = loop.controller.diagnostics().signals;
+      cue_ticks[0] += signals.ratio_slip;
+      cue_ticks[1] += signals.vibration_slip;
+      cue_ticks[2] += signals.centroid_slip;
+    });
+    std::printf("[ measure  ] flagged ticks by cue: ratio %d, vibration %d, centroid %d\n", cue_ticks[0], cue_ticks[1],
+                cue_ticks[2]);
+    const int false_events = loop.controller.telemetry().slip_events - events_after_grasp;
+    std::printf("[ measure  ] noise x%.0f (fn %.3f N, ft %.3f N per unit): %d false slip events, %d flagged ticks in "
+                "%.0f s static hold; vibration noise rms %.4f N, threshold %.4f N\n",
+                noise_scale, sensor.noise_fn_n, sensor.noise_ft_n, false_events, detected_ticks, kHoldS,
+                loop.controller.diagnostics().signals.noise_rms_n,
+                loop.controller.diagnostics().signals.vibration_threshold_n);
+    EXPECT_EQ(events_after_grasp, 0) << "noise x" << noise_scale;
+    EXPECT_EQ(false_events, 0) << "noise x" << noise_scale;
+    EXPECT_EQ(detected_ticks, 0) << "noise x" << noise_scale;
+    EXPECT_FALSE(loop.plant.sliding());
+  }
+}
+
+/// Arm motion: the wrist accelerates the held object (lift, carry, shake), so the inertial load
+/// changes smoothly by up to +-70 % of the weight. Friction is ample, so nothing slips.
+TEST(GripSlipControllerTest, NoFalseSlipDuringArmMotion) {
+  const double mass_kg = 0.1;
+  const double weight_per_finger_n = mass_kg * kGravity / 2.0;
+  ClosedLoop loop(DefaultConfig(), {}, {});
+  loop.Grasp(weight_per_finger_n, 1.0);
+  double max_ratio_of_load = 0.0;
+  // Lift/carry profile: 1.5 Hz swings of +-7 m/s^2, then a 4 Hz shake of +-5 m/s^2.
+  const auto load = [&](double t) {
+    const double tm = t - 1.0;
+    const double acceleration =
+        tm < 6.0 ? 7.0 * std::sin(2.0 * std::numbers::pi * 1.5 * tm) : 5.0 * std::sin(2.0 * std::numbers::pi * 4.0 * tm);
+    return mass_kg * (kGravity + acceleration) / 2.0;
+  };
+  loop.RunUntil(11.0, load, [&](double t) {
+    max_ratio_of_load = std::max(max_ratio_of_load, load(t) / weight_per_finger_n);
+  });
+  std::printf("[ measure  ] arm motion: load up to %.2f x weight, %d slip events (%s), plant slid %.3f mm\n",
+              max_ratio_of_load, loop.controller.telemetry().slip_events, loop.Cues().c_str(),
+              loop.plant.slip_distance_m() * 1e3);
+  EXPECT_GT(max_ratio_of_load, 1.6);
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+  EXPECT_EQ(loop.plant.slip_distance_m(), 0.0);
+}
+
+/// Sudden added mass: the load jumps beyond what the grip holds; the object slides with stick-slip.
+TEST(GripSlipControllerTest, DetectsSlipFromAddedMassWithinLatencyAndStopsIt) {
+  HandPlant::Options plant;
+  plant.friction = 0.5;  // the estimate is right; the load step outruns the grip
+  ClosedLoop loop(DefaultConfig(), plant, {});
+  loop.Grasp(0.5, 1.0);
+  ASSERT_EQ(loop.controller.telemetry().slip_events, 0);
+  const double grip_before_n = loop.plant.grip_n();
+  loop.RunUntil(2.0, [](double t) { return t < 1.2 ? 0.5 : 1.5; });
+  ASSERT_GT(loop.plant.slip_onset_s(), 0.0) << "the load step did not make the object slip";
+  ASSERT_GT(loop.first_slip_s, 0.0) << "slip not detected";
+  const double latency_s = loop.first_slip_s - loop.plant.slip_onset_s();
+  std::printf("[ measure  ] added mass: slip detected %.1f ms after onset, slid %.2f mm, grip %.2f -> %.2f N\n",
+              latency_s * 1e3, loop.plant.slip_distance_m() * 1e3, grip_before_n, loop.plant.grip_n());
+  EXPECT_GE(latency_s, 0.0);
+  EXPECT_LT(latency_s, kSlipLatencyLimitS);
+  EXPECT_FALSE(loop.plant.sliding()) << "the slip response did not stop the slip";
+  EXPECT_GT(loop.plant.grip_n(), 1.5 / plant.friction);
+  EXPECT_LT(loop.plant.slip_distance_m(), kAddedMassSlipLimitM);
+}
+
+/// Low friction: the object is slipperier than the estimate. The slip cues catch it and the estimate
+/// is learned from the ratio at slip, after which the grasp holds with no further slips.
+TEST(GripSlipControllerTest, LearnsLowFrictionFromSlipAndThenHolds) {
+  HandPlant::Options plant;
+  plant.friction = 0.25;
+  const GripSlipConfig config = DefaultConfig();
+  ClosedLoop loop(config, plant, {});
+  // Grasp with no load (object resting), then lift: load ramps to the weight share in 0.2 s.
+  loop.Grasp(0.0, 0.5);
+  const auto load = [](double t) { return std::clamp((t - 0.5) / 0.2, 0.0, 1.0) * 1.2; };
+  loop.RunUntil(1.5, load);
+  ASSERT_GT(loop.plant.slip_onset_s(), 0.0);
+  const double latency_s = loop.first_slip_s - loop.plant.slip_onset_s();
+  const int events_after_learning = loop.controller.telemetry().slip_events;
+  std::printf("[ measure  ] low friction 0.25 (estimate %.2f): detected %.1f ms after onset, friction learned %.3f, "
+              "%d slip events, slid %.2f mm\n",
+              config.friction_initial, latency_s * 1e3, loop.controller.telemetry().friction_estimate,
+              events_after_learning, loop.plant.slip_distance_m() * 1e3);
+  // Only the contact's travel reveals this slide (its stick-slip is below the noise at 1.5 N of
+  // grip), so it is caught later than the signatures above.
+  EXPECT_LT(latency_s, kSlowSlideLatencyLimitS);
+  EXPECT_LE(loop.controller.telemetry().friction_estimate, plant.friction + 0.05) << "estimate not lowered";
+  EXPECT_FALSE(loop.plant.sliding());
+  loop.RunUntil(10.0, load);
+  EXPECT_EQ(loop.controller.telemetry().slip_events, events_after_learning) << "slips after the estimate was learned";
+  EXPECT_FALSE(loop.plant.sliding());
+}
+
+TEST(GripSlipControllerTest, CeilingHonouredEvenWhileSlipping) {
+  HandPlant::Options plant;
+  plant.friction = 0.3;
+  ClosedLoop loop(DefaultConfig(), plant, {});
+  constexpr double kCeilingN = 3.0;
+  loop.controller.SetGripCeiling(kCeilingN);
+  loop.Grasp(0.2, 1.0);
+  double max_target_n = 0.0;
+  // The load needs 2 N / 0.3 = 6.7 N of grip: more than the fragile object may take.
+  loop.RunUntil(3.0, [](double t) { return t < 1.2 ? 0.2 : 2.0; }, [&](double) {
+    max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n);
+  });
+  std::printf("[ measure  ] ceiling %.1f N: peak grip %.2f N, peak target %.2f N, %d slip events\n", kCeilingN,
+              loop.max_grip_n, max_target_n, loop.controller.telemetry().slip_events);
+  EXPECT_GT(loop.controller.telemetry().slip_events, 0);
+  EXPECT_GT(loop.plant.slip_distance_m(), 0.0) << "the load should have exceeded what the ceiling can hold";
+  EXPECT_LE(max_target_n, kCeilingN + 1e-9);
+  EXPECT_LE(loop.max_grip_n, kCeilingN + kCeilingTolN);
+  EXPECT_GE(loop.command.grip_effort, 0.0);
+}
+
+TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
+  GripSlipConfig config = DefaultConfig();
+  config.max_grip_n = 4.0;
+  HandPlant::Options plant;
+  plant.friction = 0.2;
+  ClosedLoop loop(config, plant, {});
+  loop.controller.SetGripCeiling(8.0);  // the task allows more; the overall ceiling wins
+  loop.Grasp(0.2, 1.0);
+  loop.RunUntil(3.0, [](double t) { return t < 1.2 ? 0.2 : 2.0; });
+  EXPECT_DOUBLE_EQ(loop.controller.diagnostics().ceiling_n, 4.0);
+  EXPECT_LE(loop.max_grip_n, 4.0 + kCeilingTolN);
+}
+
+TEST(GripSlipControllerTest, SafeHoldOnStaleDataKeepsCommandAndNeverOpens) {
+  ClosedLoop loop(DefaultConfig(), {}, {});
+  loop.Grasp(0.8, 1.0);
+  const HandCommand before = loop.command;
+  ASSERT_GT(before.grip_effort, 0.0);
+  // Stale frames whose forces read zero, as if the object were gone: the controller must not react.
+  sensor::TactileState stale = loop.sensor.Frame(SyntheticContact{}, loop.time_s);
+  stale.stale = true;
+  for (int i = 0; i < 300; ++i) {
+    loop.time_s += kPeriodS;
+    const HandCommand command = loop.controller.Update(stale, loop.time_s);
+    ASSERT_DOUBLE_EQ(command.grip_effort, before.grip_effort) << "tick " << i;
+    ASSERT_GE(command.grip_effort, 0.0);
+    ASSERT_TRUE(command.enable);
+    ASSERT_TRUE(loop.controller.telemetry().safe_hold);
+    ASSERT_STREQ(loop.controller.telemetry().phase, "safe_hold");
+    ASSERT_FALSE(loop.controller.telemetry().slip_detected);
+  }
+  // Data back: hold resumes without a false slip from the gap.
+  loop.RunUntil(loop.time_s + 1.0, [](double) { return 0.8; });
+  EXPECT_STREQ(loop.controller.telemetry().phase, "holding");
+  EXPECT_FALSE(loop.controller.telemetry().safe_hold);
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+  EXPECT_FALSE(loop.plant.sliding());
+}
+
+TEST(GripSlipControllerTest, SafeHoldWhenTooFewUnitsAreValid) {
+  GripSlipConfig config = DefaultConfig();
+  config.min_valid_units = 4;
+  ClosedLoop loop(config, {}, {});
+  loop.Grasp(0.8, 1.0);
+  const double effort_before = loop.command.grip_effort;
+  for (int unit = 0; unit < 17; ++unit) loop.sensor.SetUnitValidity(unit, sensor::UnitValidity::kOpen);
+  loop.RunUntil(1.2, [](double) { return 0.8; });
+  EXPECT_TRUE(loop.controller.telemetry().safe_hold);
+  EXPECT_DOUBLE_EQ(loop.command.grip_effort, effort_before);
+}
+
+TEST(GripSlipControllerTest, DeadUnitsDuringHoldCauseNoFalseSlip) {
+  ClosedLoop loop(DefaultConfig(), {}, {});
+  loop.Grasp(0.8, 1.0);
+  loop.RunUntil(1.5, [](double) { return 0.8; });
+  loop.sensor.SetUnitValidity(9, sensor::UnitValidity::kShort);  // under the patch centre
+  loop.RunUntil(2.5, [](double) { return 0.8; });
+  loop.sensor.SetUnitValidity(9, sensor::UnitValidity::kValid);  // comes back
+  loop.sensor.SetUnitValidity(10, sensor::UnitValidity::kOpen);
+  loop.RunUntil(4.0, [](double) { return 0.8; });
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+  EXPECT_FALSE(loop.controller.telemetry().safe_hold);
+  EXPECT_STREQ(loop.controller.telemetry().phase, "holding");
+}
+
+TEST(GripSlipControllerTest, ReleasesOnOpenIntent) {
+  const GripSlipConfig config = DefaultConfig();
+  ClosedLoop loop(config, {}, {});
+  loop.Grasp(0.5, 1.0);
+  loop.controller.SetIntent(GraspIntent::kOpen);
+  loop.RunUntil(1.1, [](double) { return 0.0; });
+  EXPECT_STREQ(loop.controller.telemetry().phase, "releasing");
+  EXPECT_DOUBLE_EQ(loop.command.grip_effort, -config.open_effort);
+  EXPECT_DOUBLE_EQ(loop.plant.grip_n(), 0.0);
+  loop.RunUntil(1.0 + config.release_time_s + 0.01, [](double) { return 0.0; });
+  EXPECT_STREQ(loop.controller.telemetry().phase, "open");
+  EXPECT_DOUBLE_EQ(loop.command.grip_effort, 0.0);
+  // Closing again starts a fresh grasp.
+  loop.controller.SetIntent(GraspIntent::kClose);
+  loop.RunUntil(loop.time_s + 1.0, [](double) { return 0.5; });
+  EXPECT_STREQ(loop.controller.telemetry().phase, "holding");
+}
+
+TEST(GripSlipControllerTest, SaturatedUnitStopsTheEffortFromRising) {
+  GripSlipConfig config = DefaultConfig();
+  ClosedLoop loop(config, {}, {});
+  loop.Grasp(0.5, 1.0);
+  // A point-like heavy load: the centre unit saturates while the total still reads low.
+  SyntheticContact contact = loop.plant.Contact();
+  contact.grip_n = 12.0;
+  contact.centre_column = 1.0;  // on unit 9 (row 2, column 1)
+  contact.patch_sigma_units = 0.3;
+  contact.load_axial_n = 3.0;
+  const double effort_before = loop.command.grip_effort;
+  double max_effort = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    loop.time_s += kPeriodS;
+    const sensor::TactileState state = loop.sensor.Frame(contact, loop.time_s);
+    ASSERT_EQ(state.validity[9], sensor::UnitValidity::kOutOfRange);
+    max_effort = std::max(max_effort, loop.controller.Update(state, loop.time_s).grip_effort);
+  }
+  EXPECT_GE(loop.controller.diagnostics().saturated_units, 1);
+  EXPECT_LE(max_effort, effort_before + 1e-12);
+}
+
+TEST(GripSlipControllerTest, TelemetryFilledEveryUpdate) {
+  ClosedLoop loop(DefaultConfig(), {}, {});
+  EXPECT_STREQ(loop.controller.telemetry().phase, "idle");
+  EXPECT_DOUBLE_EQ(loop.controller.telemetry().friction_estimate, loop.controller.config().friction_initial);
+  loop.Grasp(1.0, 1.0);
+  const ControllerTelemetry telemetry = loop.controller.telemetry();
+  EXPECT_STREQ(telemetry.phase, "holding");
+  EXPECT_GT(telemetry.grip_target_n, 0.0);
+  EXPECT_FALSE(telemetry.safe_hold);
+  EXPECT_EQ(loop.controller.name(), "grip_slip");
+  EXPECT_GT(loop.controller.diagnostics().signals.tangential_load_n, 0.5);
+  EXPECT_TRUE(loop.controller.diagnostics().signals.orientation_consistent);
+  loop.controller.Reset();
+  EXPECT_STREQ(loop.controller.telemetry().phase, "idle");
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0);
+}
+
+TEST(GripSlipControllerTest, NanCeilingIsRejected) {
+  GripSlipController controller(DefaultConfig());
+  EXPECT_THAT(ErrorOf([&] { controller.SetGripCeiling(std::nan("")); }), HasSubstr("grip ceiling = nan"));
+  controller.SetGripCeiling(0.0);  // no task ceiling
+  EXPECT_DOUBLE_EQ(controller.diagnostics().ceiling_n, controller.config().max_grip_n);
+}
+
+}  // namespace
+}  // namespace graspbed::controller

@@ -1,0 +1,232 @@
+#include "controller/slip_detector.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <numbers>
+#include <string>
+
+#include "controller/filters.h"
+#include "tests/controller/synthetic_tactile.h"
+
+namespace graspbed::controller {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::SyntheticContact;
+using testing::SyntheticTactile;
+
+constexpr double kPeriodS = 0.001;
+constexpr double kSlipLatencyLimitS = 0.030;
+constexpr double kFriction = 0.5;
+constexpr double kGripN = 3.0;
+constexpr double kHoldLoadN = 0.9;
+constexpr double kStickSlipPeakToPeakN = 1.2;  // asserted within the latency limit  // ratio 0.3, well inside the friction cone of 0.5
+
+/// Feeds a detector 1 kHz frames from `contact(t)`; returns the first time a cue fired, or -1.
+struct Stream {
+  explicit Stream(const SlipDetectorConfig& config, const SyntheticTactile::Options& sensor = {})
+      : detector(config), sensor(sensor) {}
+
+  double Run(double start_s, double end_s, const std::function<SyntheticContact(double)>& contact) {
+    double first_s = -1.0;
+    for (double t = start_s; t < end_s - 1e-9; t += kPeriodS) {
+      const sensor::TactileState state = sensor.Frame(contact(t), t);
+      const SlipSignals& signals = detector.Update(state, state.total_fn_n, kFriction, true, true);
+      if (signals.any()) {
+        ++flagged;
+        if (first_s < 0.0) first_s = t;
+      }
+    }
+    return first_s;
+  }
+
+  SlipDetector detector;
+  SyntheticTactile sensor;
+  int flagged = 0;
+};
+
+SyntheticContact Hold(double) {
+  SyntheticContact contact;
+  contact.grip_n = kGripN;
+  contact.load_axial_n = kHoldLoadN;
+  return contact;
+}
+
+/// Only one cue enabled, to measure it alone.
+SlipDetectorConfig OnlyCue(bool ratio, bool vibration, bool centroid) {
+  SlipDetectorConfig config;
+  config.ratio_enabled = ratio;
+  config.vibration_enabled = vibration;
+  config.centroid_enabled = centroid;
+  return config;
+}
+
+TEST(SlipDetectorTest, StaticHoldWithNoiseRaisesNothingAndLearnsTheNoise) {
+  Stream stream(SlipDetectorConfig{});
+  EXPECT_LT(stream.Run(0.0, 30.0, Hold), 0.0);
+  EXPECT_EQ(stream.flagged, 0);
+  const SlipSignals& signals = stream.detector.signals();
+  EXPECT_NEAR(signals.ratio, kHoldLoadN / kGripN, 0.03);
+  EXPECT_NEAR(signals.tangential_load_n, kHoldLoadN, 0.1);
+  EXPECT_TRUE(signals.orientation_consistent);
+  // High-passed shear noise: 0.04 N white noise through a 40 Hz high-pass keeps ~90 % of its power.
+  EXPECT_NEAR(signals.noise_rms_n, 0.04 * std::sqrt(0.9), 0.01);
+  EXPECT_NEAR(signals.centroid_row, 2.0, 0.1);
+  EXPECT_NEAR(signals.centroid_column, 1.5, 0.1);
+}
+
+TEST(SlipDetectorTest, StickSlipVibrationDetectedWithinLatency) {
+  // Sliding at the friction limit with a 120 Hz sawtooth over the whole contact; swept in amplitude
+  // to show where the cue starts to see it at the default noise (0.04 N per unit on the shear).
+  double latency_at_limit_s = -1.0;
+  for (const double peak_to_peak_n : {0.4, 0.6, 0.8, 1.0, kStickSlipPeakToPeakN}) {
+    Stream stream(OnlyCue(false, true, false));
+    ASSERT_LT(stream.Run(0.0, 2.0, Hold), 0.0);
+    constexpr double kOnsetS = 2.0;
+    const double first_s = stream.Run(kOnsetS, 2.5, [&](double t) {
+      SyntheticContact contact = Hold(t);
+      contact.load_axial_n = kFriction * kGripN;
+      contact.vibration_n = peak_to_peak_n * (std::fmod(t * 120.0, 1.0) - 0.5);
+      return contact;
+    });
+    std::printf("[ measure  ] vibration cue alone: 120 Hz stick-slip %.1f N p-p on a 3 N grip: %s %.1f ms\n",
+                peak_to_peak_n, first_s > 0.0 ? "detected after" : "not detected in", 
+                first_s > 0.0 ? (first_s - kOnsetS) * 1e3 : 500.0);
+    if (peak_to_peak_n == kStickSlipPeakToPeakN) latency_at_limit_s = first_s > 0.0 ? first_s - kOnsetS : 1.0;
+  }
+  EXPECT_LT(latency_at_limit_s, kSlipLatencyLimitS);
+}
+
+TEST(SlipDetectorTest, ContactMovingAcrossUnitsDetectedWithinLatency) {
+  Stream stream(OnlyCue(false, false, true));
+  ASSERT_LT(stream.Run(0.0, 2.0, Hold), 0.0);
+  constexpr double kOnsetS = 2.0;
+  constexpr double kSlipSpeedPitchPerS = 40.0;  // 200 mm/s at 5 mm pitch: a dropping object
+  const double first_s = stream.Run(kOnsetS, 2.5, [](double t) {
+    SyntheticContact contact = Hold(t);
+    contact.centre_row = 2.0 - kSlipSpeedPitchPerS * (t - kOnsetS);
+    return contact;
+  });
+  ASSERT_GT(first_s, 0.0);
+  std::printf("[ measure  ] centroid cue alone: contact moving at 200 mm/s detected after %.1f ms\n",
+              (first_s - kOnsetS) * 1e3);
+  EXPECT_LT(first_s - kOnsetS, kSlipLatencyLimitS);
+}
+
+TEST(SlipDetectorTest, LoadOutgrowingGripDetectedByRatioWithinLatency) {
+  Stream stream(OnlyCue(true, false, false));
+  ASSERT_LT(stream.Run(0.0, 2.0, Hold), 0.0);
+  constexpr double kOnsetS = 2.0;
+  // Load steps to the friction limit (ratio 0.5); the cue fires at 0.9 x 0.5.
+  const double first_s = stream.Run(kOnsetS, 2.5, [](double t) {
+    SyntheticContact contact = Hold(t);
+    contact.load_axial_n = kFriction * kGripN;
+    return contact;
+  });
+  ASSERT_GT(first_s, 0.0);
+  std::printf("[ measure  ] ratio cue alone: load step to the friction limit detected after %.1f ms\n",
+              (first_s - kOnsetS) * 1e3);
+  EXPECT_LT(first_s - kOnsetS, kSlipLatencyLimitS);
+}
+
+TEST(SlipDetectorTest, SmoothLoadSwingsOfArmMotionRaiseNothing) {
+  Stream stream(SlipDetectorConfig{});
+  // The load swings between 0.1 and 0.7 of the grip's friction limit at 1-5 Hz, the grip following
+  // loosely: the ratio stays below 0.9 x friction, the shear is smooth, the contact does not move.
+  const double first_s = stream.Run(0.0, 20.0, [](double t) {
+    SyntheticContact contact = Hold(t);
+    const double swing = std::sin(2.0 * std::numbers::pi * (1.0 + 0.2 * t) * t);
+    contact.load_axial_n = kHoldLoadN * (1.0 + 0.7 * swing);
+    contact.grip_n = kGripN * (1.0 + 0.3 * swing);
+    return contact;
+  });
+  EXPECT_LT(first_s, 0.0);
+  EXPECT_EQ(stream.flagged, 0);
+}
+
+TEST(SlipDetectorTest, NothingFiresDuringSettleOrWhenDisarmed) {
+  SlipDetector detector(SlipDetectorConfig{});
+  SyntheticTactile sensor({});
+  detector.Restart();
+  SyntheticContact slipping = Hold(0.0);
+  slipping.load_axial_n = 2.0 * kFriction * kGripN;
+  for (int i = 0; i < 40; ++i) {  // within the default 50 ms settle time
+    const sensor::TactileState state = sensor.Frame(slipping, i * kPeriodS);
+    EXPECT_FALSE(detector.Update(state, state.total_fn_n, kFriction, true, true).any()) << i;
+  }
+  for (int i = 40; i < 200; ++i) {
+    const sensor::TactileState state = sensor.Frame(slipping, i * kPeriodS);
+    EXPECT_FALSE(detector.Update(state, state.total_fn_n, kFriction, false, true).any()) << i;
+  }
+  const sensor::TactileState state = sensor.Frame(slipping, 0.2);
+  EXPECT_TRUE(detector.Update(state, state.total_fn_n, kFriction, true, true).ratio_slip);
+}
+
+TEST(SlipDetectorTest, CircumferentialLoadUsesTheOtherUnits) {
+  Stream stream(SlipDetectorConfig{});
+  stream.Run(0.0, 0.5, [](double t) {
+    SyntheticContact contact = Hold(t);
+    contact.load_axial_n = 0.6;
+    contact.load_circumferential_n = 0.8;
+    return contact;
+  });
+  EXPECT_NEAR(stream.detector.signals().tangential_load_n, 1.0, 0.1);
+}
+
+TEST(SlipDetectorTest, WrongOrientationAssumptionIsNoticedAndFallsBack) {
+  SlipDetectorConfig config;
+  config.even_units_axial = false;  // the sensor has even units axial
+  Stream stream(config);
+  stream.Run(0.0, 0.5, Hold);
+  EXPECT_FALSE(stream.detector.signals().orientation_consistent);
+  // Fallback: 2 x |total shear| / total normal; about right for a patch centred on the grid.
+  EXPECT_NEAR(stream.detector.signals().tangential_load_n, kHoldLoadN, 0.25);
+}
+
+TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
+  SlipDetectorConfig config;
+  config.vibration_highpass_hz = 600.0;
+  try {
+    SlipDetector detector(config);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("vibration_highpass_hz = 600"));
+  }
+}
+
+TEST(FiltersTest, HighPassRejectsConstantsAndRampsAndPassesVibration) {
+  constexpr double kRateHz = 1000.0;
+  HighPassBiquad constant(40.0, kRateHz);
+  constant.Reset(3.0);
+  for (int i = 0; i < 100; ++i) EXPECT_NEAR(constant.Update(3.0), 0.0, 1e-12);
+  HighPassBiquad ramp(40.0, kRateHz);
+  ramp.Reset(0.0);
+  double ramp_out = 0.0;
+  for (int i = 0; i < 1000; ++i) ramp_out = ramp.Update(i * 0.001);  // 1 N/s, a fast arm motion
+  EXPECT_LT(std::abs(ramp_out), 1e-4);
+  HighPassBiquad tone(40.0, kRateHz);
+  tone.Reset(0.0);
+  double peak = 0.0;
+  for (int i = 0; i < 1000; ++i) {
+    const double out = tone.Update(std::sin(2.0 * std::numbers::pi * 200.0 * i / kRateHz));
+    if (i > 500) peak = std::max(peak, std::abs(out));
+  }
+  EXPECT_NEAR(peak, 1.0, 0.05);
+}
+
+TEST(FiltersTest, DelayLineReturnsOlderSamples) {
+  DelayLine<int, 4> line;
+  for (int i = 1; i <= 6; ++i) line.Push(i);
+  EXPECT_EQ(line.size(), 4);
+  EXPECT_EQ(line.Delayed(0), 6);
+  EXPECT_EQ(line.Delayed(3), 3);
+  line.Clear();
+  EXPECT_EQ(line.size(), 0);
+}
+
+}  // namespace
+}  // namespace graspbed::controller
