@@ -67,6 +67,12 @@ std::string SweepCsv(const FeaResults& results) {
   return out.str();
 }
 
+std::string Scientific(double value) {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(3) << value;
+  return out.str();
+}
+
 std::string Fixed(double value, int decimals) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(decimals) << value;
@@ -96,8 +102,7 @@ plot::Figure SweepFigure(const FeaResults& results) {
   const ResistorSweep& n = results.normal_sweep;
   const ResistorSweep& t = results.shear_sweep;
   plot::Chart normal;
-  normal.title = "Normal force: k_n = " + Fixed(results.sensitivities.kn_per_n * 1e4, 3) +
-                 "e-4 /N, R^2 = " + Fixed(results.normal_fit.r_squared, 6);
+  normal.title = "Normal force: k_n = " + Scientific(results.sensitivities.kn_per_n) + " /N, R^2 = " + Fixed(results.normal_fit.r_squared, 6);
   normal.x_label = "Fn [N]";
   normal.y_label = "resistor-averaged strain [microstrain]";
   std::vector<double> mean_n, half_diff_t;
@@ -110,8 +115,7 @@ plot::Figure SweepFigure(const FeaResults& results) {
                    {"eps_n = (eps1 + eps2) / 2", n.force_n, Scaled(mean_n, kMicrostrain)}};
   normal.include_zero_y = true;
   plot::Chart shear;
-  shear.title = "Shear force: k_t = " + Fixed(results.sensitivities.kt_per_n * 1e4, 3) +
-                "e-4 /N, R^2 = " + Fixed(results.shear_fit.r_squared, 6);
+  shear.title = "Shear force: k_t = " + Scientific(results.sensitivities.kt_per_n) + " /N, R^2 = " + Fixed(results.shear_fit.r_squared, 6);
   shear.x_label = "Ft [N]";
   shear.y_label = "resistor-averaged strain [microstrain]";
   shear.series = {{"eps1 (R1)", t.force_n, Scaled(t.eps1, kMicrostrain), false, true},
