@@ -29,11 +29,11 @@ constexpr int kHolderSegments = 48;            // polygon sides of the elliptic 
 // Fixed-format numbers so the text (and the checked-in model) is reproducible.
 class Writer {
  public:
-  Writer() { out_ << std::setprecision(9); }
+  Writer() { out_ << std::setprecision(8); }
   std::ostringstream& out() { return out_; }
   std::string Num(double value) {
     std::ostringstream s;
-    s << std::setprecision(9) << (std::abs(value) < 1e-15 ? 0.0 : value);
+    s << std::setprecision(8) << (std::abs(value) < 1e-15 ? 0.0 : value);
     return s.str();
   }
   std::string Vec(const Eigen::Vector3d& v) { return Num(v.x()) + " " + Num(v.y()) + " " + Num(v.z()); }

@@ -167,6 +167,9 @@ void Simulation::SetGripBrake(bool engaged) {
 void Simulation::SetWristTarget(const std::array<double, 3>& position_m) { wrist_target_ = position_m; }
 
 void Simulation::SetObjectExternalForce(const std::array<double, 3>& force_n) {
+  for (double component : force_n) {
+    if (!std::isfinite(component)) throw std::invalid_argument("object external force: components must be finite");
+  }
   for (int k = 0; k < 3; ++k) {
     data_->xfrc_applied[6 * object_body_ + k] = force_n[k];
     external_force_[k] = force_n[k];
@@ -205,6 +208,7 @@ void Simulation::ApplyControls() {
 void Simulation::Step() {
   ApplyControls();
   tls_last_warning[0] = '\0';
+  step_start_time_s_ = data_->time;
   mj_step(model_, data_);
   CheckFault();
 }
@@ -217,7 +221,8 @@ void Simulation::StepUntil(double time_s) {
 void Simulation::RecordFault(const char* cause) {
   if (fault_.occurred) return;
   fault_.occurred = true;
-  fault_.time_s = data_->time;
+  // MuJoCo resets the state (and the clock) on a bad number, so the step's start time is kept.
+  fault_.time_s = step_start_time_s_;
   std::snprintf(fault_.cause.data(), fault_.cause.size(), "%.150s", cause);
 }
 
@@ -227,10 +232,10 @@ void Simulation::CheckFault() {
     if (count > warning_seen_[w]) {
       fault_.warning_count += count - warning_seen_[w];
       warning_seen_[w] = count;
-      char cause[400];
-      std::snprintf(cause, sizeof(cause), "MuJoCo warning: %.100s%s%.100s",
-                    mju_warningText(w, data_->warning[w].lastinfo), tls_last_warning[0] != '\0' ? " | " : "",
-                    tls_last_warning);
+      char cause[200];
+      // The handler's text when MuJoCo printed one (first occurrence), else the stock text.
+      std::snprintf(cause, sizeof(cause), "MuJoCo warning: %.150s",
+                    tls_last_warning[0] != '\0' ? tls_last_warning : mju_warningText(w, data_->warning[w].lastinfo));
       RecordFault(cause);
     }
   }

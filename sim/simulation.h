@@ -28,7 +28,7 @@ namespace graspbed::sim {
 /// time and cause of the first fault; Step() still runs (MuJoCo resets bad states itself).
 struct PhysicsFault {
   bool occurred = false;
-  double time_s = 0.0;                 ///< simulation time of the first fault [s]
+  double time_s = 0.0;                 ///< simulation time at the start of the faulty step [s]
   std::array<char, 160> cause{};       ///< NUL-terminated text: MuJoCo warning or "NaN in qpos" etc.
   uint64_t warning_count = 0;          ///< MuJoCo warnings seen so far (all kinds)
   const char* cause_text() const { return cause.data(); }
@@ -176,6 +176,7 @@ class Simulation {
   std::array<double, 3> wrist_target_{};
   std::array<double, 3> external_force_{};  ///< on the object [N], re-applied every step
   PhysicsFault fault_;
+  double step_start_time_s_ = 0.0;  ///< simulation time when the current Step() began [s]
   std::array<uint64_t, 8> warning_seen_{};  ///< per MuJoCo warning kind, last count seen
 };
 

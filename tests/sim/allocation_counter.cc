@@ -1,0 +1,28 @@
+#include "tests/sim/allocation_counter.h"
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+// Replacements of the global allocation functions, in their own translation unit so the compiler
+// never sees a new/free pair inlined together.
+namespace {
+std::atomic<long> allocation_count{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  ++allocation_count;
+  if (void* pointer = std::malloc(size == 0 ? 1 : size)) return pointer;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return ::operator new(size); }
+void operator delete(void* pointer) noexcept { std::free(pointer); }
+void operator delete(void* pointer, std::size_t) noexcept { std::free(pointer); }
+void operator delete[](void* pointer) noexcept { std::free(pointer); }
+void operator delete[](void* pointer, std::size_t) noexcept { std::free(pointer); }
+
+namespace graspbed::sim::testing {
+
+long AllocationCount() { return allocation_count.load(); }
+
+}  // namespace graspbed::sim::testing

@@ -1,0 +1,126 @@
+// The generated model: checked-in copy current, names and poses of the mesas, loads for every
+// shipped layout and object shape, the grip motor's stall force.
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "sim/model_generator.h"
+#include "tests/sim/sim_fixture.h"
+
+namespace graspbed::sim {
+namespace {
+
+constexpr double kPoseTolM = 1e-9;
+constexpr double kForceTolN = 0.05;
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+class ModelTest : public testing::MujocoTest {};
+
+TEST_F(ModelTest, CheckedInModelIsCurrent) {
+  const std::string path = std::string(GRASPBED_SOURCE_DIR) + "/models/hand_default.xml";
+  const std::string checked_in = ReadFile(path);
+  ASSERT_FALSE(checked_in.empty()) << path;
+  const std::string generated = GenerateMjcf(DefaultLayout(), SceneConfig{});
+  if (checked_in == generated) return;
+  // Name the first line that differs rather than dumping both models.
+  std::istringstream a(checked_in);
+  std::istringstream b(generated);
+  std::string line_a;
+  std::string line_b;
+  int line = 0;
+  while (true) {
+    ++line;
+    const bool more_a = static_cast<bool>(std::getline(a, line_a));
+    const bool more_b = static_cast<bool>(std::getline(b, line_b));
+    if (line_a != line_b || more_a != more_b) break;
+  }
+  ADD_FAILURE() << "models/hand_default.xml is stale (first difference at line " << line
+                << "); regenerate: graspbed model -o models/hand_default.xml\n  checked in: " << line_a
+                << "\n  generated:  " << line_b;
+}
+
+TEST_F(ModelTest, MesaGeomsFollowTheLayoutInOrder) {
+  const sensor::Layout& layout = DefaultLayout();
+  Simulation& simulation = MakeSimulation(layout, SceneConfig{});
+  const mjModel* m = simulation.model();
+  const mjData* d = simulation.data();
+  const int holder = mj_name2id(m, mjOBJ_BODY, "holder");
+  ASSERT_GE(holder, 0);
+  for (int i = 0; i < layout.unit_count(); ++i) {
+    const std::string name = "unit_" + std::to_string(i);
+    const int geom = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    ASSERT_GE(geom, 0) << name;
+    EXPECT_EQ(m->geom_bodyid[geom], holder) << name;
+    // The mesa top centre, brought back into the holder frame, is mesa_height outside the unit's
+    // surface point along its outward normal.
+    const mjtNum* rot = d->geom_xmat + 9 * geom;  // geom axes as columns, row-major
+    mjtNum top_world[3];
+    for (int k = 0; k < 3; ++k) top_world[k] = d->geom_xpos[3 * geom + k] + rot[3 * k + 2] * m->geom_size[3 * geom + 2];
+    const mjtNum* holder_rot = d->xmat + 9 * holder;
+    mjtNum rel[3];
+    for (int k = 0; k < 3; ++k) rel[k] = top_world[k] - d->xpos[3 * holder + k];
+    mjtNum top_holder[3];
+    mju_mulMatTVec(top_holder, holder_rot, rel, 3, 3);
+    const sensor::UnitPose& unit = layout.units[i];
+    const Eigen::Vector3d expected = unit.position_m - unit.inward_normal * layout.unit.mesa_height_m;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(top_holder[k], expected[k], kPoseTolM) << name << " axis " << k;
+    // Geom x axis = beam axis (holder frame).
+    mjtNum x_world[3] = {rot[0], rot[3], rot[6]};
+    mjtNum x_holder[3];
+    mju_mulMatTVec(x_holder, holder_rot, x_world, 3, 3);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(x_holder[k], unit.beam_axis[k], 1e-9) << name;
+  }
+  EXPECT_LT(mj_name2id(m, mjOBJ_GEOM, ("unit_" + std::to_string(layout.unit_count())).c_str()), 0);
+}
+
+TEST_F(ModelTest, EveryShippedLayoutAndShapeLoadsAndSettles) {
+  for (const char* layout_file : {"default_20.yaml", "paper_3x3.yaml"}) {
+    const sensor::Layout layout =
+        sensor::LoadLayout(std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/" + layout_file);
+    for (ObjectShape shape : {ObjectShape::kBox, ObjectShape::kCylinder, ObjectShape::kSphere}) {
+      SceneConfig scene;
+      scene.object.shape = shape;
+      Simulation& simulation = MakeSimulation(layout, scene);
+      simulation.StepUntil(0.2);
+      const GroundTruth truth = simulation.truth();
+      EXPECT_NEAR(truth.object_height_above_table_m, 0.0, 1e-4) << layout_file << " " << ToString(shape);
+      EXPECT_EQ(truth.finger_contacts + truth.thumb_contacts, 0) << "open hand must not touch the object";
+    }
+  }
+}
+
+TEST_F(ModelTest, StallEffortPinchesAtLeastFifteenNewtons) {
+  SceneConfig scene;
+  Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
+  simulation.SetGripEffort(1.0);
+  simulation.StepUntil(1.2);
+  const GroundTruth truth = simulation.truth();
+  EXPECT_GE(truth.object_squeeze_n, 15.0);
+  EXPECT_NEAR(truth.object_squeeze_n, scene.hand.motor.stall_force_n, kForceTolN * scene.hand.motor.stall_force_n);
+  // 15+ N on 0.5 mm mesas: the object stays on the mesas, far from the holder shell.
+  EXPECT_LT(truth.max_mesa_penetration_m, 0.05e-3);
+  EXPECT_FALSE(truth.object_touches_holder_shell);
+}
+
+TEST_F(ModelTest, MotorClosesAtNoLoadSpeedTimesEffort) {
+  SceneConfig scene;
+  scene.hand.initial_wrist_position_m = {0.0, 0.0, 0.3};  // hand high above the object
+  Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
+  simulation.SetGripEffort(0.5);
+  simulation.StepUntil(0.2);
+  EXPECT_NEAR(simulation.truth().grip_velocity_m_s, 0.5 * scene.hand.motor.no_load_speed_m_s,
+              0.02 * scene.hand.motor.no_load_speed_m_s);
+}
+
+}  // namespace
+}  // namespace graspbed::sim

@@ -1,0 +1,55 @@
+// Scene files: values read with units, bad input named by file, line, key and value.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "common/yaml_map.h"
+#include "sim/scene_config.h"
+
+namespace graspbed::sim {
+namespace {
+
+SceneConfig Load(const std::string& text) {
+  return LoadSceneConfig(common::YamlMap::LoadString(text, "scene.yaml"));
+}
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    Load(text);
+  } catch (const common::ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(SceneConfigTest, ReadsEverySection) {
+  const SceneConfig scene = Load(
+      "object:\n  shape: cylinder\n  size_m: [0.04, 0, 0.1]\n  mass_kg: 0.2\n  friction: 0.5\n"
+      "hand:\n  open_gap_m: 0.08\n  motor:\n    stall_force_n: 25\n"
+      "physics:\n  noslip_iterations: 0\n  timestep_s: 0.001\n");
+  EXPECT_EQ(scene.object.shape, ObjectShape::kCylinder);
+  EXPECT_DOUBLE_EQ(scene.object.size_m[2], 0.1);
+  EXPECT_DOUBLE_EQ(scene.object.mass_kg, 0.2);
+  EXPECT_DOUBLE_EQ(scene.hand.open_gap_m, 0.08);
+  EXPECT_DOUBLE_EQ(scene.hand.motor.stall_force_n, 25.0);
+  EXPECT_EQ(scene.physics.noslip_iterations, 0);
+  EXPECT_DOUBLE_EQ(scene.object.RestHalfHeightM(), 0.05);
+}
+
+TEST(SceneConfigTest, BadValuesNameFileLineKeyAndValue) {
+  EXPECT_EQ(ErrorOf("object:\n  mass_kg: -0.1\n").rfind("scene.yaml:2: object.mass_kg = -0.1", 0), 0u)
+      << ErrorOf("object:\n  mass_kg: -0.1\n");
+  const std::string shape = ErrorOf("object:\n  shape: cube\n");
+  EXPECT_NE(shape.find("object.shape = cube"), std::string::npos) << shape;
+  EXPECT_NE(shape.find("box"), std::string::npos) << shape;
+  const std::string typo = ErrorOf("hand:\n  motor:\n    stall_torque: 3\n");
+  EXPECT_NE(typo.find("hand.motor.stall_torque"), std::string::npos) << typo;
+  const std::string timeconst = ErrorOf("object:\n  solref_timeconst_s: 0.0005\n");
+  EXPECT_NE(timeconst.find("solref_timeconst_s"), std::string::npos) << timeconst;
+  EXPECT_NE(timeconst.find("timestep"), std::string::npos) << timeconst;
+  const std::string condim = ErrorOf("physics:\n  condim: 5\n");
+  EXPECT_NE(condim.find("physics.condim = 5"), std::string::npos) << condim;
+}
+
+}  // namespace
+}  // namespace graspbed::sim
