@@ -44,6 +44,21 @@ TEST(ScenarioConfigTest, ShippedDefaultScenarioLoads) {
   EXPECT_FALSE(config.expectations.empty());
 }
 
+TEST(ScenarioConfigTest, EveryShippedScenarioLoadsWithExpectations) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(GRASPBED_SOURCE_DIR) + "/scenarios")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const ScenarioConfig config = LoadScenario(entry.path().string());
+    EXPECT_EQ(config.name, entry.path().stem().string());
+    EXPECT_FALSE(config.expectations.empty());
+    EXPECT_FALSE(config.description.empty());
+    EXPECT_LE(config.duration_s, 6.0);  // the suite must stay quick
+    ++count;
+  }
+  EXPECT_GE(count, 11);
+}
+
 TEST(ScenarioConfigTest, ScriptIsSortedByTimeAndActionsKeepTheirParameters) {
   const ScenarioConfig config = LoadScenarioFromString(R"(duration_s: 5
 script:

@@ -1,0 +1,258 @@
+// `graspbed run | suite | sweep | merge`: scripted scenarios, regression suites and parameter sweeps.
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/command_registry.h"
+#include "sim/scenario/runner.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/scenario/suite.h"
+#include "sim/scenario/sweep.h"
+
+namespace graspbed::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Exit code after Ctrl-C (128 + SIGINT, the shell convention).
+constexpr int kExitInterrupted = 130;
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void OnInterrupt(int) {
+  g_stop.store(true);
+  // A second Ctrl-C ends the process the usual way.
+  signal(SIGINT, SIG_DFL);
+}
+
+/// Installs the SIGINT handler for the lifetime of a command.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    g_stop.store(false);
+    struct sigaction action {};
+    action.sa_handler = &OnInterrupt;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_);
+  }
+  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+ private:
+  struct sigaction previous_ {};
+};
+
+bool StderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+/// Throws CLI::RuntimeError(code) for a non-zero exit, which main() returns silently.
+void ExitWith(int code) {
+  if (code != kExitOk) throw CLI::RuntimeError(code);
+}
+
+// ---- run -------------------------------------------------------------------------------------------
+
+struct RunCommandOptions {
+  std::string scenario;
+  std::string out_dir;
+  std::string controller;
+  int64_t seed = -1;
+  std::vector<std::string> sets;
+  bool json = false;
+  bool no_plots = false;
+};
+
+void RunCommand(const RunCommandOptions& options) {
+  std::vector<scenario::Override> overrides;
+  if (!options.controller.empty()) overrides.push_back({"controller.name", options.controller});
+  if (options.seed >= 0) overrides.push_back({"seed", std::to_string(options.seed)});
+  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
+  const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
+
+  scenario::RunOptions run;
+  run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
+  run.write_plots = !options.no_plots;
+  run.stop = &g_stop;
+  const bool terminal = StderrIsTerminal();
+  if (terminal) {
+    run.progress = [&config](double sim_s, double duration_s) {
+      std::fprintf(stderr, "\r  %s: %.2f / %.2f s simulated ", config.name.c_str(), sim_s, duration_s);
+      std::fflush(stderr);
+    };
+  }
+  InterruptGuard guard;
+  const scenario::RunResult result = scenario::RunScenario(config, run);
+  if (terminal) std::fprintf(stderr, "\r\033[K");
+
+  if (options.json) {
+    std::cout << scenario::SummaryJson(result).dump(2) << '\n';
+  } else {
+    std::cout << scenario::SummaryTable(result);
+    std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
+              << (options.no_plots ? "" : ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png")
+              << ")\n";
+  }
+  if (!result.completed) {
+    std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in " << run.out_dir
+              << " (marked INCOMPLETE)\n";
+    ExitWith(kExitInterrupted);
+  }
+  ExitWith(result.passed ? kExitOk : kExitFailed);
+}
+
+void AddRunCommand(CLI::App& root) {
+  auto options = std::make_shared<RunCommandOptions>();
+  CLI::App* command = root.add_subcommand(
+      "run", "Run one scenario: writes signals.csv, summary.json, config.yaml and PNG plots; exit 0 when every "
+             "expectation holds, 1 when one fails, 2 on bad input, 130 when interrupted");
+  command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")->required();
+  command->add_option("--out", options->out_dir, "output directory (default out/<scenario name>)");
+  command->add_option("--controller", options->controller,
+                      "controller to test instead of the file's (its parameters in the file are dropped)");
+  command->add_option("--seed", options->seed, "seed instead of the file's")->check(CLI::NonNegativeNumber);
+  command->add_option("--set", options->sets, "override a key, e.g. --set object.mass_kg=0.3 (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  command->add_flag("--json", options->json, "print the summary JSON on stdout instead of the table");
+  command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  command->callback([options] { RunCommand(*options); });
+}
+
+// ---- suite -----------------------------------------------------------------------------------------
+
+struct SuiteCommandOptions {
+  std::string dir;
+  int jobs = 1;
+  std::string out_dir = "out/suite";
+  std::string controller;
+  std::vector<std::string> sets;
+  bool json = false;
+  bool no_plots = false;
+};
+
+void SuiteCommand(const SuiteCommandOptions& options) {
+  std::vector<scenario::Override> overrides;
+  if (!options.controller.empty()) overrides.push_back({"controller.name", options.controller});
+  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
+  const std::vector<scenario::ScenarioConfig> configs =
+      scenario::LoadScenarios(scenario::ListScenarioFiles(options.dir), overrides);
+
+  scenario::SuiteOptions suite;
+  suite.jobs = options.jobs;
+  suite.out_dir = options.out_dir;
+  suite.write_plots = !options.no_plots;
+  suite.stop = &g_stop;
+  const bool terminal = StderrIsTerminal();
+  suite.on_finished = [terminal](int done, int total, const scenario::SuiteRun& run) {
+    if (!terminal) return;
+    std::fprintf(stderr, "\r\033[K  [%d/%d] %s: %s", done, total, run.result.config.name.c_str(),
+                 !run.error.empty() ? "error" : run.result.passed ? "pass" : "FAIL");
+    std::fflush(stderr);
+  };
+  InterruptGuard guard;
+  const scenario::SuiteResult result = scenario::RunSuite(configs, suite);
+  if (terminal) std::fprintf(stderr, "\r\033[K");
+  if (options.json) {
+    std::cout << scenario::SuiteJson(result).dump(2) << '\n';
+  } else {
+    std::cout << scenario::SuiteTable(result);
+    std::cout << "  outputs: " << options.out_dir << "/ (suite.json, one directory per scenario)\n";
+  }
+  if (!result.completed) ExitWith(kExitInterrupted);
+  ExitWith(result.failed == 0 ? kExitOk : kExitFailed);
+}
+
+void AddSuiteCommand(CLI::App& root) {
+  auto options = std::make_shared<SuiteCommandOptions>();
+  CLI::App* command = root.add_subcommand(
+      "suite", "Run every scenario (*.yaml) of a directory in parallel: pass/fail table, DIR_OUT/suite.json and "
+               "one output directory per scenario; exit 1 if any fails");
+  command->add_option("dir", options->dir, "directory of scenario files, e.g. scenarios")->required();
+  command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
+  command->add_option("--out", options->out_dir, "output directory (default out/suite)");
+  command->add_option("--controller", options->controller, "run every scenario with this controller");
+  command->add_option("--set", options->sets, "override a key in every scenario (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  command->add_flag("--json", options->json, "print the combined JSON instead of the table");
+  command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  command->callback([options] { SuiteCommand(*options); });
+}
+
+// ---- sweep and merge ---------------------------------------------------------------------------------
+
+struct SweepCommandOptions {
+  std::string spec;
+  std::string shard = "1/1";
+  std::string out_dir = "out/sweep";
+  int jobs = 1;
+};
+
+void SweepCommand(const SweepCommandOptions& options) {
+  const scenario::SweepSpec spec = scenario::LoadSweepSpec(options.spec);
+  scenario::SweepOptions sweep;
+  sweep.shard = scenario::ParseShard(options.shard);
+  sweep.jobs = options.jobs;
+  sweep.out_dir = options.out_dir;
+  sweep.stop = &g_stop;
+  const bool terminal = StderrIsTerminal();
+  sweep.on_finished = [terminal](int done, int total) {
+    if (!terminal) return;
+    std::fprintf(stderr, "\r\033[K  sweep: %d/%d runs", done, total);
+    std::fflush(stderr);
+  };
+  InterruptGuard guard;
+  const scenario::SweepOutcome outcome = scenario::RunSweep(spec, sweep);
+  if (terminal) std::fprintf(stderr, "\r\033[K");
+  std::printf("sweep %s shard %s: %d of %d runs finished, %d passed, %.2f s -> %s/results.csv, results.jsonl\n",
+              spec.source_file.c_str(), options.shard.c_str(), outcome.finished, outcome.runs, outcome.passed,
+              outcome.wall_s, options.out_dir.c_str());
+  if (!outcome.completed) {
+    std::fprintf(stderr, "graspbed: interrupted; finished rows are in %s/results.jsonl.partial (not merged)\n",
+                 options.out_dir.c_str());
+    ExitWith(kExitInterrupted);
+  }
+}
+
+void AddSweepCommand(CLI::App& root) {
+  auto options = std::make_shared<SweepCommandOptions>();
+  CLI::App* command = root.add_subcommand(
+      "sweep", "Run a grid or seeded random sample over scenario parameters: one row per run in "
+               "DIR/results.csv and results.jsonl; --shard K/N runs every N-th run for cluster arrays");
+  command->add_option("spec", options->spec, "sweep spec YAML (see docs/scenarios.md, Sweeps)")->required();
+  command->add_option("--shard", options->shard, "run shard K of N (1-based), e.g. --shard $SLURM_ARRAY_TASK_ID/8");
+  command->add_option("--out", options->out_dir, "output directory (default out/sweep)");
+  command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
+  command->callback([options] { SweepCommand(*options); });
+
+  auto dirs = std::make_shared<std::vector<std::string>>();
+  auto out = std::make_shared<std::string>("out/sweep-merged");
+  CLI::App* merge = root.add_subcommand(
+      "merge", "Combine the output directories of all shards of one sweep into one results.csv/jsonl; refuses "
+               "missing, repeated, incomplete or foreign shards");
+  merge->add_option("shards", *dirs, "shard output directories")->required();
+  merge->add_option("--out", *out, "merged output directory (default out/sweep-merged)");
+  merge->callback([dirs, out] {
+    const int rows = scenario::MergeSweeps(*dirs, *out);
+    std::printf("merged %zu shards: %d rows -> %s/results.csv, results.jsonl\n", dirs->size(), rows, out->c_str());
+  });
+}
+
+void AddCommands(CLI::App& root) {
+  AddRunCommand(root);
+  AddSuiteCommand(root);
+  AddSweepCommand(root);
+}
+
+const bool kRegisteredRun = RegisterCommands(&AddCommands);
+
+}  // namespace
+}  // namespace graspbed::app
