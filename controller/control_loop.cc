@@ -1,0 +1,73 @@
+#include "controller/control_loop.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace graspbed::controller {
+
+void ControlLoopConfig::Validate() const {
+  if (!(stale_timeout_s > 0.0) || !std::isfinite(stale_timeout_s)) {
+    throw std::invalid_argument("control loop stale_timeout_s = " + std::to_string(stale_timeout_s) +
+                                ": must be > 0");
+  }
+  readout.Validate();
+  inversion.Validate();
+}
+
+ControlLoop::ControlLoop(sensor::TactileBackend& backend, GraspController& controller,
+                         HandActuator& actuator, const sensor::Layout& layout,
+                         const sensor::Calibration& calibration, const ControlLoopConfig& config)
+    : backend_(backend),
+      controller_(controller),
+      actuator_(actuator),
+      config_(config),
+      readout_(config.readout, layout.unit_count(), backend.nominal_r0_ohm()),
+      inversion_(layout, calibration, config.inversion),
+      session_(backend.session()) {
+  config_.Validate();
+  if (backend.unit_count() != layout.unit_count()) {
+    throw std::invalid_argument("backend '" + backend.name() + "' delivers " +
+                                std::to_string(backend.unit_count()) + " units but the layout '" +
+                                layout.name + "' has " + std::to_string(layout.unit_count()));
+  }
+  state_.unit_count = layout.unit_count();
+  state_.stale = true;  // nothing measured yet: a controller must not act on an empty state
+}
+
+void ControlLoop::Retare() { readout_.Reset(); }
+
+void ControlLoop::SetBaseline(std::span<const double> r1_ohm, std::span<const double> r2_ohm) {
+  readout_.SetBaseline(r1_ohm, r2_ohm);
+}
+
+sensor::ReadStatus ControlLoop::Tick(double time_s) {
+  ++counters_.ticks;
+  const sensor::ReadStatus status = backend_.Read(&frame_);
+  if (status == sensor::ReadStatus::kOk) {
+    // A device that rebooted starts a new session: its baseline is no longer ours.
+    if (backend_.session() != session_) {
+      session_ = backend_.session();
+      readout_.Reset();
+      ++counters_.retares;
+    }
+    readout_.Process(frame_, &readout_frame_);
+    inversion_.Invert(readout_frame_, &state_);
+    last_frame_time_s_ = time_s;
+    ++counters_.frames;
+  } else if (status == sensor::ReadStatus::kDisconnected) {
+    ++counters_.disconnected_ticks;
+  }
+
+  const bool stale = status == sensor::ReadStatus::kStale ||
+                     status == sensor::ReadStatus::kDisconnected || last_frame_time_s_ < 0.0 ||
+                     time_s - last_frame_time_s_ > config_.stale_timeout_s;
+  state_.stale = stale;
+  if (stale) ++counters_.stale_ticks;
+
+  command_ = controller_.Update(state_, time_s);
+  if (actuator_.Write(command_) != WriteStatus::kOk) ++counters_.actuator_failures;
+  return status;
+}
+
+}  // namespace graspbed::controller

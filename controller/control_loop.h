@@ -1,0 +1,88 @@
+#pragma once
+/// ControlLoop: backend -> readout -> inversion -> controller -> actuator, one tick at a time. The same
+/// code serves the simulation and the serial hardware; only who calls Tick() differs (the simulated
+/// clock after each control period, or the hardware thread when frames arrive).
+
+#include <cstdint>
+
+#include "controller/grasp_controller.h"
+#include "controller/hand_command.h"
+#include "sensor/calibration.h"
+#include "sensor/inversion.h"
+#include "sensor/layout.h"
+#include "sensor/raw_frame.h"
+#include "sensor/readout.h"
+#include "sensor/tactile_backend.h"
+#include "sensor/tactile_state.h"
+
+namespace graspbed::controller {
+
+/// Settings of the loop itself; the readout and inversion carry their own.
+struct ControlLoopConfig {
+  /// No new frame for this long marks the tactile state stale; the controller must hold [s].
+  double stale_timeout_s = 0.02;
+  sensor::ReadoutConfig readout;
+  sensor::InversionConfig inversion;
+
+  /// Throws std::invalid_argument naming the offending field and value.
+  void Validate() const;
+};
+
+/// What happened in the loop since it started.
+struct LoopCounters {
+  uint64_t ticks = 0;            ///< Tick() calls
+  uint64_t frames = 0;           ///< new frames processed
+  uint64_t stale_ticks = 0;      ///< ticks with a stale state
+  uint64_t disconnected_ticks = 0;
+  uint64_t actuator_failures = 0;  ///< Write() that did not reach the motor
+  uint64_t retares = 0;          ///< baselines restarted after a device session change
+};
+
+/// Ties one backend, one controller and one actuator together. Not copyable; holds references
+/// that must outlive it. Tick() allocates nothing and does no I/O of its own.
+class ControlLoop {
+ public:
+  ControlLoop(sensor::TactileBackend& backend, GraspController& controller, HandActuator& actuator,
+              const sensor::Layout& layout, const sensor::Calibration& calibration,
+              const ControlLoopConfig& config);
+  ControlLoop(const ControlLoop&) = delete;
+  ControlLoop& operator=(const ControlLoop&) = delete;
+
+  /// One control tick at `time_s` on the loop's clock [s]: takes the newest frame if any, updates the
+  /// tactile state (marking it stale when frames stop), asks the controller, writes the command.
+  /// Returns the backend's read status for this tick.
+  sensor::ReadStatus Tick(double time_s);
+
+  /// Newest tactile state (forces per unit, validity, totals, stale flag).
+  const sensor::TactileState& state() const { return state_; }
+  /// Newest raw frame taken from the backend.
+  const sensor::RawFrame& frame() const { return frame_; }
+  /// dR/R of the newest frame.
+  const sensor::ReadoutFrame& readout_frame() const { return readout_frame_; }
+  /// Command written at the last tick.
+  const HandCommand& command() const { return command_; }
+  const LoopCounters& counters() const { return counters_; }
+  /// Forgets the tare baseline; the next frames are averaged into a new one.
+  void Retare();
+  /// Uses a stored baseline instead of taring from the first frames [Ohm], layout order.
+  void SetBaseline(std::span<const double> r1_ohm, std::span<const double> r2_ohm);
+
+ private:
+  sensor::TactileBackend& backend_;
+  GraspController& controller_;
+  HandActuator& actuator_;
+  ControlLoopConfig config_;
+  sensor::Readout readout_;
+  sensor::Inversion inversion_;
+
+  sensor::RawFrame frame_;
+  sensor::ReadoutFrame readout_frame_;
+  sensor::TactileState state_;
+  HandCommand command_;
+  LoopCounters counters_;
+  double last_frame_time_s_ = -1.0;  ///< loop time of the newest frame; < 0 before the first
+  uint64_t session_ = 0;
+  bool stale_ = false;
+};
+
+}  // namespace graspbed::controller
