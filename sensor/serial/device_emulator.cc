@@ -32,7 +32,7 @@ void EmulatorConfig::Validate() const {
     throw std::invalid_argument("emulator config: " + field + " = " + std::to_string(value) + ": " + reason);
   };
   if (link_path.empty()) throw std::invalid_argument("emulator config: link_path is empty");
-  if (unit_count < 1 || unit_count > kMaxFrameUnits) fail("unit_count", unit_count, "must be in 1..64");
+  if (unit_count < 1 || unit_count > kMaxUnitsOnWire) fail("unit_count", unit_count, "must be in 1..62 (512-byte packets)");
   if (frame_rate_hz < 1 || frame_rate_hz > 10000) fail("frame_rate_hz", frame_rate_hz, "must be in 1..10000");
   if (!(hello_period_s > 0)) fail("hello_period_s", hello_period_s, "must be > 0");
   if (!(connect_delay_s >= 0)) fail("connect_delay_s", connect_delay_s, "must be >= 0");
@@ -199,7 +199,7 @@ void DeviceEmulator::Tick(int64_t now_ns) {
   const uint64_t device_tick = tick_ - time_base_tick_;
   const double device_time_s = static_cast<double>(device_tick) * period_s;
   frame_.unit_count = config_.unit_count;
-  source_(device_time_s, &frame_);  // every period, so a simulation behind it keeps real time
+  source_(device_time_s, stats_.streaming && !paused_, &frame_);  // every period, so a simulation behind it keeps real time
 
   if (master_fd_ < 0) {  // vanished
     CheckWatchdog(now_ns);

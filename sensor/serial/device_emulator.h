@@ -65,8 +65,9 @@ struct EmulatorStats {
 class DeviceEmulator {
  public:
   /// Fills `frame` (unit_count preset) with R1/R2 [Ohm] for device time `device_time_s`. Called once
-  /// per frame period on the emulator thread, streaming or not (so a simulation keeps real time).
-  using FrameSource = std::function<void(double device_time_s, sensor::RawFrame* frame)>;
+  /// per frame period on the emulator thread, streaming or not (so a simulation keeps real time);
+  /// `streaming` tells whether a host currently asks for frames.
+  using FrameSource = std::function<void(double device_time_s, bool streaming, sensor::RawFrame* frame)>;
   /// Receives the motor state whenever it changes (command, watchdog, stream loss, reboot).
   using MotorSink = std::function<void(const EmulatedMotor& motor)>;
 

@@ -57,8 +57,4 @@ HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map) {
   return config;
 }
 
-HardwareConfig LoadHardwareConfig(const std::string& path) {
-  return HardwareConfigFromYaml(common::YamlMap::LoadFile(path));
-}
-
 }  // namespace graspbed::serial

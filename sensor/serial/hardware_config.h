@@ -27,9 +27,8 @@ struct HardwareConfig {
   void Validate() const;
 };
 
-/// Reads a hardware config from `map` (keys as the field names); unknown keys are refused.
+/// Reads a hardware config from `map` (keys as the field names; the `serial:` section of a
+/// `graspbed hw --config` file, docs/hardware.md "Configuration"); unknown keys are refused.
 HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map);
-/// Loads a hardware config file (docs/hardware.md "Configuration").
-HardwareConfig LoadHardwareConfig(const std::string& path);
 
 }  // namespace graspbed::serial

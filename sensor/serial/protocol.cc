@@ -41,7 +41,7 @@ size_t Finish(std::array<uint8_t, kMaxPacketSize>& scratch, size_t body_size, st
 }  // namespace
 
 size_t EncodePacket(const TactileFramePacket& packet, std::span<uint8_t> out) {
-  if (packet.unit_count < 1 || packet.unit_count > kMaxFrameUnits) return 0;
+  if (packet.unit_count < 1 || packet.unit_count > kMaxUnitsOnWire) return 0;
   std::array<uint8_t, kMaxPacketSize> body;
   PutHeader(body.data(), PacketType::kTactileFrame, packet.sequence);
   PutU32(body.data() + 4, packet.device_time_us);

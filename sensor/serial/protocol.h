@@ -22,8 +22,12 @@ inline constexpr size_t kMaxWirePacketSize = CobsMaxEncodedSize(kMaxPacketSize) 
 inline constexpr size_t kHeaderSize = 4;
 /// CRC trailer length [bytes].
 inline constexpr size_t kCrcSize = 2;
-/// Most units a TACTILE_FRAME can carry.
+/// Largest unit count field PROTOCOL.md allows (1..64).
 inline constexpr int kMaxFrameUnits = 64;
+/// Most units that fit the 512-byte packet limit: 10 + 8N + 2 <= 512 gives N <= 62. PROTOCOL.md allows
+/// the count field up to 64, but frames of 63 or 64 units would exceed the maximum packet size; they
+/// are refused by the encoder and arrive at the decoder as too-long packets.
+inline constexpr int kMaxUnitsOnWire = 62;
 /// Wire value of a channel that reads open circuit [milliohm].
 inline constexpr uint32_t kOpenCircuitMilliohm = 0xFFFFFFFFu;
 
@@ -85,7 +89,7 @@ inline constexpr size_t kStreamControlBodySize = 5;
 
 /// Encodes a packet as it goes on the wire: body + CRC, COBS-encoded, then the 0x00 delimiter.
 /// Returns the number of bytes written, or 0 when `out` is too small (size it kMaxWirePacketSize)
-/// or the packet is invalid (unit count outside 1..64).
+/// or the packet is invalid (unit count outside 1..kMaxUnitsOnWire).
 size_t EncodePacket(const TactileFramePacket& packet, std::span<uint8_t> out);
 size_t EncodePacket(const HelloPacket& packet, std::span<uint8_t> out);
 size_t EncodePacket(const MotorCommandPacket& packet, std::span<uint8_t> out);

@@ -35,9 +35,9 @@ SerialLink::SerialLink(std::string path, const HardwareConfig& config, LinkRole 
       layout_name_(std::move(layout_name)) {
   config_.Validate();
   if (path_.empty()) throw std::invalid_argument("serial link: no port given");
-  if (has_sensor() && (expected_units_ < 1 || expected_units_ > kMaxFrameUnits)) {
+  if (has_sensor() && (expected_units_ < 1 || expected_units_ > kMaxUnitsOnWire)) {
     throw std::invalid_argument("serial link: layout '" + layout_name_ + "' has " +
-                                std::to_string(expected_units_) + " units; the protocol carries 1..64");
+                                std::to_string(expected_units_) + " units; a 512-byte packet carries 1..62");
   }
   wake_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (wake_fd_ < 0) throw std::runtime_error("serial link: eventfd failed");

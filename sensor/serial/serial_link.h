@@ -59,6 +59,8 @@ class SerialLink {
   /// Blocks up to `timeout_s` until a frame newer than `last_id` is published (for drivers that tick
   /// on frame arrival; never called by the control loop itself). True when one is there.
   bool WaitForFrame(uint64_t last_id, double timeout_s);
+  /// Frames published so far (compare with WaitForFrame's `last_id`).
+  uint64_t published() const { return published_.load(std::memory_order_acquire); }
   /// Seconds since the newest valid frame arrived (since the handshake when none has).
   double SecondsSinceLastFrame() const;
   /// True while the port is open, the handshake is done and the device was not refused.

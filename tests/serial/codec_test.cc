@@ -146,6 +146,15 @@ TEST(Protocol, OtherPacketsRoundTrip) {
   EXPECT_EQ(decoder.stats().corrupt(), 0u);
 }
 
+TEST(Protocol, FramesBeyondThePacketLimitAreRefused) {
+  std::array<uint8_t, kMaxWirePacketSize> out{};
+  EXPECT_GT(EncodePacket(MakeFrame(1, kMaxUnitsOnWire), out), 0u);
+  EXPECT_EQ(EncodePacket(MakeFrame(1, kMaxUnitsOnWire + 1), out), 0u);  // 63 units: 516 bytes
+  EXPECT_EQ(EncodePacket(MakeFrame(1, 0), out), 0u);
+  std::array<uint8_t, 16> small{};
+  EXPECT_EQ(EncodePacket(MakeFrame(1, 20), small), 0u);
+}
+
 TEST(Protocol, ResistanceAndEffortConversions) {
   EXPECT_EQ(OhmToMilliohm(3400.0), 3'400'000u);
   EXPECT_EQ(OhmToMilliohm(sensor::kOpenCircuitOhm), kOpenCircuitMilliohm);
@@ -318,7 +327,7 @@ TEST_F(DecoderResync, ByteByByteFeedingMatchesBulk) {
   std::mt19937 rng(3);
   std::vector<uint8_t> bytes;
   for (uint16_t s = 0; s < 50; ++s) {
-    auto w = Wire(MakeFrame(s, 1 + s % 64));
+    auto w = Wire(MakeFrame(s, 1 + s % kMaxUnitsOnWire));
     if (s % 7 == 3) w[rng() % (w.size() - 1)] ^= 0x01;
     if (w[0] == 0) w[0] = 1;
     bytes.insert(bytes.end(), w.begin(), w.end());

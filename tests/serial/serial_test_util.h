@@ -35,7 +35,7 @@ inline bool WaitFor(const std::function<bool()>& condition, double timeout_s = k
 
 /// Frame source: unit k reads R1 = 3400 + k Ohm, R2 = 3400 - k Ohm, plus 0.001 Ohm per ms of device
 /// time on R1 (so frames differ).
-inline void TestFrameSource(double device_time_s, sensor::RawFrame* frame) {
+inline void TestFrameSource(double device_time_s, bool /*streaming*/, sensor::RawFrame* frame) {
   for (int k = 0; k < frame->unit_count; ++k) {
     frame->r1_ohm[k] = 3400.0 + k + device_time_s;
     frame->r2_ohm[k] = 3400.0 - k;

@@ -1,0 +1,507 @@
+// `graspbed hw`: the shared control loop against the tactile readout and hand electronics over a
+// serial link. `graspbed emulate`: the simulated hand behind a pseudo-terminal, speaking the same
+// protocol as the device, so `hw` runs end to end without hardware. docs/hardware.md.
+#include <signal.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "app/command_registry.h"
+#include "common/yaml_map.h"
+#include "controller/control_loop.h"
+#include "controller/grasp_controller.h"
+#include "sensor/calibration.h"
+#include "sensor/inversion.h"
+#include "sensor/layout.h"
+#include "sensor/readout.h"
+#include "sensor/serial/device_emulator.h"
+#include "sensor/serial/hardware_backend.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/scenario/script_player.h"
+#include "sim/sim_rig.h"
+
+namespace graspbed::app {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void OnStopSignal(int) { g_stop.store(true); }
+
+/// SIGINT/SIGTERM end the command cleanly (stream stop, motor off) for its lifetime.
+class StopSignalGuard {
+ public:
+  StopSignalGuard() {
+    g_stop.store(false);
+    struct sigaction action {};
+    action.sa_handler = &OnStopSignal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_int_);
+    sigaction(SIGTERM, &action, &previous_term_);
+  }
+  ~StopSignalGuard() {
+    sigaction(SIGINT, &previous_int_, nullptr);
+    sigaction(SIGTERM, &previous_term_, nullptr);
+  }
+  StopSignalGuard(const StopSignalGuard&) = delete;
+  StopSignalGuard& operator=(const StopSignalGuard&) = delete;
+
+ private:
+  struct sigaction previous_int_ {};
+  struct sigaction previous_term_ {};
+};
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// ---- hw ----------------------------------------------------------------------------------------------
+
+/// Everything `hw --config FILE` can set (docs/hardware.md "Configuration").
+struct HwRunConfig {
+  serial::HardwareConfig serial;
+  controller::ControlLoopConfig loop;
+  /// Control ticks per second when frames do not arrive (ticks also follow every frame) [Hz].
+  double rate_hz = 1000.0;
+};
+
+HwRunConfig LoadHwRunConfig(const std::string& path) {
+  const common::YamlMap root = common::YamlMap::LoadFile(path);
+  HwRunConfig config;
+  if (const auto section = root.GetMap("serial")) config.serial = serial::HardwareConfigFromYaml(*section);
+  if (const auto section = root.GetMap("control")) {
+    config.rate_hz = section->GetNumber("rate_hz", config.rate_hz, {1.0, 20000.0, false});
+    config.loop.stale_timeout_s =
+        section->GetNumber("stale_timeout_s", config.loop.stale_timeout_s, common::NumberRule::Positive());
+    section->RejectUnknownKeys();
+  }
+  if (const auto section = root.GetMap("readout")) config.loop.readout = sensor::LoadReadoutConfig(*section);
+  if (const auto section = root.GetMap("inversion")) {
+    config.loop.inversion = sensor::LoadInversionConfig(*section);
+  }
+  root.RejectUnknownKeys();
+  return config;
+}
+
+/// Writes one CSV row per decoded frame, off the control loop's thread: frames come from the link's
+/// tap; this thread runs its own readout and inversion on every one of them (the same configuration
+/// and the same re-tare on a new device session as the loop), so no frame is missing from the log
+/// even when the loop took only the newest. The file is written as PATH.partial and renamed at the end.
+class FrameLogger {
+ public:
+  FrameLogger(std::string path, serial::SerialLink& link, const sensor::Layout& layout,
+              const sensor::Calibration& calibration, const controller::ControlLoopConfig& config,
+              double nominal_r0_ohm)
+      : path_(std::move(path)),
+        link_(link),
+        unit_count_(layout.unit_count()),
+        readout_(config.readout, layout.unit_count(), nominal_r0_ohm),
+        inversion_(layout, calibration, config.inversion) {
+    out_.open(path_ + ".partial", std::ios::trunc);
+    if (!out_) throw std::invalid_argument("--log " + path_ + ": cannot write this file");
+    out_ << "seq,device_time_s";
+    for (int k = 0; k < unit_count_; ++k) {
+      out_ << ",r1_" << k << "_ohm,r2_" << k << "_ohm,fn_" << k << "_n,ft_" << k << "_n,valid_" << k;
+    }
+    out_ << '\n';
+    thread_ = std::thread([this] { Run(); });
+  }
+  ~FrameLogger() { Finish(); }
+  FrameLogger(const FrameLogger&) = delete;
+  FrameLogger& operator=(const FrameLogger&) = delete;
+
+  /// Writes what is left, closes and renames the file. Call after the link has stopped.
+  void Finish() {
+    if (!thread_.joinable()) return;
+    done_ = true;
+    thread_.join();
+    out_.close();
+    std::filesystem::rename(path_ + ".partial", path_);
+  }
+  uint64_t rows() const { return rows_; }
+
+ private:
+  void Run() {
+    for (;;) {
+      const bool last_round = done_.load();
+      bool any = false;
+      while (link_.PopTap(&entry_)) {
+        Write();
+        any = true;
+      }
+      if (last_round) return;
+      if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+
+  void Write() {
+    if (entry_.session != session_) {
+      session_ = entry_.session;
+      readout_.Reset();
+    }
+    readout_.Process(entry_.frame, &readout_frame_);
+    inversion_.Invert(readout_frame_, &state_);
+    char buffer[96];
+    std::snprintf(buffer, sizeof(buffer), "%u,%.6f", entry_.frame.sequence, entry_.frame.time_s);
+    out_ << buffer;
+    for (int k = 0; k < unit_count_; ++k) {
+      std::snprintf(buffer, sizeof(buffer), ",%.3f,%.3f,%.5f,%.5f,%d", entry_.frame.r1_ohm[k],
+                    entry_.frame.r2_ohm[k], state_.fn_n[k], state_.ft_n[k],
+                    state_.validity[k] == sensor::UnitValidity::kValid ? 1 : 0);
+      out_ << buffer;
+    }
+    out_ << '\n';
+    ++rows_;
+  }
+
+  std::string path_;
+  serial::SerialLink& link_;
+  int unit_count_;
+  sensor::Readout readout_;
+  sensor::Inversion inversion_;
+  serial::TappedFrame entry_;
+  sensor::ReadoutFrame readout_frame_;
+  sensor::TactileState state_;
+  uint64_t session_ = 1;
+  std::ofstream out_;
+  std::thread thread_;
+  std::atomic<bool> done_{false};
+  std::atomic<uint64_t> rows_{0};
+};
+
+struct HwOptions {
+  std::string port;
+  std::string config;
+  std::string layout;
+  std::string calibration;
+  std::string controller = "open_loop";
+  std::string intent = "close";
+  double duration_s = 0.0;
+  int tare_frames = -1;
+  std::string log;
+  bool json = false;
+};
+
+controller::GraspIntent ParseIntent(const std::string& text) {
+  if (text == "close") return controller::GraspIntent::kClose;
+  if (text == "open") return controller::GraspIntent::kOpen;
+  if (text == "idle") return controller::GraspIntent::kIdle;
+  throw std::invalid_argument("--intent " + text + ": must be close, open or idle");
+}
+
+void RunHw(const HwOptions& options) {
+  HwRunConfig config = options.config.empty() ? HwRunConfig{} : LoadHwRunConfig(options.config);
+  if (!options.port.empty()) config.serial.port = options.port;
+  if (config.serial.port.empty()) {
+    throw std::invalid_argument("hw: no serial port: give --port PATH or serial.port in --config");
+  }
+  if (options.tare_frames >= 0) config.loop.readout.baseline_frames = options.tare_frames;
+  config.serial.Validate();
+  config.loop.Validate();
+  const controller::GraspIntent intent = ParseIntent(options.intent);
+  const sensor::Layout layout =
+      sensor::LoadLayout(options.layout.empty() ? sensor::DefaultLayoutPath() : options.layout);
+  const int units = layout.unit_count();
+  const sensor::Calibration calibration = options.calibration.empty()
+                                              ? sensor::PaperCalibration(units)
+                                              : sensor::LoadCalibration(options.calibration, units);
+  std::unique_ptr<controller::GraspController> grasp = controller::MakeController(options.controller, {});
+
+  serial::HardwareBackend backend(config.serial, units, layout.name);
+  serial::HardwareActuator actuator(backend, config.serial);
+  serial::SerialLink& link = *backend.link();
+  if (!options.log.empty()) link.EnableTap(16384);
+  try {
+    backend.Start();
+    actuator.Start();
+  } catch (const std::runtime_error& error) {
+    // Missing port, no permission, busy, no HELLO, wrong unit count: refused before running.
+    throw std::invalid_argument(error.what());
+  }
+  StopSignalGuard signals;
+  controller::ControlLoop loop(backend, *grasp, actuator, layout, calibration, config.loop);
+  std::unique_ptr<FrameLogger> logger;
+  if (!options.log.empty()) {
+    logger = std::make_unique<FrameLogger>(options.log, link, layout, calibration, config.loop,
+                                           backend.nominal_r0_ohm());
+  }
+
+  // Tick on every frame arrival, and at rate_hz when frames stop (stale detection, commands).
+  const double period_s = 1.0 / config.rate_hz;
+  const Clock::time_point start = Clock::now();
+  uint64_t seen = 0;
+  bool intent_given = false;
+  double peak_total_fn_n = 0.0;
+  while (!g_stop.load()) {
+    if (options.duration_s > 0.0 && SecondsSince(start) >= options.duration_s) break;
+    link.WaitForFrame(seen, period_s);
+    seen = link.published();
+    loop.Tick(SecondsSince(start));
+    // The first baseline_frames frames are the tare (no load on the fingertip); then the intent.
+    if (!intent_given && loop.counters().frames >= static_cast<uint64_t>(config.loop.readout.baseline_frames)) {
+      grasp->SetIntent(intent);
+      intent_given = true;
+    }
+    if (!loop.state().stale) peak_total_fn_n = std::max(peak_total_fn_n, loop.state().total_fn_n);
+  }
+  const double run_s = SecondsSince(start);
+  actuator.Stop();
+  backend.Stop();
+  if (logger) logger->Finish();
+
+  const sensor::BackendCounters counters = backend.counters();
+  const controller::LoopCounters& ticks = loop.counters();
+  nlohmann::json summary = {
+      {"port", config.serial.port},
+      {"layout", layout.name},
+      {"controller", grasp->name()},
+      {"duration_s", run_s},
+      {"frames", counters.frames},
+      {"corrupt", counters.corrupt},
+      {"dropped", counters.dropped},
+      {"unknown_packets", counters.unknown_packets},
+      {"reconnects", counters.reconnects},
+      {"stale_periods", counters.stale_periods},
+      {"sessions", counters.sessions},
+      {"ticks", ticks.ticks},
+      {"loop_frames", ticks.frames},
+      {"stale_ticks", ticks.stale_ticks},
+      {"disconnected_ticks", ticks.disconnected_ticks},
+      {"actuator_failures", ticks.actuator_failures},
+      {"retares", ticks.retares},
+      {"motor_commands", link.motor_commands_sent()},
+      {"tare_frames", config.loop.readout.baseline_frames},
+      {"peak_total_fn_n", peak_total_fn_n},
+      {"final_total_fn_n", loop.state().total_fn_n},
+      {"final_valid_units", loop.state().valid_count},
+      {"interrupted", g_stop.load()},
+  };
+  if (logger) {
+    summary["log"] = options.log;
+    summary["log_rows"] = logger->rows();
+    summary["log_rows_lost"] = link.tap_overflows();
+  }
+  if (!link.last_error().empty()) summary["last_error"] = link.last_error();
+  if (options.json) {
+    std::cout << summary.dump(2) << '\n';
+    return;
+  }
+  std::cout << "hw " << config.serial.port << ": " << run_s << " s, " << counters.frames << " frames, "
+            << counters.corrupt << " corrupt, " << counters.dropped << " dropped, " << counters.unknown_packets
+            << " unknown, " << counters.reconnects << " reconnects, " << counters.stale_periods
+            << " stale periods, " << counters.sessions << " sessions; peak grip " << peak_total_fn_n
+            << " N (sensed)\n";
+}
+
+// ---- emulate -----------------------------------------------------------------------------------------
+
+struct EmulateOptions {
+  std::string link;
+  std::string scenario;
+  double duration_s = -1.0;
+  bool json = false;
+};
+
+/// The simulated hand behind the emulator's callbacks. The scenario's script moves the wrist and the
+/// object; grasp intent belongs to the host's controller, so close/open actions are not played
+/// (ScriptPlayer gives them to a controller nobody ticks). Simulated time starts with the first
+/// STREAM_CONTROL start and advances one sensor period per emulator tick.
+class SimulatedDevice {
+ public:
+  SimulatedDevice(const scenario::ScenarioConfig& config, const sensor::Layout& layout)
+      : rig_(layout, sensor::PaperCalibration(layout.unit_count()), RigConfig(config),
+             controller::MakeController("open_loop", {})),
+        player_(config),
+        period_s_(1.0 / config.sensor.sample_rate_hz) {
+    player_.Start(rig_);
+    initial_object_z_m_ = rig_.simulation().truth().object_position_m[2];
+  }
+
+  static sim::SimRigConfig RigConfig(const scenario::ScenarioConfig& config) {
+    sim::SimRigConfig rig;
+    rig.scene = config.scene;
+    rig.backend.sample_rate_hz = config.sensor.sample_rate_hz;
+    rig.backend.latency_s = config.sensor.latency_s;
+    rig.backend.drop_probability = 0.0;  // link faults are the emulator's business here
+    rig.backend.strain_model = config.sensor.strain_model;
+    rig.loop.readout = config.sensor.readout;
+    rig.loop.inversion = config.sensor.inversion;
+    rig.seed = config.seed;
+    return rig;
+  }
+
+  /// Emulator thread: advances the simulation by one sensor period once streaming has begun.
+  void Frame(bool streaming, sensor::RawFrame* frame) {
+    if (streaming) started_ = true;
+    if (started_) {
+      target_s_ += period_s_;
+      sim::Simulation& simulation = rig_.simulation();
+      while (simulation.time_s() < target_s_) {
+        player_.Update(simulation.time_s(), rig_);
+        simulation.Step();
+        rig_.backend().Poll();
+      }
+      const sim::GroundTruth truth = simulation.truth();
+      std::lock_guard lock(mutex_);
+      sim_time_s_ = simulation.time_s();
+      peak_squeeze_n_ = std::max(peak_squeeze_n_, truth.object_squeeze_n);
+      last_truth_ = truth;
+    }
+    sensor::RawFrame fresh;
+    while (rig_.backend().Read(&fresh) == sensor::ReadStatus::kOk) latest_ = fresh;
+    if (latest_.unit_count == 0) {  // nothing sampled yet: unloaded gauges
+      latest_.unit_count = frame->unit_count;
+      latest_.r1_ohm.fill(rig_.backend().nominal_r0_ohm());
+      latest_.r2_ohm.fill(rig_.backend().nominal_r0_ohm());
+    }
+    frame->flags = latest_.flags;
+    std::copy_n(latest_.r1_ohm.begin(), frame->unit_count, frame->r1_ohm.begin());
+    std::copy_n(latest_.r2_ohm.begin(), frame->unit_count, frame->r2_ohm.begin());
+  }
+
+  /// Emulator thread: the motor state the device drives.
+  void Motor(const serial::EmulatedMotor& motor) {
+    rig_.actuator().Write({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
+  }
+
+  nlohmann::json Summary() const {
+    std::lock_guard lock(mutex_);
+    return {
+        {"sim_time_s", sim_time_s_},
+        {"object_lift_m", last_truth_.object_position_m[2] - initial_object_z_m_},
+        {"object_height_above_table_m", last_truth_.object_height_above_table_m},
+        {"peak_squeeze_n", peak_squeeze_n_},
+        {"final_squeeze_n", last_truth_.object_squeeze_n},
+        {"finger_contacts", last_truth_.finger_contacts},
+        {"thumb_contacts", last_truth_.thumb_contacts},
+    };
+  }
+  bool started() const { return started_.load(); }
+  double sim_time_s() const {
+    std::lock_guard lock(mutex_);
+    return sim_time_s_;
+  }
+
+ private:
+  sim::SimRig rig_;
+  scenario::ScriptPlayer player_;
+  double period_s_;
+  double target_s_ = 0.0;
+  std::atomic<bool> started_{false};
+  sensor::RawFrame latest_;
+  double initial_object_z_m_ = 0.0;
+  mutable std::mutex mutex_;  // guards the summary values read by the main thread
+  double sim_time_s_ = 0.0;
+  double peak_squeeze_n_ = 0.0;
+  sim::GroundTruth last_truth_;
+};
+
+void RunEmulate(const EmulateOptions& options) {
+  scenario::ScenarioConfig config;
+  if (!options.scenario.empty()) {
+    config = scenario::LoadScenario(options.scenario);
+  } else {
+    config.name = "plain";
+    config.duration_s = 0.0;  // no scenario: until stopped
+  }
+  const sensor::Layout layout = sensor::LoadLayout(scenario::ResolveLayoutPath(config));
+  SimulatedDevice device(config, layout);
+
+  serial::EmulatorConfig emulator_config;
+  emulator_config.link_path = options.link;
+  emulator_config.unit_count = layout.unit_count();
+  emulator_config.frame_rate_hz = static_cast<int>(std::lround(config.sensor.sample_rate_hz));
+  emulator_config.nominal_r0_ohm = config.sensor.strain_model.nominal.r0_ohm;
+  serial::DeviceEmulator emulator(
+      emulator_config,
+      [&device](double, bool streaming, sensor::RawFrame* frame) { device.Frame(streaming, frame); },
+      [&device](const serial::EmulatedMotor& motor) { device.Motor(motor); });
+  StopSignalGuard signals;
+  emulator.Start();
+  std::cerr << "emulate: device '" << config.name << "' (" << layout.unit_count() << " units) at "
+            << options.link << " -> " << emulator.slave_path() << "; waiting for a host\n";
+  // Ends after `duration` simulated seconds from the first stream start (default: the scenario's),
+  // or on SIGINT/SIGTERM.
+  const double duration_s = options.duration_s >= 0.0 ? options.duration_s : config.duration_s;
+  while (!g_stop.load()) {
+    if (duration_s > 0.0 && device.started() && device.sim_time_s() >= duration_s) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const serial::EmulatorStats stats = emulator.stats();
+  emulator.Stop();
+
+  nlohmann::json summary = device.Summary();
+  summary["scenario"] = config.name;
+  summary["link"] = options.link;
+  summary["frames_sent"] = stats.frames_sent;
+  summary["hellos_sent"] = stats.hellos_sent;
+  summary["motor_commands"] = stats.motor_commands;
+  summary["watchdog_trips"] = stats.watchdog_trips;
+  summary["stream_starts"] = stats.stream_starts;
+  summary["connects"] = stats.connects;
+  summary["commands_before_hello"] = stats.commands_before_hello;
+  if (options.json) {
+    std::cout << summary.dump(2) << '\n';
+    return;
+  }
+  std::cout << "emulate " << options.link << ": " << summary["sim_time_s"].get<double>() << " s simulated, "
+            << stats.frames_sent << " frames sent, " << stats.motor_commands << " motor commands, "
+            << stats.watchdog_trips << " watchdog trips; object lifted "
+            << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak squeeze "
+            << summary["peak_squeeze_n"].get<double>() << " N\n";
+}
+
+void AddHwCommands(CLI::App& root) {
+  auto hw_options = std::make_shared<HwOptions>();
+  CLI::App* hw = root.add_subcommand(
+      "hw", "Run a controller against the tactile readout and hand over a serial link (or the emulator)");
+  hw->add_option("--port", hw_options->port, "Serial device, e.g. /dev/ttyACM0 or an emulator link");
+  hw->add_option("--config", hw_options->config, "YAML with serial:, control:, readout:, inversion: sections")
+      ->check(CLI::ExistingFile);
+  hw->add_option("--layout", hw_options->layout, "Layout file (default: sensor/layouts/default_20.yaml)");
+  hw->add_option("--calibration", hw_options->calibration, "Calibration file (default: paper values)");
+  hw->add_option("--controller", hw_options->controller, "Controller name")->capture_default_str();
+  hw->add_option("--intent", hw_options->intent, "Intent once tared: close, open or idle")->capture_default_str();
+  hw->add_option("--duration", hw_options->duration_s, "Stop cleanly after S seconds (0: until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  hw->add_option("--tare-frames", hw_options->tare_frames,
+                 "Frames averaged for the tare baseline at start (default: readout.baseline_frames = 100)")
+      ->check(CLI::PositiveNumber);
+  hw->add_option("--log", hw_options->log, "CSV with one row per decoded frame");
+  hw->add_flag("--json", hw_options->json, "Print a JSON summary at the end");
+  hw->callback([hw_options] { RunHw(*hw_options); });
+
+  auto emulate_options = std::make_shared<EmulateOptions>();
+  CLI::App* emulate = root.add_subcommand(
+      "emulate", "Serve the simulated hand as a serial device on a pseudo-terminal (symlinked at --link)");
+  emulate->add_option("--link", emulate_options->link, "Path of the symlink to create")->required();
+  emulate->add_option("scenario", emulate_options->scenario, "Scenario YAML (wrist and object script)")
+      ->check(CLI::ExistingFile);
+  emulate->add_option("--duration", emulate_options->duration_s,
+                      "Simulated seconds after the host starts streaming (default: the scenario's; "
+                      "without a scenario, until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  emulate->add_flag("--json", emulate_options->json, "Print a JSON summary (ground truth) at the end");
+  emulate->callback([emulate_options] { RunEmulate(*emulate_options); });
+}
+
+const bool kRegistered = RegisterCommands(&AddHwCommands);
+
+}  // namespace
+}  // namespace graspbed::app
