@@ -31,7 +31,9 @@ struct Mesh {
   std::vector<double> y_lines;    ///< element boundaries along y, ascending [mm]
   std::vector<int> cell_element;  ///< element of grid cell (i, j) at j * CellsX() + i, or -1 (void)
 
+  /// Number of grid cells along x.
   int CellsX() const { return static_cast<int>(x_lines.size()) - 1; }
+  /// Number of grid cells along y.
   int CellsY() const { return static_cast<int>(y_lines.size()) - 1; }
   /// Element occupying grid cell (i, j), or -1 when the cell is void or outside the grid.
   int CellElement(int i, int j) const;

@@ -43,7 +43,9 @@ class PlaneStressModel {
   /// std::runtime_error when the stiffness is singular (e.g. too few constraints).
   PlaneStressModel(Mesh mesh, PlaneStressMaterial material, std::vector<PrescribedDof> prescribed);
 
+  /// The mesh the model was built on.
   const Mesh& mesh() const { return mesh_; }
+  /// Material and thickness.
   const PlaneStressMaterial& material() const { return material_; }
   /// Degrees of freedom of the whole mesh (free + prescribed).
   int DofCount() const { return mesh_.DofCount(); }

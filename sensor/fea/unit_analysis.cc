@@ -95,11 +95,13 @@ LineFit FitLine(const std::vector<double>& x, const std::vector<double>& y) {
   return fit;
 }
 
-StrainLine BottomSurfaceStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
-                               int row) {
+namespace {
+
+StrainLine BottomStrainOf(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
+                          const std::vector<int>& elements) {
   StrainLine line;
   std::vector<int> shared;  // how many elements contributed to each point
-  for (int element : FreeBottomElements(model.mesh(), row)) {
+  for (int element : elements) {
     for (double xi : {-1.0, 0.0, 1.0}) {
       const double x = model.PositionAt(element, xi, -1.0).x();
       const double eps = model.StrainAt(element, xi, -1.0, u)[0];
@@ -116,11 +118,11 @@ StrainLine BottomSurfaceStrain(const PlaneStressModel& model, const Eigen::Ref<c
   return line;
 }
 
-double AverageBottomStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u, int row,
-                           double x_start_mm, double x_end_mm) {
+double AverageBottomStrainOf(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
+                             const std::vector<int>& elements, double x_start_mm, double x_end_mm) {
   double integral = 0.0;
   double covered = 0.0;
-  for (int element : FreeBottomElements(model.mesh(), row)) {
+  for (int element : elements) {
     const double x0 = model.PositionAt(element, -1.0, -1.0).x();
     const double x1 = model.PositionAt(element, 1.0, -1.0).x();
     const double a = std::max(x0, x_start_mm);
@@ -135,11 +137,22 @@ double AverageBottomStrain(const PlaneStressModel& model, const Eigen::Ref<const
     covered += b - a;
   }
   if (!(covered > 0.0)) {
-    throw std::invalid_argument("AverageBottomStrain: no free bottom face of row " + std::to_string(row) +
-                                " lies in [" + std::to_string(x_start_mm) + ", " +
-                                std::to_string(x_end_mm) + "] mm");
+    throw std::invalid_argument("AverageBottomStrain: no free bottom face lies in [" +
+                                std::to_string(x_start_mm) + ", " + std::to_string(x_end_mm) + "] mm");
   }
   return integral / covered;
+}
+
+}  // namespace
+
+StrainLine BottomSurfaceStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
+                               int row) {
+  return BottomStrainOf(model, u, FreeBottomElements(model.mesh(), row));
+}
+
+double AverageBottomStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u, int row,
+                           double x_start_mm, double x_end_mm) {
+  return AverageBottomStrainOf(model, u, FreeBottomElements(model.mesh(), row), x_start_mm, x_end_mm);
 }
 
 PlaneStressModel UnitModel::BuildModel(const FeaConfig& config, double* mesh_s, double* assemble_factor_s) {
@@ -165,6 +178,7 @@ UnitModel::UnitModel(const FeaConfig& config)
     if (std::abs(m.y_lines[j] - underside_y) < kSameXTolMm) underside_row_ = j;
   }
   if (underside_row_ < 0) throw std::logic_error("UnitModel: no grid line at the beam underside");
+  underside_elements_ = FreeBottomElements(m, underside_row_);
   const int top_row = m.CellsY() - 1;
   for (int i = 0; i < m.CellsX(); ++i) {
     const int element = m.CellElement(i, top_row);
@@ -181,13 +195,13 @@ Eigen::VectorXd UnitModel::LoadVector(double fn_n, double ft_n) const {
 }
 
 StrainLine UnitModel::Underside(const Eigen::Ref<const Eigen::VectorXd>& u) const {
-  return BottomSurfaceStrain(model_, u, underside_row_);
+  return BottomStrainOf(model_, u, underside_elements_);
 }
 
 Eigen::Vector2d UnitModel::ResistorStrains(const Eigen::Ref<const Eigen::VectorXd>& u) const {
   const GaugeConfig& gauge = config_.gauge;
-  return {AverageBottomStrain(model_, u, underside_row_, gauge.r1.start_mm, gauge.r1.end_mm),
-          AverageBottomStrain(model_, u, underside_row_, gauge.r2.start_mm, gauge.r2.end_mm)};
+  return {AverageBottomStrainOf(model_, u, underside_elements_, gauge.r1.start_mm, gauge.r1.end_mm),
+          AverageBottomStrainOf(model_, u, underside_elements_, gauge.r2.start_mm, gauge.r2.end_mm)};
 }
 
 FeaResults RunUnitAnalysis(const FeaConfig& config) {

@@ -101,7 +101,9 @@ class UnitModel {
   /// Validates `config` (std::invalid_argument on a bad value), meshes and factorises.
   explicit UnitModel(const FeaConfig& config);
 
+  /// The config the unit was built from.
   const FeaConfig& config() const { return config_; }
+  /// The assembled, factorised plane-stress model.
   const PlaneStressModel& model() const { return model_; }
   /// Grid row whose bottom faces are the beam underside.
   int UndersideRow() const { return underside_row_; }
@@ -111,7 +113,9 @@ class UnitModel {
   StrainLine Underside(const Eigen::Ref<const Eigen::VectorXd>& u) const;
   /// Mean eps_xx over R1 and R2 for displacements `u`.
   Eigen::Vector2d ResistorStrains(const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  /// Time spent meshing [s].
   double mesh_s() const { return mesh_s_; }
+  /// Time spent assembling and factorising the stiffness [s].
   double assemble_factor_s() const { return assemble_factor_s_; }
 
  private:
@@ -124,6 +128,7 @@ class UnitModel {
   PlaneStressModel model_;
   int underside_row_ = 0;
   std::vector<int> mesa_top_elements_;
+  std::vector<int> underside_elements_;  // free-span elements along the underside, ascending x
 };
 
 /// Runs the whole analysis: one factorisation, all load cases solved together.
