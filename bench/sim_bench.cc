@@ -1,0 +1,151 @@
+// Cost of the simulated pipeline against bare physics, and the force coverage of the fingertip.
+//   BM_PhysicsOnly:   Simulation::Step (mj_step + the NaN/warning check) on the default scene, the
+//                     default box held in a 10 N pinch (effort 0.5 of a 20 N stall).
+//   BM_FullPipeline:  the same scene through SimRig::Step: physics, contact mapping + strain model at
+//                     1 kHz, readout + inversion + open-loop controller + actuator at 1 kHz.
+// After the Google Benchmark runs, main() times both again, interleaved in rounds of one simulated
+// second so machine load hits both alike, and prints the ratio (design budget <= 1.15) and the force
+// coverage (sensed share of the finger's contact force) for a 10 N pinch of each object shape.
+// Run: build/bench/sim_bench   (docs/simulation.md)
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <memory>
+
+#include "controller/grasp_controller.h"
+#include "sensor/calibration.h"
+#include "sensor/layout.h"
+#include "sim/sim_rig.h"
+#include "sim/simulation.h"
+
+namespace graspbed::sim {
+namespace {
+
+constexpr double kCloseEffort = 0.5;  // 10 N pinch at the default 20 N stall force
+constexpr double kSettleS = 1.2;      // closed and at rest by then
+
+const sensor::Layout& Layout() {
+  static const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  return layout;
+}
+
+std::unique_ptr<Simulation> HeldPhysics(const SceneConfig& scene = {}) {
+  auto simulation = std::make_unique<Simulation>(Layout(), scene);
+  simulation->SetGripEffort(kCloseEffort);
+  simulation->StepUntil(kSettleS);
+  return simulation;
+}
+
+std::unique_ptr<SimRig> HeldRig() {
+  auto rig = std::make_unique<SimRig>(Layout(), sensor::PaperCalibration(Layout().unit_count()), SimRigConfig{},
+                                      controller::MakeController("open_loop", {{"close_effort", kCloseEffort}}));
+  rig->controller().SetIntent(controller::GraspIntent::kClose);
+  rig->AdvanceTo(kSettleS);
+  return rig;
+}
+
+void BM_PhysicsOnly(benchmark::State& bench) {
+  auto simulation = HeldPhysics();
+  const double start = simulation->time_s();
+  for (auto _ : bench) simulation->Step();
+  bench.counters["sim_s_per_wall_s"] =
+      benchmark::Counter(simulation->time_s() - start, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_PhysicsOnly)->Unit(benchmark::kMicrosecond);
+
+void BM_FullPipeline(benchmark::State& bench) {
+  auto rig = HeldRig();
+  const double start = rig->time_s();
+  for (auto _ : bench) rig->Step();
+  bench.counters["sim_s_per_wall_s"] = benchmark::Counter(rig->time_s() - start, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_FullPipeline)->Unit(benchmark::kMicrosecond);
+
+double WallSeconds(const std::chrono::steady_clock::time_point& start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// CPU time of this thread [s]: robust against other processes sharing the cores.
+double ThreadCpuSeconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
+void PrintRatio() {
+  constexpr int kRounds = 6;
+  constexpr double kRoundS = 1.0;
+  auto physics = HeldPhysics();
+  auto rig = HeldRig();
+  double physics_wall = 0.0;
+  double pipeline_wall = 0.0;
+  double physics_cpu = 0.0;
+  double pipeline_cpu = 0.0;
+  for (int round = 0; round < kRounds; ++round) {
+    auto start = std::chrono::steady_clock::now();
+    double cpu_start = ThreadCpuSeconds();
+    physics->StepUntil(physics->time_s() + kRoundS);
+    physics_wall += WallSeconds(start);
+    physics_cpu += ThreadCpuSeconds() - cpu_start;
+    start = std::chrono::steady_clock::now();
+    cpu_start = ThreadCpuSeconds();
+    rig->AdvanceTo(rig->time_s() + kRoundS);
+    pipeline_wall += WallSeconds(start);
+    pipeline_cpu += ThreadCpuSeconds() - cpu_start;
+  }
+  const double simulated = kRounds * kRoundS;
+  std::printf("\nPipeline cost, default scene, 10 N pinch hold, %.0f s simulated each, interleaved:\n", simulated);
+  std::printf("  bare physics   : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / physics_wall,
+              simulated / physics_cpu);
+  std::printf("  full pipeline  : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / pipeline_wall,
+              simulated / pipeline_cpu);
+  std::printf("  ratio full / bare: %.3f wall, %.3f CPU   (budget <= 1.15)\n", pipeline_wall / physics_wall,
+              pipeline_cpu / physics_cpu);
+  if (physics->fault().occurred || rig->simulation().fault().occurred) std::printf("  PHYSICS FAULT during timing\n");
+}
+
+void PrintCoverage() {
+  std::printf("\nForce coverage, 10 N pinch (sensed = on mesas; share of all finger contact force):\n");
+  std::printf("  %-28s %9s %9s %9s %8s %12s\n", "object", "finger N", "mesas N", "holder N", "share", "mesa pen um");
+  struct Case {
+    const char* name;
+    ObjectShape shape;
+    std::array<double, 3> size_m;
+    double solref_timeconst_s;
+  };
+  const Case cases[] = {
+      {"box 50 mm (flat face)", ObjectShape::kBox, {0.05, 0.05, 0.08}, 0.002},
+      {"box 50 mm, soft (20 ms)", ObjectShape::kBox, {0.05, 0.05, 0.08}, 0.02},
+      {"box 50 mm, very soft (80 ms)", ObjectShape::kBox, {0.05, 0.05, 0.08}, 0.08},
+      {"cylinder d 50 mm", ObjectShape::kCylinder, {0.05, 0.0, 0.08}, 0.002},
+      {"sphere d 50 mm", ObjectShape::kSphere, {0.05, 0.0, 0.0}, 0.002},
+  };
+  for (const Case& c : cases) {
+    SceneConfig scene;
+    scene.object.shape = c.shape;
+    scene.object.size_m = c.size_m;
+    scene.object.solref_timeconst_s = c.solref_timeconst_s;
+    auto simulation = HeldPhysics(scene);
+    const GroundTruth truth = simulation->truth();
+    const double share =
+        truth.finger_normal_force_n > 0.0 ? truth.sensed_normal_force_n / truth.finger_normal_force_n : 0.0;
+    std::printf("  %-28s %9.3f %9.3f %9.3f %8.3f %12.1f%s\n", c.name, truth.finger_normal_force_n,
+                truth.sensed_normal_force_n, truth.holder_normal_force_n, share, truth.max_mesa_penetration_m * 1e6,
+                simulation->fault().occurred ? "  FAULT" : "");
+  }
+}
+
+}  // namespace
+}  // namespace graspbed::sim
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  graspbed::sim::PrintRatio();
+  graspbed::sim::PrintCoverage();
+  return 0;
+}
