@@ -37,7 +37,7 @@ struct GripSlipConfig {
   double load_rate_n_per_s = 20.0;      ///< ramp rate of the grip target while loading [N/s]
   double load_timeout_s = 0.3;          ///< loading ends after this long even if the grip lags [s]
   double min_grip_n = 1.5;              ///< grip target never drops below this while holding [N]
-  double max_grip_n = 15.0;             ///< overall grip ceiling (sum over the units) [N]
+  double max_grip_n = 10.0;             ///< overall grip ceiling (sum over the units; the sensor's rated range) [N]
   double safety_margin = 1.4;           ///< grip = tangential load / friction estimate x this
   double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
   double unit_range_n = 10.0;           ///< a saturated (out-of-range) unit counts as this force [N]
@@ -49,12 +49,12 @@ struct GripSlipConfig {
   double friction_learn_min_load_n = 0.2;  ///< learn only from slips under at least this tangential load [N]
 
   // Force loop (feed-forward + PI with anti-windup) on the measured grip.
-  double effort_per_newton = 0.06;    ///< feed-forward effort per newton of target (~1 / stall force)
+  double effort_per_newton = 0.05;    ///< feed-forward effort per newton of target (1 / the 20 N stall pinch)
   double kp_effort_per_n = 0.04;      ///< proportional gain [1/N]
   double ki_effort_per_n_s = 1.5;     ///< integral gain [1/(N s)]
   double integrator_limit = 0.5;      ///< bound of the integral term [-]
   double max_effort = 1.0;            ///< largest closing effort ever commanded [-]
-  double ceiling_effort_margin = 1.3;  ///< effort cap = this x effort_per_newton x grip ceiling
+  double ceiling_effort_margin = 1.1;  ///< effort cap = this x effort_per_newton x grip ceiling
   double grip_filter_s = 0.002;       ///< low-pass time constant of the measured grip [s]
 
   // Slip response.

@@ -53,7 +53,7 @@ TEST(ScenarioConfigTest, EveryShippedScenarioLoadsWithExpectations) {
     EXPECT_EQ(config.name, entry.path().stem().string());
     EXPECT_FALSE(config.expectations.empty());
     EXPECT_FALSE(config.description.empty());
-    EXPECT_LE(config.duration_s, 6.0);  // the suite must stay quick
+    EXPECT_LE(config.duration_s, 20.0);  // the suite must stay quick (the long static hold is the longest)
     ++count;
   }
   EXPECT_GE(count, 11);
