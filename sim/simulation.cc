@@ -335,6 +335,7 @@ GroundTruth Simulation::truth() const {
   double thumb_on_object = 0.0;
   double slip_weighted = 0.0;
   double slip_weight = 0.0;
+  mjtNum tangential_world[3] = {0.0, 0.0, 0.0};
   for (int c = 0; c < d->ncon; ++c) {
     const mjContact& contact = d->contact[c];
     const int side1 = geom_side_[contact.geom1];
@@ -373,6 +374,10 @@ GroundTruth Simulation::truth() const {
       thumb_on_object += normal;
       ++t.thumb_contacts;
     }
+    // contact.frame rows are the normal and the two tangent directions (world frame).
+    for (int k = 0; k < 3; ++k) {
+      tangential_world[k] += local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k];
+    }
     mjtNum v_object[3];
     mjtNum v_digit[3];
     PointVelocity(m, d, object_body_, contact.pos, v_object);
@@ -388,6 +393,9 @@ GroundTruth Simulation::truth() const {
   if (slip_weight > 0.0) t.mean_slip_speed_m_s = slip_weighted / slip_weight;
   if (t.holder_normal_force_n > 1e-9) t.sensed_share = t.sensed_normal_force_n / t.holder_normal_force_n;
   t.object_squeeze_n = std::max(finger_on_object, thumb_on_object);
+  t.object_tangential_load_n = mju_norm3(tangential_world);
+  const double friction = m->geom_friction[3 * object_geom_];
+  if (friction > 0.0) t.required_grip_n = t.object_tangential_load_n / (2.0 * friction);
   return t;
 }
 

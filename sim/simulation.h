@@ -67,6 +67,12 @@ struct GroundTruth {
   /// holder shell itself (pushed through the mesas).
   double max_mesa_penetration_m = 0.0;
   bool object_touches_holder_shell = false;
+  /// Magnitude of the summed tangential contact force of both digits on the object, world frame [N]:
+  /// the load the pinch carries by friction (weight, pulls, inertia).
+  double object_tangential_load_n = 0.0;
+  /// Least squeeze per digit that carries that load at the object's current friction coefficient:
+  /// tangential load / (2 mu) [N]. Peak grip over this is the grasp's efficiency.
+  double required_grip_n = 0.0;
   int finger_contacts = 0;  ///< contacts between the object and the finger
   int thumb_contacts = 0;   ///< contacts between the object and the thumb
 };

@@ -105,6 +105,7 @@ void MetricsTracker::Update(const TickSample& sample) {
   if (was_holding) held_s_ += dt;
 
   if (holding_) {
+    needed_grip_n_ = std::max(needed_grip_n_, truth.required_grip_n);
     double squared = 0.0;
     for (int k = 0; k < 3; ++k) {
       const double d = truth.object_position_m[k] - truth.wrist_position_m[k] - reference_offset_m_[k];
@@ -200,6 +201,8 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.drop_time_s = copy.drop_time_s_;
   m.max_slip_mm = copy.slip_distance_m_ * 1e3;
   m.peak_grip_n = copy.peak_grip_n_;
+  m.needed_grip_n = copy.needed_grip_n_;
+  if (copy.needed_grip_n_ > 0.0) m.grip_efficiency_ratio = copy.peak_grip_n_ / copy.needed_grip_n_;
   m.crushed = copy.crush_limit_n_ > 0.0 && copy.peak_grip_n_ > copy.crush_limit_n_;
   m.slip_events = copy.event_count_;
   m.missed_slip_events = copy.missed_;

@@ -37,6 +37,11 @@ struct Metrics {
   double max_slip_mm = 0.0;       ///< slip distance accumulated above the creep speed while held [mm]
   double peak_grip_n = 0.0;       ///< largest squeeze on the object over the run [N]
   bool crushed = false;           ///< peak_grip_n above object.crush_limit_n (fragile objects only)
+  /// Largest grip the held object needed: max over holding ticks of its tangential load / (2 mu) [N].
+  double needed_grip_n = 0.0;
+  /// peak_grip_n / needed_grip_n: how many times harder than necessary the hand squeezed at its
+  /// worst [-]; empty when the object was never held with load.
+  std::optional<double> grip_efficiency_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
   int slip_events = 0;            ///< ground-truth slip events while held
@@ -112,6 +117,7 @@ class MetricsTracker {
 
   double slip_distance_m_ = 0.0;
   double peak_grip_n_ = 0.0;
+  double needed_grip_n_ = 0.0;
 
   std::array<SlipEvent, kMaxEvents> events_{};
   int event_count_ = 0;       ///< events started (may exceed kMaxEvents)

@@ -514,6 +514,8 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"dropped", m.dropped},
       {"max_slip_mm", m.max_slip_mm},
       {"peak_grip_n", m.peak_grip_n},
+      {"needed_grip_n", m.needed_grip_n},
+      {"grip_efficiency_ratio", Optional(m.grip_efficiency_ratio)},
       {"crushed", m.crushed},
       {"slip_detect_latency_ms", Optional(m.slip_detect_latency_ms)},
       {"false_slip_per_min", m.false_slip_per_min},
