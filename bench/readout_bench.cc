@@ -1,11 +1,13 @@
 // Per-frame cost of the sensor path for one 20-unit frame (default layout):
 //   BM_ReadoutAndInversion: Readout::Process + Inversion::Invert (the hardware path's cost)
+//   BM_ReadoutInversionController: the same plus GripSlipController::Update (the per-frame control path)
 //   BM_StrainModelSample:   StrainModel::Sample, ideal and with every non-ideal option on
 // Run: build/bench/readout_bench   (docs/sensor.md)
 #include <benchmark/benchmark.h>
 
 #include <vector>
 
+#include "controller/grip_slip_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
@@ -46,6 +48,39 @@ void BM_ReadoutAndInversion(benchmark::State& bench) {
   bench.SetLabel("20 units, ns per frame");
 }
 BENCHMARK(BM_ReadoutAndInversion);
+
+void BM_ReadoutInversionController(benchmark::State& bench) {
+  const Layout layout = LoadLayout(DefaultLayoutPath());
+  StrainModelConfig config;
+  config.noise_ohm = 0.5;
+  StrainModel model(layout, config, 1);
+  Readout readout(ReadoutConfig{}, layout.unit_count(), 3400);
+  readout.SetBaseline(model.r0_ohm_r1(), model.r0_ohm_r2());
+  const Inversion inversion(layout, PaperCalibration(layout.unit_count()), InversionConfig{});
+  controller::GripSlipController controller{controller::GripSlipConfig{}};
+  controller.SetIntent(controller::GraspIntent::kClose);
+  constexpr int kFrames = 64;
+  std::vector<RawFrame> frames(kFrames);
+  const std::vector<UnitLoad> loads = Loads(layout.unit_count());
+  for (int i = 0; i < kFrames; ++i) model.Sample(loads, i * 1e-3, &frames[static_cast<size_t>(i)]);
+  ReadoutFrame readout_frame;
+  TactileState state;
+  int index = 0;
+  uint32_t sequence = 0;
+  double time_s = 0.0;
+  for (auto _ : bench) {
+    RawFrame& frame = frames[static_cast<size_t>(index)];
+    frame.sequence = ++sequence;  // a new frame every tick, as the loop delivers them
+    readout.Process(frame, &readout_frame);
+    inversion.Invert(readout_frame, &state);
+    time_s += 1e-3;
+    benchmark::DoNotOptimize(controller.Update(state, time_s));
+    index = (index + 1) % kFrames;
+  }
+  bench.SetItemsProcessed(bench.iterations());
+  bench.SetLabel("20 units, grip_slip holding, ns per frame");
+}
+BENCHMARK(BM_ReadoutInversionController);
 
 void BM_StrainModelSample(benchmark::State& bench) {
   const bool non_ideal = bench.range(0) != 0;
