@@ -22,60 +22,58 @@ std::vector<UnitLoad> Loads(int count) {
   return loads;
 }
 
-void BM_ReadoutAndInversion(benchmark::State& bench) {
-  const Layout layout = LoadLayout(DefaultLayoutPath());
-  StrainModelConfig config;
-  config.noise_ohm = 0.5;
-  StrainModel model(layout, config, 1);
-  Readout readout(ReadoutConfig{}, layout.unit_count(), 3400);
-  readout.SetBaseline(model.r0_ohm_r1(), model.r0_ohm_r2());
-  const Inversion inversion(layout, PaperCalibration(layout.unit_count()), InversionConfig{});
-  // A small ring of distinct frames so the branch predictor does not see one frame forever.
-  constexpr int kFrames = 64;
-  std::vector<RawFrame> frames(kFrames);
-  const std::vector<UnitLoad> loads = Loads(layout.unit_count());
-  for (int i = 0; i < kFrames; ++i) model.Sample(loads, i * 1e-3, &frames[static_cast<size_t>(i)]);
+/// The hardware path's per-frame chain on the default layout, with a small ring of distinct tared
+/// frames so the branch predictor does not see one frame forever.
+struct FramePath {
+  static constexpr int kFrames = 64;
+  Layout layout = LoadLayout(DefaultLayoutPath());
+  StrainModel model{layout, NoisyConfig(), 1};
+  Readout readout{ReadoutConfig{}, layout.unit_count(), 3400};
+  Inversion inversion{layout, PaperCalibration(layout.unit_count()), InversionConfig{}};
+  std::vector<RawFrame> frames = std::vector<RawFrame>(kFrames);
   ReadoutFrame readout_frame;
   TactileState state;
   int index = 0;
-  for (auto _ : bench) {
-    readout.Process(frames[static_cast<size_t>(index)], &readout_frame);
-    inversion.Invert(readout_frame, &state);
-    benchmark::DoNotOptimize(state.total_fn_n);
-    index = (index + 1) % kFrames;
+
+  FramePath() {
+    readout.SetBaseline(model.r0_ohm_r1(), model.r0_ohm_r2());
+    const std::vector<UnitLoad> loads = Loads(layout.unit_count());
+    for (int i = 0; i < kFrames; ++i) model.Sample(loads, i * 1e-3, &frames[static_cast<size_t>(i)]);
   }
+  static StrainModelConfig NoisyConfig() {
+    StrainModelConfig config;
+    config.noise_ohm = 0.5;
+    return config;
+  }
+  /// Readout + inversion of the next frame of the ring, stamped with `sequence`.
+  const TactileState& Next(uint32_t sequence) {
+    RawFrame& frame = frames[static_cast<size_t>(index)];
+    frame.sequence = sequence;
+    readout.Process(frame, &readout_frame);
+    inversion.Invert(readout_frame, &state);
+    index = (index + 1) % kFrames;
+    return state;
+  }
+};
+
+void BM_ReadoutAndInversion(benchmark::State& bench) {
+  FramePath path;
+  uint32_t sequence = 0;
+  for (auto _ : bench) benchmark::DoNotOptimize(path.Next(++sequence).total_fn_n);
   bench.SetItemsProcessed(bench.iterations());
   bench.SetLabel("20 units, ns per frame");
 }
 BENCHMARK(BM_ReadoutAndInversion);
 
 void BM_ReadoutInversionController(benchmark::State& bench) {
-  const Layout layout = LoadLayout(DefaultLayoutPath());
-  StrainModelConfig config;
-  config.noise_ohm = 0.5;
-  StrainModel model(layout, config, 1);
-  Readout readout(ReadoutConfig{}, layout.unit_count(), 3400);
-  readout.SetBaseline(model.r0_ohm_r1(), model.r0_ohm_r2());
-  const Inversion inversion(layout, PaperCalibration(layout.unit_count()), InversionConfig{});
+  FramePath path;
   controller::GripSlipController controller{controller::GripSlipConfig{}};
   controller.SetIntent(controller::GraspIntent::kClose);
-  constexpr int kFrames = 64;
-  std::vector<RawFrame> frames(kFrames);
-  const std::vector<UnitLoad> loads = Loads(layout.unit_count());
-  for (int i = 0; i < kFrames; ++i) model.Sample(loads, i * 1e-3, &frames[static_cast<size_t>(i)]);
-  ReadoutFrame readout_frame;
-  TactileState state;
-  int index = 0;
   uint32_t sequence = 0;
   double time_s = 0.0;
   for (auto _ : bench) {
-    RawFrame& frame = frames[static_cast<size_t>(index)];
-    frame.sequence = ++sequence;  // a new frame every tick, as the loop delivers them
-    readout.Process(frame, &readout_frame);
-    inversion.Invert(readout_frame, &state);
-    time_s += 1e-3;
-    benchmark::DoNotOptimize(controller.Update(state, time_s));
-    index = (index + 1) % kFrames;
+    time_s += 1e-3;  // a new frame every 1 ms tick, as the loop delivers them
+    benchmark::DoNotOptimize(controller.Update(path.Next(++sequence), time_s));
   }
   bench.SetItemsProcessed(bench.iterations());
   bench.SetLabel("20 units, grip_slip holding, ns per frame");
