@@ -44,6 +44,16 @@ Calibration PaperCalibration(int unit_count) {
   return Calibration{std::vector<UnitCalibration>(static_cast<size_t>(unit_count))};
 }
 
+Calibration NominalCalibration(const UnitConstants& nominal, int unit_count) {
+  Calibration calibration = PaperCalibration(unit_count);
+  for (UnitCalibration& unit : calibration.units) {
+    unit.gauge_factor = nominal.gauge_factor;
+    unit.kn_per_n = nominal.kn_per_n;
+    unit.kt_per_n = nominal.kt_per_n;
+  }
+  return calibration;
+}
+
 Calibration LoadCalibration(const std::string& path, int expected_unit_count) {
   const YamlMap root = YamlMap::LoadFile(path);
   const std::vector<YamlMap> unit_maps = root.GetMapList("units");

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "sensor/strain_model.h"
+
 namespace graspbed::sensor {
 
 /// Constants of one unit's inversion.
@@ -29,6 +31,10 @@ struct Calibration {
 
 /// The paper's constants (G = 100, kn = 5.5e-4 /N, kt = 4.1e-4 /N, no offsets) for every unit.
 Calibration PaperCalibration(int unit_count);
+/// The nominal constants of a strain model (G, kn, kt; no offsets) for every unit: what a host
+/// that knows only the datasheet of the sensor inverts with. Equals PaperCalibration for the
+/// paper's constants.
+Calibration NominalCalibration(const UnitConstants& nominal, int unit_count);
 
 /// Loads a calibration YAML (format in docs/sensor.md); throws common::ConfigError naming file,
 /// line and key, including when the file holds a different number of units than expected.

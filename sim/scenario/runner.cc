@@ -371,7 +371,10 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   std::unique_ptr<sim::SimRig> rig;
   {
     std::lock_guard<std::mutex> lock(ConstructionMutex());
-    rig = std::make_unique<sim::SimRig>(layout, sensor::PaperCalibration(units), rig_config,
+    // The host inverts with the sensor's nominal constants, not with anything the simulation knows
+    // per unit (spread, drift): those show up as estimation error, as on hardware.
+    rig = std::make_unique<sim::SimRig>(layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units),
+                                        rig_config,
                                         controller::MakeController(config.controller.name, config.controller.params));
   }
   ScriptPlayer player(config);

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sensor/fea/fea_config.h"
+#include "sensor/fea/unit_analysis.h"
 #include "sensor/layout.h"
 
 namespace graspbed::scenario {
@@ -245,6 +247,28 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   if (auto sub = map.GetMap("strain_model")) {
     s.strain_model = sensor::LoadStrainModelConfig(*sub, *unit_count);
   }
+  s.sensitivities = map.GetString("sensitivities", s.sensitivities, {"paper", "fea"});
+  s.fea_config = map.GetString("fea_config", s.fea_config);
+  if (!s.fea_config.empty()) {
+    std::filesystem::path path(s.fea_config);
+    if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
+    if (!std::filesystem::exists(path)) map.Fail("fea_config", "no such file");
+    s.fea_config = std::filesystem::absolute(path).lexically_normal().string();
+  }
+  if (s.sensitivities == "fea") {
+    // The unit's geometry and material decide kn and kt (about 0.1 s of analysis).
+    const fea::Sensitivities analysed =
+        fea::ComputeSensitivities(fea::LoadFeaConfig(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
+    if (!(analysed.kn_per_n > 0.0) || !(analysed.kt_per_n > 0.0)) {
+      std::ostringstream reason;
+      reason << "the unit in " << (s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config)
+             << " analyses to kn_per_n = " << analysed.kn_per_n << ", kt_per_n = " << analysed.kt_per_n
+             << " /N; both must be > 0 for the gauge to sense normal force and shear (see graspbed fea)";
+      map.Fail("sensitivities", reason.str());
+    }
+    s.strain_model.nominal.kn_per_n = analysed.kn_per_n;
+    s.strain_model.nominal.kt_per_n = analysed.kt_per_n;
+  }
   if (auto sub = map.GetMap("readout")) s.readout = sensor::LoadReadoutConfig(*sub);
   if (auto sub = map.GetMap("inversion")) s.inversion = sensor::LoadInversionConfig(*sub);
   map.RejectUnknownKeys();
@@ -479,6 +503,8 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   EmitNumber(out, "sample_rate_hz", s.sample_rate_hz);
   EmitNumber(out, "latency_s", s.latency_s);
   EmitNumber(out, "drop_probability", s.drop_probability);
+  out << YAML::Key << "sensitivities" << YAML::Value << s.sensitivities;
+  if (!s.fea_config.empty()) out << YAML::Key << "fea_config" << YAML::Value << s.fea_config;
   const sensor::StrainModelConfig& m = s.strain_model;
   out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
   EmitNumber(out, "r0_ohm", m.nominal.r0_ohm);

@@ -134,6 +134,14 @@ struct SensorOptions {
   double sample_rate_hz = 1000.0;     ///< sensor frames per second [Hz]
   double latency_s = 0.0;             ///< delay from sampling to delivery [s]
   double drop_probability = 0.0;      ///< chance each frame is lost on the link [0..1]
+  /// Where the strain model's kn and kt come from: "paper" (strain_model.kn_per_n / kt_per_n, the
+  /// paper's values unless set) or "fea" (graspbed's finite-element analysis of the unit described
+  /// by fea_config; overrides strain_model.kn_per_n and kt_per_n). The inversion uses the same
+  /// nominal constants either way.
+  std::string sensitivities = "paper";
+  /// FEA config for sensitivities "fea" (relative to the scenario file); empty = the shipped
+  /// sensor/fea/unit_fea.yaml.
+  std::string fea_config;
   sensor::StrainModelConfig strain_model;
   sensor::ReadoutConfig readout;
   sensor::InversionConfig inversion;
