@@ -1,0 +1,374 @@
+// Metrics and expectations: every expectation kind evaluated passing and failing, the tracker's slip
+// events, detection latency, false alarms, drops, stable window and estimation error on synthetic
+// ticks, and expectations scored on real runs.
+#include "sim/scenario/metrics.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "tests/scenario/scenario_test_util.h"
+
+namespace graspbed::scenario {
+namespace {
+
+using testing::HeldBoxScenario;
+using testing::RunScenarioText;
+using testing::ScenarioRun;
+using testing::TempDir;
+
+constexpr double kTimeTolS = 1e-9;
+constexpr double kTickS = 0.001;  // control period of the synthetic ticks
+
+// The outcome named `name` (fails the test when absent).
+ExpectationOutcome Find(const std::vector<ExpectationOutcome>& outcomes, const std::string& name) {
+  for (const ExpectationOutcome& o : outcomes) {
+    if (o.name == name) return o;
+  }
+  ADD_FAILURE() << "no outcome " << name;
+  return {};
+}
+
+bool Passes(const Expectations& e, const Metrics& m, const std::string& name) {
+  return Find(EvaluateExpectations(e, m), name).passed;
+}
+
+// A held, clean run's metrics.
+Metrics HeldMetrics() {
+  Metrics m;
+  m.grasped = true;
+  m.grasp_time_s = 0.2;
+  m.max_slip_mm = 1.5;
+  m.peak_grip_n = 6.0;
+  m.fn_rmse_n = 0.2;
+  m.ft_rmse_n = 0.3;
+  m.time_to_stable_s = 0.5;
+  m.held_s = 60.0;
+  return m;
+}
+
+TEST(ExpectationsTest, NotDroppedPassesWhenHeldAndFailsWhenDroppedOrNeverGrasped) {
+  Expectations e;
+  e.not_dropped = true;
+  Metrics m = HeldMetrics();
+  EXPECT_TRUE(Passes(e, m, "not_dropped"));
+  m.dropped = true;
+  m.drop_time_s = 1.25;
+  const ExpectationOutcome dropped = Find(EvaluateExpectations(e, m), "not_dropped");
+  EXPECT_FALSE(dropped.passed);
+  EXPECT_EQ(dropped.value_text, "dropped at 1.25 s");
+  Metrics never;
+  never.dropped = true;
+  const ExpectationOutcome missed = Find(EvaluateExpectations(e, never), "not_dropped");
+  EXPECT_FALSE(missed.passed);
+  EXPECT_EQ(missed.value_text, "never grasped");
+  // not_dropped: false asks for a drop.
+  e.not_dropped = false;
+  EXPECT_TRUE(Passes(e, m, "not_dropped"));
+  EXPECT_FALSE(Passes(e, HeldMetrics(), "not_dropped"));
+}
+
+TEST(ExpectationsTest, LimitsPassAtAndBelowAndFailAbove) {
+  Expectations e;
+  e.max_slip_mm = 1.5;
+  e.max_peak_grip_n = 6.0;
+  e.stable_within_s = 0.5;
+  e.max_false_slip_per_min = 1.0;
+  Metrics m = HeldMetrics();
+  m.false_slip_per_min = 1.0;
+  for (const char* name : {"max_slip_mm", "max_peak_grip_n", "stable_within_s", "max_false_slip_per_min"}) {
+    EXPECT_TRUE(Passes(e, m, name)) << name << " at its limit";
+  }
+  m.max_slip_mm = 1.6;
+  m.peak_grip_n = 6.1;
+  m.time_to_stable_s = 0.6;
+  m.false_slip_per_min = 2.0;
+  for (const char* name : {"max_slip_mm", "max_peak_grip_n", "stable_within_s", "max_false_slip_per_min"}) {
+    EXPECT_FALSE(Passes(e, m, name)) << name << " above its limit";
+  }
+  const ExpectationOutcome slip = Find(EvaluateExpectations(e, m), "max_slip_mm");
+  EXPECT_EQ(slip.limit, "<= 1.5 mm");
+  EXPECT_EQ(slip.value_text, "1.6 mm");
+  ASSERT_TRUE(slip.value.has_value());
+  EXPECT_DOUBLE_EQ(*slip.value, 1.6);
+  // Never stable fails and says so.
+  m.time_to_stable_s.reset();
+  const ExpectationOutcome never = Find(EvaluateExpectations(e, m), "stable_within_s");
+  EXPECT_FALSE(never.passed);
+  EXPECT_EQ(never.value_text, "never");
+}
+
+TEST(ExpectationsTest, NotCrushedFollowsTheCrushFlag) {
+  Expectations e;
+  e.not_crushed = true;
+  Metrics m = HeldMetrics();
+  EXPECT_TRUE(Passes(e, m, "not_crushed"));
+  m.crushed = true;
+  EXPECT_FALSE(Passes(e, m, "not_crushed"));
+}
+
+TEST(ExpectationsTest, SlipDetectionPassesInTimeAndFailsLateOrMissed) {
+  Expectations e;
+  e.slip_detected_within_ms = 30.0;
+  Metrics m = HeldMetrics();
+  // No slip at all: nothing to detect, passes with a note.
+  const ExpectationOutcome none = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
+  EXPECT_TRUE(none.passed);
+  EXPECT_EQ(none.value_text, "no slip");
+  m.slip_events = 2;
+  m.slip_detect_latency_ms = 30.0;
+  EXPECT_TRUE(Passes(e, m, "slip_detected_within_ms"));
+  m.slip_detect_latency_ms = 31.0;
+  EXPECT_FALSE(Passes(e, m, "slip_detected_within_ms"));
+  m.slip_detect_latency_ms = 5.0;
+  m.missed_slip_events = 1;
+  const ExpectationOutcome missed = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
+  EXPECT_FALSE(missed.passed);
+  EXPECT_EQ(missed.value_text, "1 of 2 missed");
+}
+
+TEST(ExpectationsTest, EstimationErrorTakesTheWorseOfFnAndFtAndFailsWithoutContact) {
+  Expectations e;
+  e.max_estimation_error_n = 0.3;
+  Metrics m = HeldMetrics();  // Fn 0.2, Ft 0.3
+  EXPECT_TRUE(Passes(e, m, "max_estimation_error_n"));
+  m.ft_rmse_n = 0.31;
+  EXPECT_FALSE(Passes(e, m, "max_estimation_error_n"));
+  m.ft_rmse_n = 0.1;
+  m.fn_rmse_n = 0.4;
+  EXPECT_FALSE(Passes(e, m, "max_estimation_error_n"));
+  m.fn_rmse_n.reset();
+  m.ft_rmse_n.reset();
+  const ExpectationOutcome unscored = Find(EvaluateExpectations(e, m), "max_estimation_error_n");
+  EXPECT_FALSE(unscored.passed);
+  EXPECT_EQ(unscored.value_text, "no contact");
+}
+
+TEST(ExpectationsTest, PhysicsFaultIsAlwaysCheckedAndOnlyConfiguredOnesAppear) {
+  Metrics m = HeldMetrics();
+  std::vector<ExpectationOutcome> outcomes = EvaluateExpectations(Expectations{}, m);
+  ASSERT_EQ(outcomes.size(), 1u);
+  EXPECT_EQ(outcomes[0].name, "no_physics_fault");
+  EXPECT_TRUE(outcomes[0].passed);
+  m.physics_fault = true;
+  m.physics_fault_cause = "NaN in qacc";
+  m.physics_fault_time_s = 0.75;
+  outcomes = EvaluateExpectations(Expectations{}, m);
+  EXPECT_FALSE(outcomes[0].passed);
+  EXPECT_EQ(outcomes[0].value_text, "NaN in qacc");
+  EXPECT_EQ(outcomes[0].note, "at t = 0.75 s");
+}
+
+// ---- MetricsTracker on synthetic ticks -------------------------------------------------------------------
+
+// Drives a tracker with a held object: every tick says both digits touch with 2 N; the test sets the
+// slip speed, the object offset and the controller flag per tick.
+class TrackerTest : public ::testing::Test {
+ protected:
+  TrackerTest() : tracker_(MetricsConfig{}, /*crush_limit_n=*/8.0, /*contact_threshold_n=*/0.05) {
+    truth_.finger_contacts = 1;
+    truth_.thumb_contacts = 1;
+    truth_.finger_normal_force_n = 2.0;
+    truth_.object_squeeze_n = 2.0;
+    state_.unit_count = 1;
+    loads_[0].fn_n = 1.0;
+    state_.fn_n[0] = 1.0;
+  }
+
+  // Ticks from the current time up to `until_s` (exclusive) with the given slip speed and flag.
+  void Run(double until_s, double slip_speed_m_s, bool flag = false,
+           controller::GraspIntent intent = controller::GraspIntent::kClose) {
+    while (time_s_ < until_s - kTimeTolS) {
+      truth_.time_s = time_s_;
+      truth_.slip_speed_m_s = slip_speed_m_s;
+      TickSample sample;
+      sample.time_s = time_s_;
+      sample.intent = intent;
+      sample.truth = &truth_;
+      sample.state = &state_;
+      sample.true_loads = loads_;
+      sample.controller_slip = flag;
+      tracker_.Update(sample);
+      time_s_ += kTickS;
+    }
+  }
+
+  MetricsTracker tracker_;
+  sim::GroundTruth truth_;
+  sensor::TactileState state_;
+  std::array<sensor::UnitLoad, 1> loads_{};
+  double time_s_ = 0.0;
+};
+
+TEST_F(TrackerTest, SlipEventDetectedLateGivesItsLatencyAndDistance) {
+  Run(0.5, 0.0);
+  Run(0.52, 0.01);        // slipping at 10 mm/s, not flagged for 20 ms
+  Run(0.6, 0.01, true);   // flagged from 0.52 s
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 1);
+  EXPECT_EQ(m.missed_slip_events, 0);
+  ASSERT_TRUE(m.slip_detect_latency_ms.has_value());
+  EXPECT_NEAR(*m.slip_detect_latency_ms, 20.0, 1e-6);
+  EXPECT_NEAR(m.max_slip_mm, 0.01 * 0.1 * 1e3, 0.02);  // 10 mm/s for 0.1 s
+  EXPECT_EQ(m.false_slip_flags, 0);
+  EXPECT_FALSE(m.dropped);
+  ASSERT_EQ(m.events.size(), 1u);
+  EXPECT_NEAR(m.events[0].onset_s, 0.5, kTimeTolS);
+}
+
+TEST_F(TrackerTest, EarlyFlagCountsAsZeroLatencyAndUnmatchedFlagsAreFalseAlarms) {
+  Run(0.3, 0.0);
+  Run(0.31, 0.0, true);  // a false alarm, long before any slip
+  Run(0.5, 0.0);
+  Run(0.51, 0.0, true);  // flagged 10 ms before the slip starts (incipient slip)
+  Run(0.6, 0.01, true);
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 1);
+  ASSERT_TRUE(m.slip_detect_latency_ms.has_value());
+  EXPECT_EQ(*m.slip_detect_latency_ms, 0.0);
+  EXPECT_EQ(m.controller_slip_flags, 2);
+  EXPECT_EQ(m.false_slip_flags, 1);
+  EXPECT_NEAR(m.false_slip_per_min, 1.0 / (m.held_s / 60.0), 1e-9);
+}
+
+TEST_F(TrackerTest, UnflaggedSlipIsMissedAndCreepIsNoSlip) {
+  Run(0.5, 0.0003);  // below the creep speed: no slip distance
+  Run(0.6, 0.01);    // never flagged
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 1);
+  EXPECT_EQ(m.missed_slip_events, 1);
+  EXPECT_FALSE(m.slip_detect_latency_ms.has_value());
+  EXPECT_NEAR(m.max_slip_mm, 1.0, 0.02);
+  Expectations e;
+  e.slip_detected_within_ms = 1000.0;
+  EXPECT_FALSE(Passes(e, m, "slip_detected_within_ms"));
+}
+
+TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
+  Run(0.2, 0.0);
+  truth_.object_position_m = {0.0, 0.0, -0.025};  // 25 mm below where it was grasped
+  Run(0.3, 0.0);
+  const Metrics dropped = tracker_.Finish(0.3, 0.1, 0.0);
+  EXPECT_TRUE(dropped.dropped);
+  EXPECT_NEAR(dropped.drop_time_s, 0.2, kTimeTolS);
+
+  MetricsTracker released(MetricsConfig{}, 0.0, 0.05);
+  TickSample sample;
+  sample.truth = &truth_;
+  sample.state = &state_;
+  sample.true_loads = loads_;
+  truth_.object_position_m = {0.0, 0.0, 0.0};
+  for (int i = 0; i < 300; ++i) {
+    sample.time_s = i * kTickS;
+    sample.intent = i < 200 ? controller::GraspIntent::kClose : controller::GraspIntent::kOpen;
+    if (i >= 200) truth_.object_position_m = {0.0, 0.0, -0.05};
+    released.Update(sample);
+  }
+  EXPECT_FALSE(released.Finish(0.3, 0.1, 0.0).dropped);
+}
+
+TEST_F(TrackerTest, StableWindowAndCrushAndEstimationError) {
+  // Squeeze wobbling by 50 % for 0.3 s, then steady: stable from the steady part on.
+  for (int i = 0; i < 300; ++i) {
+    truth_.object_squeeze_n = (i % 2 == 0) ? 2.0 : 3.0;
+    Run(time_s_ + kTickS, 0.0);
+  }
+  truth_.object_squeeze_n = 9.0;  // above the 8 N crush limit
+  state_.fn_n[0] = 1.5;           // the estimate reads 0.5 N high
+  state_.ft_n[0] = -0.2;
+  Run(0.8, 0.0);
+  const Metrics m = tracker_.Finish(0.8, 0.1, /*first_close_time_s=*/0.1);
+  ASSERT_TRUE(m.time_to_stable_s.has_value());
+  EXPECT_NEAR(*m.time_to_stable_s, 0.3 - 0.1, 2 * kTickS);
+  EXPECT_TRUE(m.crushed);
+  EXPECT_DOUBLE_EQ(m.peak_grip_n, 9.0);
+  ASSERT_TRUE(m.fn_rmse_n.has_value());
+  // RMSE over 300 exact ticks and 500 ticks 0.5 N off.
+  EXPECT_NEAR(*m.fn_rmse_n, std::sqrt(500 * 0.25 / 800), 1e-9);
+  EXPECT_NEAR(*m.ft_rmse_n, std::sqrt(500 * 0.04 / 800), 1e-9);
+  EXPECT_EQ(m.estimation_samples, 800);
+}
+
+// ---- expectations on real runs -----------------------------------------------------------------------------
+
+TEST(ExpectationsOnRunsTest, FragileObjectCrushedByAHardGripAndSparedByASoftOne) {
+  TempDir dir;
+  const std::string fragile = R"(duration_s: 0.3
+object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7, crush_limit_n: 6}
+hand: {open_gap_m: 0.055}
+script:
+  - {at_s: 0.04, action: close}
+expectations: {not_crushed: true, max_peak_grip_n: 6}
+controller:
+  name: open_loop
+  params:
+)";
+  const ScenarioRun hard = RunScenarioText(dir, "hard", fragile + "    close_effort: 0.5\n");
+  EXPECT_TRUE(hard.result.metrics.crushed);
+  EXPECT_GT(hard.result.metrics.peak_grip_n, 6.0);
+  EXPECT_FALSE(Find(hard.result.outcomes, "not_crushed").passed);
+  EXPECT_FALSE(Find(hard.result.outcomes, "max_peak_grip_n").passed);
+  EXPECT_FALSE(hard.result.passed);
+  const ScenarioRun soft = RunScenarioText(dir, "soft", fragile + "    close_effort: 0.15\n");
+  EXPECT_FALSE(soft.result.metrics.crushed);
+  EXPECT_TRUE(Find(soft.result.outcomes, "not_crushed").passed);
+  EXPECT_TRUE(soft.result.passed);
+}
+
+TEST(ExpectationsOnRunsTest, EstimationErrorGrowsWithSensorNoiseAsTheModelPredicts) {
+  TempDir dir;
+  // Ideal sensor: the inversion is exact, the RMSE is rounding.
+  const ScenarioRun ideal = RunScenarioText(dir, "ideal", HeldBoxScenario(0.3, "", "expectations: {max_estimation_error_n: 0.01}\n"));
+  ASSERT_TRUE(ideal.result.metrics.fn_rmse_n.has_value());
+  EXPECT_LT(*ideal.result.metrics.fn_rmse_n, 1e-9);
+  EXPECT_GT(ideal.result.metrics.estimation_samples, 100);
+  EXPECT_TRUE(ideal.result.passed);
+  // 3 Ohm of white noise per channel: Fn noise = sqrt(2) * 3 / R0 / (2 G kn) = 11 mN, Ft = 15 mN
+  // (plus a little from the tare's own noise).
+  const ScenarioRun noisy = RunScenarioText(
+      dir, "noisy",
+      HeldBoxScenario(0.3, "", "sensor: {strain_model: {noise_ohm: 3}}\nexpectations: {max_estimation_error_n: 0.01}\n"));
+  EXPECT_NEAR(*noisy.result.metrics.fn_rmse_n, 0.0113, 0.003);
+  EXPECT_NEAR(*noisy.result.metrics.ft_rmse_n, 0.0152, 0.004);
+  EXPECT_FALSE(Find(noisy.result.outcomes, "max_estimation_error_n").passed);
+  EXPECT_FALSE(noisy.result.passed);
+}
+
+TEST(ExpectationsOnRunsTest, SlipUnderASuddenPullIsCaughtByGripSlipAndMissedByAWeakOpenLoopGrip) {
+  TempDir dir;
+  // Grasped, lifted slowly (no slip), then an 8 N downward pull at once.
+  const std::string scenario = R"(duration_s: 1.0
+object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
+hand: {open_gap_m: 0.055}
+script:
+  - {at_s: 0.04, action: close}
+  - {at_s: 0.3, action: lift, height_m: 0.03, duration_s: 0.5}
+  - {at_s: 0.85, action: pull, force_n: [0, 0, -8]}
+expectations: {slip_detected_within_ms: 50, not_dropped: true}
+)";
+  const ScenarioRun seeing = RunScenarioText(dir, "seeing", scenario + "controller: {name: grip_slip}\n");
+  EXPECT_GE(seeing.result.metrics.slip_events, 1);
+  EXPECT_GE(seeing.result.metrics.controller_slip_flags, 1);
+  EXPECT_TRUE(Find(seeing.result.outcomes, "slip_detected_within_ms").passed)
+      << Find(seeing.result.outcomes, "slip_detected_within_ms").value_text;
+  EXPECT_TRUE(Find(seeing.result.outcomes, "not_dropped").passed);
+  EXPECT_TRUE(seeing.result.passed);
+  // A blind 6 N pinch (capacity about 8.4 N) loses the box and never flags the slip.
+  const ScenarioRun blind =
+      RunScenarioText(dir, "blind", scenario + "controller: {name: open_loop, params: {close_effort: 0.3}}\n");
+  EXPECT_GE(blind.result.metrics.slip_events, 1);
+  EXPECT_EQ(blind.result.metrics.missed_slip_events, blind.result.metrics.slip_events);
+  EXPECT_EQ(blind.result.metrics.controller_slip_flags, 0);
+  EXPECT_FALSE(Find(blind.result.outcomes, "slip_detected_within_ms").passed);
+  EXPECT_FALSE(Find(blind.result.outcomes, "not_dropped").passed);
+  EXPECT_GT(blind.result.metrics.drop_time_s, 0.85);
+}
+
+}  // namespace
+}  // namespace graspbed::scenario
