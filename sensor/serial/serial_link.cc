@@ -215,9 +215,13 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
     message << "serial port " << path_ << ": the device reports " << static_cast<int>(hello.unit_count)
             << " units in its HELLO but layout '" << layout_name_ << "' has " << expected_units_
             << ": refusing to run (give the matching --layout, or connect the right device)";
-    SetError(message.str());
-    refused_ = true;
-    connected_ = false;
+    {
+      // Under the lock Start() waits with, or its wait could miss this notification.
+      std::lock_guard lock(info_mutex_);
+      error_ = message.str();
+      refused_ = true;
+      connected_ = false;
+    }
     info_cv_.notify_all();
     return;
   }
@@ -228,7 +232,13 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
   if (!handshake_) {
     handshake_ = true;
     if (ever_connected_) counter_reconnects_.fetch_add(1);
-    if (!ever_connected_) counter_sessions_.fetch_add(1);
+    if (!ever_connected_) {
+      counter_sessions_.fetch_add(1);
+    } else if (rebooted) {
+      // The device restarted while it was away (a USB reset usually reboots it): its HELLO numbers
+      // began again. Frames may not tell (sequence and device time can look like a forward jump).
+      NewSession();
+    }
     ever_connected_ = true;
     refused_ = false;
     last_frame_ns_ = NowNs();  // the stale clock starts with the handshake
@@ -278,7 +288,6 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   last_frame_ns_.store(NowNs(), std::memory_order_release);
   counter_frames_.fetch_add(1);
   stale_ = false;
-  first_frame_seen_ = true;
   { std::lock_guard lock(wait_mutex_); }
   frame_cv_.notify_all();
   if (!tap_.empty()) {
@@ -311,7 +320,8 @@ void SerialLink::OnLost() {
 }
 
 void SerialLink::CheckStale() {
-  if (!first_frame_seen_ || stale_) return;
+  // From the first handshake on: a device that says HELLO but never streams is stale too.
+  if (!ever_connected_ || stale_) return;
   if (SecondsSinceLastFrame() > config_.stale_timeout_s) {
     stale_ = true;
     counter_stale_.fetch_add(1);

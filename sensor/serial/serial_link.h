@@ -132,7 +132,6 @@ class SerialLink {
   bool have_last_hello_ = false;
   uint16_t last_hello_seq_ = 0;
   bool stale_ = false;
-  bool first_frame_seen_ = false;
   uint16_t motor_seq_ = 0;
   uint16_t stream_seq_ = 0;
   uint64_t extra_corrupt_ = 0;  // frames refused for a wrong unit count

@@ -56,13 +56,15 @@ bool StreamDecoder::Complete(DecodedPacket* packet) {
     Fail(PacketError::kCrc);
     return false;
   }
+  // A good CRC means we are in step with the sender: from here on every refusal is counted, also
+  // an unknown type or version that comes first after Reset().
+  synced_ = true;
   const PacketError error = ParseBody(body, packet);
   if (error != PacketError::kNone) {
     Fail(error);
     return false;
   }
   ++stats_.packets;
-  synced_ = true;
   return true;
 }
 

@@ -43,7 +43,7 @@ class StreamDecoder {
   /// goes to `*packet`), or all of it. Never looks past that delimiter, never allocates.
   FeedResult Feed(std::span<const uint8_t> input, DecodedPacket* packet);
 
-  /// Forgets any partial packet (after opening a port). Until the next valid packet, refused bytes
+  /// Forgets any partial packet (after opening a port). Until a packet passes its CRC, refused bytes
   /// are start-up junk (the tail of a packet sent before we listened) and are dropped uncounted.
   void Reset();
 
@@ -62,7 +62,7 @@ class StreamDecoder {
   int block_remaining_ = 0;  // data bytes still due in the current COBS block
   uint8_t block_code_ = 0;   // code byte of the current block (0: none yet in this packet)
   bool discarding_ = false;  // skipping to the next delimiter after an error
-  bool synced_ = true;       // false after Reset() until a valid packet: errors are not counted
+  bool synced_ = true;       // false after Reset() until a packet passes its CRC: errors are not counted
   DecoderStats stats_;
   PacketError last_error_ = PacketError::kNone;
 };

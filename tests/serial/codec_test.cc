@@ -314,6 +314,25 @@ TEST_F(DecoderResync, UnknownTypeCountedUnknownVersionRejectedBadLengthCorrupt) 
   EXPECT_EQ(decoder_.stats().unknown(), 2u);
 }
 
+// After Reset() (a port just opened) the tail of a packet sent before we listened is junk, not a
+// fault; but a packet with a good CRC proves the stream is in step, so what follows it counts, even
+// when that first packet is of a type or version this host does not speak.
+TEST_F(DecoderResync, AfterResetJunkIsUncountedButTheFirstGoodCrcSyncs) {
+  decoder_.Reset();
+  std::vector<uint8_t> bytes = Frames(1, 1);
+  bytes.erase(bytes.begin(), bytes.begin() + 30);                  // tail of a frame: junk
+  auto add = [&](const std::vector<uint8_t>& more) { bytes.insert(bytes.end(), more.begin(), more.end()); };
+  add(RawPacket({0x33, 0x01, 0x00, 0x00, 0xAA}));                  // unknown type, good CRC
+  auto broken = Frames(2, 1);
+  uint8_t& hit = broken[broken.size() / 2];
+  hit = static_cast<uint8_t>(hit == 0x40 ? 0x41 : hit ^ 0x40);    // a real error after sync (no 0x00)
+  add(broken);
+  add(Frames(3, 1));
+  EXPECT_EQ(DecodeFrames(decoder_, bytes), (std::vector<uint16_t>{3}));
+  EXPECT_EQ(decoder_.stats().unknown_type, 1u);
+  EXPECT_EQ(decoder_.stats().corrupt(), 1u);
+}
+
 TEST_F(DecoderResync, NeverConsumesPastAPacketsEnd) {
   const auto bytes = Frames(0, 3);
   const size_t first = Wire(MakeFrame(0, 20)).size();

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -14,8 +16,10 @@
 #include <string>
 #include <thread>
 
+#include "sensor/readout.h"
 #include "sensor/serial/device_emulator.h"
 #include "sensor/serial/hardware_backend.h"
+#include "sensor/serial/stream_decoder.h"
 #include "tests/serial/serial_test_util.h"
 
 namespace graspbed::serial {
@@ -25,6 +29,96 @@ using testing::WaitFor;
 
 constexpr int kUnits = 20;
 constexpr double kResistanceTolOhm = 1e-3;  // wire resolution is 1 mOhm
+
+// A device written packet by packet, for cases the DeviceEmulator cannot stage (any sequence number
+// or device time). A pty whose slave is exposed at `link`, like the emulator's.
+class ScriptedDevice {
+ public:
+  explicit ScriptedDevice(std::string link) : link_(std::move(link)) {}
+  ~ScriptedDevice() { Vanish(); }
+  ScriptedDevice(const ScriptedDevice&) = delete;
+  ScriptedDevice& operator=(const ScriptedDevice&) = delete;
+
+  /// A new pty behind the link (the device is plugged in).
+  void Appear() {
+    int slave = -1;
+    char name[256] = {};
+    ASSERT_EQ(openpty(&master_, &slave, name, nullptr, nullptr), 0);
+    termios raw{};
+    tcgetattr(slave, &raw);
+    cfmakeraw(&raw);
+    tcsetattr(slave, TCSANOW, &raw);
+    ::close(slave);
+    fcntl(master_, F_SETFL, fcntl(master_, F_GETFL) | O_NONBLOCK);
+    ::unlink(link_.c_str());
+    ASSERT_EQ(symlink(name, link_.c_str()), 0);
+  }
+  /// The pty closes and the link goes (unplugged).
+  void Vanish() {
+    if (master_ < 0) return;
+    ::close(master_);
+    master_ = -1;
+    ::unlink(link_.c_str());
+  }
+  /// Sends HELLOs numbered from `hello_seq` (a device repeats them; the host may flush the first
+  /// while opening the port) until the host answers with STREAM_CONTROL start.
+  bool Handshake(uint16_t hello_seq, int units) {
+    return testing::WaitFor(
+        [&] {
+          HelloPacket hello{.sequence = hello_seq++, .firmware_version = 1,
+                            .unit_count = static_cast<uint8_t>(units), .nominal_rate_hz = 1000,
+                            .nominal_r0_milliohm = 3'400'000};
+          Send(hello);
+          return testing::WaitFor([&] { return ReadStreamStart(); }, 0.05);
+        },
+        testing::kWaitTimeoutS);
+  }
+  void Send(const auto& packet) {
+    std::array<uint8_t, kMaxWirePacketSize> out;
+    const size_t size = EncodePacket(packet, out);
+    ASSERT_GT(size, 0u);
+    size_t written = 0;
+    while (written < size) {
+      const ssize_t n = ::write(master_, out.data() + written, size - written);
+      if (n > 0) {
+        written += static_cast<size_t>(n);
+      } else {
+        pollfd fd{master_, POLLOUT, 0};
+        ::poll(&fd, 1, 10);
+      }
+    }
+  }
+  void SendFrames(uint16_t first_seq, uint32_t first_time_us, int count, int units) {
+    TactileFramePacket frame;
+    frame.unit_count = static_cast<uint8_t>(units);
+    for (int k = 0; k < units; ++k) frame.r1_milliohm[k] = frame.r2_milliohm[k] = 3'400'000;
+    for (int i = 0; i < count; ++i) {
+      frame.sequence = static_cast<uint16_t>(first_seq + i);
+      frame.device_time_us = first_time_us + 1000u * static_cast<uint32_t>(i);
+      Send(frame);
+    }
+  }
+
+ private:
+  bool ReadStreamStart() {
+    std::array<uint8_t, 256> in;
+    const ssize_t n = ::read(master_, in.data(), in.size());
+    if (n <= 0) return false;
+    std::span<const uint8_t> rest(in.data(), static_cast<size_t>(n));
+    bool started = false;
+    while (!rest.empty()) {
+      const FeedResult fed = decoder_.Feed(rest, &packet_);
+      rest = rest.subspan(fed.consumed);
+      if (fed.packet && packet_.type == PacketType::kStreamControl && packet_.stream.start) started = true;
+    }
+    return started;
+  }
+
+  std::string link_;
+  int master_ = -1;
+  StreamDecoder decoder_;
+  DecodedPacket packet_;
+};
 
 class HardwareTest : public ::testing::Test {
  protected:
@@ -289,6 +383,76 @@ TEST_F(HardwareTest, RebootStartsANewSession) {
   sensor::RawFrame frame;
   ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
   EXPECT_LT(frame.time_s, 5.0);  // device time restarted
+}
+
+// A device that reboots while unplugged (a USB reset usually reboots it) and comes back: its HELLO
+// numbers start again, which is a new session even when its frames seem to go on, as they do after a
+// long uptime (sequence wrapped, device time past 2^31 us, so neither steps back).
+TEST(HardwareRebootWhileAway, HelloNumbersStartingAgainIsANewSession) {
+  HardwareConfig config;
+  config.port = testing::UniqueLinkPath("scripted");
+  config.reconnect_backoff_s = 0.01;
+  config.reconnect_backoff_max_s = 0.05;
+  ScriptedDevice device(config.port);
+  device.Appear();
+  HardwareBackend backend(config, kUnits, "test_20");
+  std::thread starter([&] { backend.Start(); });
+  ASSERT_TRUE(device.Handshake(/*hello_seq=*/40, kUnits));
+  starter.join();
+  constexpr uint32_t kLongUptimeUs = 3'000'000'000u;  // 50 min
+  device.SendFrames(/*first_seq=*/65530, kLongUptimeUs, /*count=*/10, kUnits);
+  ASSERT_TRUE(testing::WaitFor([&] { return backend.counters().frames == 10; }));
+  EXPECT_EQ(backend.session(), 1u);
+
+  device.Vanish();
+  ASSERT_TRUE(testing::WaitFor([&] { return !backend.link()->connected(); }));
+  device.Appear();
+  ASSERT_TRUE(device.Handshake(/*hello_seq=*/0, kUnits));
+  ASSERT_TRUE(testing::WaitFor([&] { return backend.link()->connected(); }));
+  // Frames that look like a continuation of the old stream: only the HELLO tells.
+  device.SendFrames(/*first_seq=*/4, kLongUptimeUs + 10'000, /*count=*/10, kUnits);  // 65540 wrapped
+  ASSERT_TRUE(testing::WaitFor([&] { return backend.counters().frames == 20; }));
+  const auto counters = backend.counters();
+  EXPECT_EQ(counters.reconnects, 1u);
+  EXPECT_EQ(counters.sessions, 2u);
+  EXPECT_EQ(backend.session(), 2u);
+  EXPECT_EQ(counters.dropped, 0u);
+  EXPECT_EQ(counters.corrupt, 0u);
+}
+
+// Open, shorted and implausible channels arrive as such over the wire, and the shared readout marks
+// exactly those units invalid (the hardware path never makes a force of them).
+TEST_F(HardwareTest, OpenShortAndImplausibleChannelsMakeTheirUnitsInvalid) {
+  EmulatorConfig config;
+  config.link_path = testing::UniqueLinkPath("faulty");
+  emulator_ = std::make_unique<DeviceEmulator>(config, [](double t, bool, sensor::RawFrame* frame) {
+    testing::TestFrameSource(t, true, frame);
+    frame->r1_ohm[0] = sensor::kOpenCircuitOhm;  // broken wire
+    frame->r2_ohm[1] = 0.0;                      // shorted gauge
+    frame->r1_ohm[2] = 50'000.0;                 // 15 x R0: no gauge reads that
+  });
+  emulator_->Start();
+  hw_config_.port = config.link_path;
+  StartHost();
+  sensor::ReadoutConfig readout_config;
+  readout_config.baseline_frames = 5;
+  sensor::Readout readout(readout_config, kUnits, backend_->nominal_r0_ohm());
+  sensor::RawFrame frame;
+  sensor::ReadoutFrame out;
+  int processed = 0;
+  ASSERT_TRUE(WaitFor([&] {
+    if (backend_->Read(&frame) == sensor::ReadStatus::kOk) {
+      readout.Process(frame, &out);
+      ++processed;
+    }
+    return processed > readout_config.baseline_frames + 2;
+  }));
+  EXPECT_TRUE(std::isinf(frame.r1_ohm[0]));
+  EXPECT_EQ(frame.r2_ohm[1], 0.0);
+  EXPECT_EQ(out.validity[0], sensor::UnitValidity::kOpen);
+  EXPECT_EQ(out.validity[1], sensor::UnitValidity::kShort);
+  EXPECT_EQ(out.validity[2], sensor::UnitValidity::kImplausible);
+  for (int k = 3; k < kUnits; ++k) EXPECT_EQ(out.validity[k], sensor::UnitValidity::kValid) << k;
 }
 
 TEST_F(HardwareTest, FramesWithTheWrongUnitCountAreRefused) {
