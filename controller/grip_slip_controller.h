@@ -54,7 +54,7 @@ struct GripSlipConfig {
   double ki_effort_per_n_s = 1.5;     ///< integral gain [1/(N s)]
   double integrator_limit = 0.5;      ///< bound of the integral term [-]
   double max_effort = 1.0;            ///< largest closing effort ever commanded [-]
-  double ceiling_effort_margin = 1.1;  ///< effort cap = this x effort_per_newton x grip ceiling
+  double ceiling_effort_margin = 1.0;  ///< effort cap = this x effort_per_newton x grip ceiling
   double grip_filter_s = 0.002;       ///< low-pass time constant of the measured grip [s]
 
   // Slip response.
