@@ -602,8 +602,10 @@ std::string SummaryTable(const RunResult& result) {
                 m.slip_events, m.missed_slip_events, optional_text(m.slip_detect_latency_ms, "%.1f ms").c_str(),
                 m.false_slip_per_min, optional_text(m.time_to_stable_s, "%.3f s").c_str());
   out << line;
+  // %g, not %f: an ideal sensor inverts exactly (RMSE ~1e-15 N), and 0.000 would hide whether the
+  // error is rounding or a few tenths of a millinewton.
   std::snprintf(line, sizeof(line), "  Fn RMSE %s, Ft RMSE %s; %.2f s simulated in %.2f s (%.1fx real time)\n",
-                optional_text(m.fn_rmse_n, "%.3f N").c_str(), optional_text(m.ft_rmse_n, "%.3f N").c_str(),
+                optional_text(m.fn_rmse_n, "%.3g N").c_str(), optional_text(m.ft_rmse_n, "%.3g N").c_str(),
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;
   for (const ExpectationOutcome& o : result.outcomes) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/scenario/runner.h"
 #include "tests/scenario/scenario_test_util.h"
 
 namespace graspbed::scenario {
@@ -160,6 +161,19 @@ TEST(ExpectationsTest, PhysicsFaultIsAlwaysCheckedAndOnlyConfiguredOnesAppear) {
   EXPECT_FALSE(outcomes[0].passed);
   EXPECT_EQ(outcomes[0].value_text, "NaN in qacc");
   EXPECT_EQ(outcomes[0].note, "at t = 0.75 s");
+}
+
+TEST(SummaryTableTest, EstimationErrorKeepsItsSignificantDigits) {
+  RunResult result;
+  result.completed = true;
+  result.metrics = HeldMetrics();
+  result.metrics.fn_rmse_n = 9.7e-16;  // an ideal sensor: the inversion is exact up to rounding
+  result.metrics.ft_rmse_n = 0.000123;
+  const std::string table = SummaryTable(result);
+  EXPECT_NE(table.find("Fn RMSE 9.7e-16 N, Ft RMSE 0.000123 N"), std::string::npos) << table;
+  result.metrics.fn_rmse_n.reset();
+  result.metrics.ft_rmse_n.reset();
+  EXPECT_NE(SummaryTable(result).find("Fn RMSE none, Ft RMSE none"), std::string::npos);
 }
 
 // ---- MetricsTracker on synthetic ticks -------------------------------------------------------------------
