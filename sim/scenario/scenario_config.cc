@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -194,7 +195,16 @@ MetricsConfig LoadMetricsConfig(const YamlMap& map) {
   MetricsConfig m;
   m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, NumberRule::Positive());
   m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, NumberRule::Positive());
-  if (m.slip_speed_m_s < m.creep_speed_m_s) map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s");
+  if (m.slip_speed_m_s < m.creep_speed_m_s) {
+    // Name the key the file actually set: an absent one would print as "= null".
+    char limit[64];
+    if (map.Has("slip_speed_m_s")) {
+      std::snprintf(limit, sizeof(limit), "%g", m.creep_speed_m_s);
+      map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s (" + std::string(limit) + ")");
+    }
+    std::snprintf(limit, sizeof(limit), "%g", m.slip_speed_m_s);
+    map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + std::string(limit) + ")");
+  }
   m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, NumberRule::NonNegative());
   m.early_detection_window_s =
       map.GetNumber("early_detection_window_s", m.early_detection_window_s, NumberRule::NonNegative());

@@ -248,3 +248,66 @@ metrics: {slip_speed_m_s: 0.003}
 
 }  // namespace
 }  // namespace graspbed::scenario
+
+namespace graspbed::scenario {
+namespace {
+
+TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
+  const struct {
+    const char* text;
+    const char* message;
+  } cases[] = {
+      {"duration_s: 1\nobject: [1, 2\n", "test.yaml:3: YAML syntax error"},
+      {"- 1\n- 2\n", "test.yaml:1: expected a mapping of keys at the top level"},
+      {"script:\n  - {at_s: soon, action: close}\n", "test.yaml:2: script[0].at_s = soon: expected a number"},
+      {"script:\n  - {at_s: -0.1, action: close}\n", "test.yaml:2: script[0].at_s = -0.1: must be >= 0"},
+      {"script:\n  - {action: close}\n", "test.yaml:2: script[0].at_s = null: missing required key"},
+      {"script: close\n", "test.yaml:1: script"},
+      {"script:\n  - {at_s: 0.1, action: lift, height_m: 0.1, profile: smooth}\n",
+       "test.yaml:2: script[0].profile = smooth: unknown name; valid names: minimum_jerk, linear"},
+      {"script:\n  - {at_s: 0.1, action: lift, height_m: 2}\n", "test.yaml:2: script[0].height_m = 2: must be <= 1"},
+      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, axis: [0, 0, 0]}\n",
+       "test.yaml:2: script[0].axis = [...]: must not be the zero vector"},
+      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 0, amplitude_m: 0.01, duration_s: 1}\n",
+       "test.yaml:2: script[0].frequency_hz = 0: must be > 0"},
+      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0}\n", "test.yaml:2: script[0].mass_kg = 0: must not be 0"},
+      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0.1, ramp_s: -1}\n",
+       "test.yaml:2: script[0].ramp_s = -1: must be >= 0"},
+      {"script:\n  - {at_s: 0.1, action: pull, force_n: [0, 0, 2000]}\n",
+       "test.yaml:2: script[0].force_n = [...]: each component must be within +-1000 N"},
+      {"script:\n  - {at_s: 0.1, action: set_friction, friction: 0}\n",
+       "test.yaml:2: script[0].friction = 0: must be > 0"},
+      {"script:\n  - {at_s: 0.1, action: bias, unit: 2, r1_ohm: 1e6}\n",
+       "test.yaml:2: script[0].r1_ohm = 1e6: must be <= 100000"},
+      {"script:\n  - {at_s: 0.1, action: drop_frames, duration_s: 0.1, probability: 1.5}\n",
+       "test.yaml:2: script[0].probability = 1.5: must be <= 1"},
+      {"script:\n  - {at_s: 0.1, action: add_latency, latency_s: 2}\n",
+       "test.yaml:2: script[0].latency_s = 2: must be <= 1"},
+      {"script:\n  - {at_s: 0.1, action: dead_unit, unit: 1.5}\n", "test.yaml:2: script[0].unit = 1.5: expected a whole number"},
+      {"sensor: {layout: paper_3x3}\nscript:\n  - {at_s: 0.1, action: dead_unit, unit: 9}\n",
+       "test.yaml:3: script[0].unit = 9: must be <= 8"},
+      {"sensor:\n  sample_rate_hz: 0\n", "test.yaml:2: sensor.sample_rate_hz = 0: must be >= 1"},
+      {"sensor:\n  sample_rate_hz: 10\n", "stale_timeout_s = 0.02: must be >= one sensor period"},
+      {"metrics:\n  creep_speed_m_s: 0.01\n",
+       "test.yaml:2: metrics.creep_speed_m_s = 0.01: must be <= slip_speed_m_s (default 0.002)"},
+      {"metrics:\n  creep_speed_m_s: 0.01\n  slip_speed_m_s: 0.005\n",
+       "test.yaml:3: metrics.slip_speed_m_s = 0.005: must be >= creep_speed_m_s (0.01)"},
+      {"expectations:\n  max_slip_mm: -1\n", "test.yaml:2: expectations.max_slip_mm = -1: must be >= 0"},
+      {"expectations:\n  max_peak_grip_n: 0\n", "test.yaml:2: expectations.max_peak_grip_n = 0: must be > 0"},
+      {"seed: -3\n", "test.yaml:1: seed = -3: must be >= 0"},
+      {"duration_s: 4000\n", "test.yaml:1: duration_s = 4000: must be <= 3600"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.text);
+    std::string error;
+    try {
+      LoadScenarioFromString(c.text, "test.yaml");
+    } catch (const std::invalid_argument& e) {
+      error = e.what();
+    }
+    EXPECT_NE(error.find(c.message), std::string::npos) << error;
+  }
+}
+
+}  // namespace
+}  // namespace graspbed::scenario
