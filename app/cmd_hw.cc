@@ -31,6 +31,8 @@
 #include "sensor/readout.h"
 #include "sensor/serial/device_emulator.h"
 #include "sensor/serial/hardware_backend.h"
+#include "sim/scenario/metrics.h"
+#include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/script_player.h"
 #include "sim/sim_rig.h"
@@ -117,7 +119,8 @@ class FrameLogger {
     if (!out_) throw std::invalid_argument("--log " + path_ + ": cannot write this file");
     out_ << "seq,device_time_s";
     for (int k = 0; k < unit_count_; ++k) {
-      out_ << ",r1_" << k << "_ohm,r2_" << k << "_ohm,fn_" << k << "_n,ft_" << k << "_n,valid_" << k;
+      // Column names as the issue gives them; units: r [Ohm], fn/ft [N], valid 0/1 (docs/hardware.md).
+      out_ << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
     }
     out_ << '\n';
     thread_ = std::thread([this] { Run(); });
@@ -261,8 +264,10 @@ void RunHw(const HwOptions& options) {
     if (!loop.state().stale) peak_total_fn_n = std::max(peak_total_fn_n, loop.state().total_fn_n);
   }
   const double run_s = SecondsSince(start);
-  actuator.Stop();
+  // PROTOCOL.md's clean shutdown order: stream stop, motor off (both sent by the link's shutdown when
+  // the motor shares the port; a separate motor port is switched off just after), restore, close.
   backend.Stop();
+  actuator.Stop();
   if (logger) logger->Finish();
 
   const sensor::BackendCounters counters = backend.counters();
@@ -321,16 +326,23 @@ struct EmulateOptions {
 /// The simulated hand behind the emulator's callbacks. The scenario's script moves the wrist and the
 /// object; grasp intent belongs to the host's controller, so close/open actions are not played
 /// (ScriptPlayer gives them to a controller nobody ticks). Simulated time starts with the first
-/// STREAM_CONTROL start and advances one sensor period per emulator tick.
+/// STREAM_CONTROL start and advances one sensor period per emulator tick. The outcome is scored as
+/// `graspbed run` scores it (MetricsTracker on the ground truth, once per frame) while the host is in
+/// control, and frozen when the host first stops streaming (stream stop or closing the port).
 class SimulatedDevice {
  public:
   SimulatedDevice(const scenario::ScenarioConfig& config, const sensor::Layout& layout)
-      : rig_(layout, sensor::PaperCalibration(layout.unit_count()), RigConfig(config),
+      : config_(config),
+        rig_(layout, sensor::PaperCalibration(layout.unit_count()), RigConfig(config),
              controller::MakeController("open_loop", {})),
         player_(config),
-        period_s_(1.0 / config.sensor.sample_rate_hz) {
+        tracker_(config.metrics, config.scene.object.crush_limit_n, config.sensor.inversion.contact_threshold_n),
+        period_s_(1.0 / config.sensor.sample_rate_hz),
+        wall_start_(Clock::now()) {
     player_.Start(rig_);
     initial_object_z_m_ = rig_.simulation().truth().object_position_m[2];
+    // The tracker sees no estimates (the host has them): a stale state keeps it to ground truth.
+    no_estimate_.stale = true;
   }
 
   static sim::SimRigConfig RigConfig(const scenario::ScenarioConfig& config) {
@@ -349,6 +361,7 @@ class SimulatedDevice {
   /// Emulator thread: advances the simulation by one sensor period once streaming has begun.
   void Frame(bool streaming, sensor::RawFrame* frame) {
     if (streaming) started_ = true;
+    if (started_ && !streaming) host_done_ = true;
     if (started_) {
       target_s_ += period_s_;
       sim::Simulation& simulation = rig_.simulation();
@@ -360,8 +373,19 @@ class SimulatedDevice {
       const sim::GroundTruth truth = simulation.truth();
       std::lock_guard lock(mutex_);
       sim_time_s_ = simulation.time_s();
-      peak_squeeze_n_ = std::max(peak_squeeze_n_, truth.object_squeeze_n);
-      last_truth_ = truth;
+      if (!host_done_) {
+        scenario::TickSample sample;
+        sample.time_s = sim_time_s_;
+        sample.intent = player_.intent();
+        sample.truth = &truth;
+        sample.state = &no_estimate_;
+        tracker_.Update(sample);
+        outcome_time_s_ = sim_time_s_;
+        outcome_wall_s_ = SecondsSince(wall_start_);
+        peak_squeeze_n_ = std::max(peak_squeeze_n_, truth.object_squeeze_n);
+        last_truth_ = truth;
+        physics_fault_ = rig_.simulation().fault();
+      }
     }
     sensor::RawFrame fresh;
     while (rig_.backend().Read(&fresh) == sensor::ReadStatus::kOk) latest_ = fresh;
@@ -380,36 +404,62 @@ class SimulatedDevice {
     rig_.actuator().Write({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
   }
 
+  /// Ground truth and the metrics of `graspbed run` (same keys) as the host left the hand.
   nlohmann::json Summary() const {
     std::lock_guard lock(mutex_);
+    scenario::RunResult result;
+    result.config = config_;
+    result.metrics = tracker_.Finish(outcome_time_s_, outcome_wall_s_, player_.first_close_time_s());
+    result.metrics.physics_fault = physics_fault_.occurred;
+    result.metrics.physics_fault_cause = physics_fault_.occurred ? physics_fault_.cause_text() : "";
+    result.metrics.physics_fault_time_s = physics_fault_.time_s;
+    nlohmann::json metrics = scenario::SummaryJson(result)["metrics"];
+    // The host's controller, not the emulator, sees slip flags and estimates: leave out what it
+    // cannot score.
+    for (const char* key : {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n",
+                            "missed_slip_events", "controller_slip_flags", "false_slip_flags",
+                            "estimation_samples"}) {
+      metrics.erase(key);
+    }
     return {
-        {"sim_time_s", sim_time_s_},
+        {"sim_time_s", outcome_time_s_},
         {"object_lift_m", last_truth_.object_position_m[2] - initial_object_z_m_},
         {"object_height_above_table_m", last_truth_.object_height_above_table_m},
         {"peak_squeeze_n", peak_squeeze_n_},
         {"final_squeeze_n", last_truth_.object_squeeze_n},
         {"finger_contacts", last_truth_.finger_contacts},
         {"thumb_contacts", last_truth_.thumb_contacts},
+        {"metrics", metrics},
     };
   }
   bool started() const { return started_.load(); }
+  /// True once a host that streamed has stopped (the outcome is frozen).
+  bool host_done() const { return host_done_.load(); }
   double sim_time_s() const {
     std::lock_guard lock(mutex_);
     return sim_time_s_;
   }
 
  private:
+  scenario::ScenarioConfig config_;
   sim::SimRig rig_;
   scenario::ScriptPlayer player_;
+  scenario::MetricsTracker tracker_;
+  sensor::TactileState no_estimate_;
   double period_s_;
+  Clock::time_point wall_start_;
   double target_s_ = 0.0;
   std::atomic<bool> started_{false};
+  std::atomic<bool> host_done_{false};
   sensor::RawFrame latest_;
   double initial_object_z_m_ = 0.0;
-  mutable std::mutex mutex_;  // guards the summary values read by the main thread
+  mutable std::mutex mutex_;  // guards the values below, read by the main thread
   double sim_time_s_ = 0.0;
+  double outcome_time_s_ = 0.0;
+  double outcome_wall_s_ = 0.0;
   double peak_squeeze_n_ = 0.0;
   sim::GroundTruth last_truth_;
+  sim::PhysicsFault physics_fault_;
 };
 
 void RunEmulate(const EmulateOptions& options) {
@@ -437,10 +487,19 @@ void RunEmulate(const EmulateOptions& options) {
   std::cerr << "emulate: device '" << config.name << "' (" << layout.unit_count() << " units) at "
             << options.link << " -> " << emulator.slave_path() << "; waiting for a host\n";
   // Ends after `duration` simulated seconds from the first stream start (default: the scenario's),
-  // or on SIGINT/SIGTERM.
+  // when the host stops streaming (with a scenario: one host run is one trial), or on SIGINT/SIGTERM.
   const double duration_s = options.duration_s >= 0.0 ? options.duration_s : config.duration_s;
+  const bool one_trial = !options.scenario.empty();
+  std::string ended_by = "signal";
   while (!g_stop.load()) {
-    if (duration_s > 0.0 && device.started() && device.sim_time_s() >= duration_s) break;
+    if (duration_s > 0.0 && device.started() && device.sim_time_s() >= duration_s) {
+      ended_by = "duration";
+      break;
+    }
+    if (one_trial && device.host_done()) {
+      ended_by = "host_stopped";
+      break;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   const serial::EmulatorStats stats = emulator.stats();
@@ -449,22 +508,29 @@ void RunEmulate(const EmulateOptions& options) {
   nlohmann::json summary = device.Summary();
   summary["scenario"] = config.name;
   summary["link"] = options.link;
+  summary["ended_by"] = ended_by;
   summary["frames_sent"] = stats.frames_sent;
+  summary["frames_overflowed"] = stats.frames_overflowed;
   summary["hellos_sent"] = stats.hellos_sent;
   summary["motor_commands"] = stats.motor_commands;
+  summary["max_command_interval_s"] = stats.max_command_interval_s;
   summary["watchdog_trips"] = stats.watchdog_trips;
   summary["stream_starts"] = stats.stream_starts;
   summary["connects"] = stats.connects;
   summary["commands_before_hello"] = stats.commands_before_hello;
+  summary["host_corrupt"] = stats.host_corrupt;
   if (options.json) {
     std::cout << summary.dump(2) << '\n';
     return;
   }
-  std::cout << "emulate " << options.link << ": " << summary["sim_time_s"].get<double>() << " s simulated, "
-            << stats.frames_sent << " frames sent, " << stats.motor_commands << " motor commands, "
-            << stats.watchdog_trips << " watchdog trips; object lifted "
-            << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak squeeze "
-            << summary["peak_squeeze_n"].get<double>() << " N\n";
+  const nlohmann::json& metrics = summary["metrics"];
+  std::cout << "emulate " << options.link << " (" << ended_by << "): " << summary["sim_time_s"].get<double>()
+            << " s simulated, " << stats.frames_sent << " frames sent, " << stats.motor_commands
+            << " motor commands, " << stats.watchdog_trips << " watchdog trips; object "
+            << (metrics["dropped"].get<bool>() ? "DROPPED" : "held") << ", lifted "
+            << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak grip "
+            << metrics["peak_grip_n"].get<double>() << " N, slip " << metrics["max_slip_mm"].get<double>()
+            << " mm\n";
 }
 
 void AddHwCommands(CLI::App& root) {
@@ -497,7 +563,8 @@ void AddHwCommands(CLI::App& root) {
                       "Simulated seconds after the host starts streaming (default: the scenario's; "
                       "without a scenario, until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
-  emulate->add_flag("--json", emulate_options->json, "Print a JSON summary (ground truth) at the end");
+  emulate->add_flag("--json", emulate_options->json,
+                    "Print a JSON summary at the end: ground truth and run metrics as the host left the hand");
   emulate->callback([emulate_options] { RunEmulate(*emulate_options); });
 }
 
