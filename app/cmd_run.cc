@@ -228,7 +228,7 @@ void AddSweepCommand(CLI::App& root) {
       "sweep", "Run a grid or seeded random sample over scenario parameters: one row per run in "
                "DIR/results.csv and results.jsonl; --shard K/N runs every N-th run for cluster arrays");
   command->add_option("spec", options->spec, "sweep spec YAML (see docs/scenarios.md, Sweeps)")->required();
-  command->add_option("--shard", options->shard, "run shard K of N (1-based), e.g. --shard $SLURM_ARRAY_TASK_ID/8");
+  command->add_option("--shard", options->shard, "run shard K of N (1-based: runs with index % N == K - 1), e.g. with sbatch --array=0-7: --shard $((SLURM_ARRAY_TASK_ID+1))/8");
   command->add_option("--out", options->out_dir, "output directory (default out/sweep)");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
   command->callback([options] { SweepCommand(*options); });
