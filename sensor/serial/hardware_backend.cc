@@ -16,7 +16,7 @@ void HardwareBackend::Start() { link_->Start(); }
 void HardwareBackend::Stop() { link_->Stop(); }
 
 sensor::ReadStatus HardwareBackend::Read(sensor::RawFrame* frame) {
-  if (link_->TryTakeFrame(frame, &last_id_)) return sensor::ReadStatus::kOk;
+  if (link_->TryTakeFrame(frame, &last_id_, &frame_session_)) return sensor::ReadStatus::kOk;
   if (!link_->connected()) return sensor::ReadStatus::kDisconnected;
   const double since_s = link_->SecondsSinceLastFrame();
   if (since_s > link_->config().disconnect_timeout_s) return sensor::ReadStatus::kDisconnected;

@@ -31,7 +31,9 @@ class HardwareBackend : public sensor::TactileBackend {
   int unit_count() const override { return unit_count_; }
   /// From the device's HELLO (3400 Ohm until one arrived or when it reports 0).
   double nominal_r0_ohm() const override;
-  uint64_t session() const override { return link_->session(); }
+  /// The device session of the newest frame Read() returned (the link's current one before any):
+  /// a frame still in the slot from before a reboot does not count as the new session's.
+  uint64_t session() const override { return frame_session_ != 0 ? frame_session_ : link_->session(); }
   sensor::BackendCounters counters() const override { return link_->counters(); }
   std::string name() const override { return "serial"; }
 
@@ -42,6 +44,7 @@ class HardwareBackend : public sensor::TactileBackend {
   std::shared_ptr<SerialLink> link_;
   int unit_count_;
   uint64_t last_id_ = 0;
+  uint64_t frame_session_ = 0;
 };
 
 class HardwareActuator : public controller::HandActuator {

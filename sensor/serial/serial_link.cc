@@ -125,12 +125,13 @@ double SerialLink::SecondsSinceLastFrame() const {
   return static_cast<double>(NowNs() - last_frame_ns_.load(std::memory_order_acquire)) * 1e-9;
 }
 
-bool SerialLink::TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id) {
+bool SerialLink::TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id, uint64_t* session) {
   if (published_.load(std::memory_order_acquire) == *last_id) return false;
   std::unique_lock lock(frame_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return false;
   *frame = slot_;
   *last_id = slot_id_;
+  if (session != nullptr) *session = slot_session_;
   return true;
 }
 
@@ -282,6 +283,7 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   {
     std::lock_guard lock(frame_mutex_);
     slot_ = scratch_;
+    slot_session_ = session;
     slot_id_ = published_.load() + 1;
     published_.store(slot_id_, std::memory_order_release);
   }

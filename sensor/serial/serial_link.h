@@ -53,9 +53,10 @@ class SerialLink {
   /// Stream stop, motor off, drain, restore the port settings, close, join. Safe to call twice.
   void Stop();
 
-  /// Copies the newest frame when it is newer than `*last_id` (updating it). Never blocks: when the
-  /// I/O thread is publishing right now, returns false and the frame is taken at the next call.
-  bool TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id);
+  /// Copies the newest frame when it is newer than `*last_id` (updating it), and the device session
+  /// it belongs to into `*session` when given. Never blocks: when the I/O thread is publishing right
+  /// now, returns false and the frame is taken at the next call.
+  bool TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id, uint64_t* session = nullptr);
   /// Blocks up to `timeout_s` until a frame newer than `last_id` is published (for drivers that tick
   /// on frame arrival; never called by the control loop itself). True when one is there.
   bool WaitForFrame(uint64_t last_id, double timeout_s);
@@ -146,9 +147,10 @@ class SerialLink {
   std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0},
       counter_unknown_{0}, counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
 
-  mutable std::mutex frame_mutex_;  // guards slot_, slot_id_; the loop only try_locks it
+  mutable std::mutex frame_mutex_;  // guards slot_, slot_id_, slot_session_; the loop only try_locks it
   sensor::RawFrame slot_;
   uint64_t slot_id_ = 0;
+  uint64_t slot_session_ = 0;
   std::atomic<uint64_t> published_{0};
   std::mutex wait_mutex_;
   std::condition_variable frame_cv_;

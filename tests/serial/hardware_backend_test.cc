@@ -455,6 +455,27 @@ TEST_F(HardwareTest, OpenShortAndImplausibleChannelsMakeTheirUnitsInvalid) {
   for (int k = 3; k < kUnits; ++k) EXPECT_EQ(out.validity[k], sensor::UnitValidity::kValid) << k;
 }
 
+// The loop re-tares when the session of the frame it reads changes. A frame of the old session still
+// waiting in the slot when the reboot is seen must be reported with its own session, so the new
+// baseline starts with the new session's first frame.
+TEST_F(HardwareTest, AFrameFromBeforeARebootKeepsItsSession) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 20; }));
+  emulator_->PauseFrames(true);
+  ASSERT_TRUE(WaitHostCaughtUp(0, 0, 0));  // the last frame sent is in the slot, unread
+  emulator_->Reboot();
+  ASSERT_TRUE(WaitFor([&] { return backend_->link()->session() == 2; }));
+  sensor::RawFrame frame;
+  ASSERT_EQ(backend_->Read(&frame), sensor::ReadStatus::kOk);
+  EXPECT_EQ(backend_->session(), 1u) << "an old frame was tagged with the new session";
+  const double old_time_s = frame.time_s;
+  emulator_->PauseFrames(false);
+  ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
+  EXPECT_EQ(backend_->session(), 2u);
+  EXPECT_LT(frame.time_s, old_time_s);  // device time restarted
+}
+
 TEST_F(HardwareTest, FramesWithTheWrongUnitCountAreRefused) {
   StartEmulator();
   StartHost();
