@@ -259,6 +259,9 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   if (!has_sensor() || !handshake_) return;  // frames before the HELLO belong to nobody's session
   if (frame.unit_count != expected_units_) {
     ++extra_corrupt_;
+    // The message once per change of count, not per frame: this path runs at the frame rate.
+    if (frame.unit_count == last_refused_units_) return;
+    last_refused_units_ = frame.unit_count;
     std::ostringstream message;
     message << "serial port " << path_ << ": frames carry " << static_cast<int>(frame.unit_count)
             << " units but layout '" << layout_name_ << "' has " << expected_units_ << "; frames dropped";
