@@ -91,7 +91,9 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations << "\" iterations=\""
     << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
     << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
-  o << "  <size nconmax=\"600\" njmax=\"4000\" nstack=\"2000000\"/>\n";
+  // Sized for a pinch on all mesas (a few hundred constraint rows) with margin; MuJoCo 2.x allocates
+  // njmax^2 doubles for the solver, so njmax 4000 would cost 128 MB per run for nothing.
+  o << "  <size nconmax=\"300\" njmax=\"1000\" nstack=\"1000000\"/>\n";
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
   o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
