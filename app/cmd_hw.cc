@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -79,6 +81,12 @@ double SecondsSince(Clock::time_point start) {
 struct HwRunConfig {
   serial::HardwareConfig serial;
   controller::ControlLoopConfig loop;
+  /// The controller and its parameters (names as in a scenario's controller section, so a controller
+  /// tuned in simulation runs with the same numbers on the hand).
+  std::string controller = "grip_slip";
+  controller::ControllerParams controller_params;
+  /// Task grip ceiling [N]; 0 = none (the controller's own overall ceiling still holds).
+  double grip_ceiling_n = 0.0;
   /// Control ticks per second when frames do not arrive (ticks also follow every frame) [Hz].
   double rate_hz = 1000.0;
 };
@@ -91,6 +99,23 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
     config.rate_hz = section->GetNumber("rate_hz", config.rate_hz, {1.0, 20000.0, false});
     config.loop.stale_timeout_s =
         section->GetNumber("stale_timeout_s", config.loop.stale_timeout_s, common::NumberRule::Positive());
+    section->RejectUnknownKeys();
+  }
+  if (const auto section = root.GetMap("controller")) {
+    config.controller = section->GetString("name", config.controller, controller::ControllerNames());
+    config.grip_ceiling_n = section->GetNumber("grip_ceiling_n", config.grip_ceiling_n, {0.0, 1000.0, true});
+    if (const auto params = section->GetMap("params")) {
+      // Names and ranges are the controller's own: add the parameters one by one, so the first that
+      // the controller refuses is the one named, with its file and line.
+      for (const std::string& key : params->Keys()) {
+        config.controller_params[key] = params->RequireNumber(key);
+        try {
+          controller::MakeController(config.controller, config.controller_params);
+        } catch (const std::invalid_argument& error) {
+          params->Fail(key, error.what());
+        }
+      }
+    }
     section->RejectUnknownKeys();
   }
   if (const auto section = root.GetMap("readout")) config.loop.readout = sensor::LoadReadoutConfig(*section);
@@ -193,7 +218,8 @@ struct HwOptions {
   std::string config;
   std::string layout;
   std::string calibration;
-  std::string controller = "open_loop";
+  std::string controller;  ///< empty: the config's (default grip_slip)
+  std::vector<std::string> params;  ///< NAME=VALUE controller parameters
   std::string intent = "close";
   double duration_s = 0.0;
   int tare_frames = -1;
@@ -224,7 +250,24 @@ void RunHw(const HwOptions& options) {
   const sensor::Calibration calibration = options.calibration.empty()
                                               ? sensor::PaperCalibration(units)
                                               : sensor::LoadCalibration(options.calibration, units);
-  std::unique_ptr<controller::GraspController> grasp = controller::MakeController(options.controller, {});
+  // --controller picks another controller than the config's; the config's parameters belong to its own.
+  if (!options.controller.empty() && options.controller != config.controller) {
+    config.controller = options.controller;
+    config.controller_params.clear();
+  }
+  for (const std::string& assignment : options.params) {
+    const size_t equals = assignment.find('=');
+    const std::string number = equals == std::string::npos ? "" : assignment.substr(equals + 1);
+    char* end = nullptr;
+    const double value = std::strtod(number.c_str(), &end);
+    if (equals == 0 || number.empty() || end != number.c_str() + number.size() || !std::isfinite(value)) {
+      throw std::invalid_argument("--param " + assignment + ": expected NAME=NUMBER");
+    }
+    config.controller_params[assignment.substr(0, equals)] = value;
+  }
+  std::unique_ptr<controller::GraspController> grasp =
+      controller::MakeController(config.controller, config.controller_params);
+  if (config.grip_ceiling_n > 0.0) grasp->SetGripCeiling(config.grip_ceiling_n);
 
   serial::HardwareBackend backend(config.serial, units, layout.name);
   serial::HardwareActuator actuator(backend, config.serial);
@@ -538,11 +581,15 @@ void AddHwCommands(CLI::App& root) {
   CLI::App* hw = root.add_subcommand(
       "hw", "Run a controller against the tactile readout and hand over a serial link (or the emulator)");
   hw->add_option("--port", hw_options->port, "Serial device, e.g. /dev/ttyACM0 or an emulator link");
-  hw->add_option("--config", hw_options->config, "YAML with serial:, control:, readout:, inversion: sections")
+  hw->add_option("--config", hw_options->config,
+                 "YAML with serial:, control:, controller:, readout:, inversion: sections")
       ->check(CLI::ExistingFile);
   hw->add_option("--layout", hw_options->layout, "Layout file (default: sensor/layouts/default_20.yaml)");
   hw->add_option("--calibration", hw_options->calibration, "Calibration file (default: paper values)");
-  hw->add_option("--controller", hw_options->controller, "Controller name")->capture_default_str();
+  hw->add_option("--controller", hw_options->controller,
+                 "Controller name (default: controller.name of --config, else grip_slip)");
+  hw->add_option("--param", hw_options->params,
+                 "Controller parameter NAME=VALUE, as in a scenario's controller.params (repeatable)");
   hw->add_option("--intent", hw_options->intent, "Intent once tared: close, open or idle")->capture_default_str();
   hw->add_option("--duration", hw_options->duration_s, "Stop cleanly after S seconds (0: until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
