@@ -316,7 +316,11 @@ nlohmann::json Optional(const std::optional<double>& value) {
 void PrepareOutputDir(const std::string& dir) {
   std::error_code error;
   fs::create_directories(dir, error);
-  if (error || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create output directory");
+  // A place the user named that cannot hold results is bad input (exit 2), not a failed expectation.
+  if (error || !fs::is_directory(dir)) {
+    throw std::invalid_argument("--out " + dir + ": cannot create the output directory" +
+                                (error ? " (" + error.message() + ")" : ""));
+  }
   for (const char* name : kOutputFiles) fs::remove(fs::path(dir) / name, error);
   WriteFileAtomic(dir + "/" + kIncompleteMarker,
                   "This run is in progress or was interrupted; its results are not complete.\n");
