@@ -3,19 +3,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tests/support/error_of.h"
+
 namespace graspbed::common {
 namespace {
 
 using ::testing::HasSubstr;
 
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return "(no error)";
-}
+// The errors refused here are ConfigError; one of another type fails the test.
+std::string ErrorOf(const std::function<void()>& action) { return graspbed::testing::ErrorOf<ConfigError>(action); }
 
 TEST(YamlMapTest, ReadsTypedValuesWithDefaults) {
   const YamlMap map = YamlMap::LoadString("mass: 0.25\nname: box\nflag: true\ncount: 3\n", "t.yaml");

@@ -3,6 +3,7 @@
 
 #include <functional>
 #include <set>
+#include <stdexcept>
 #include <string>
 
 #include "controller/grasp_controller.h"
@@ -10,6 +11,7 @@
 #include "controller/open_loop_controller.h"
 #include "tests/controller/allocation_counter.h"
 #include "tests/controller/synthetic_tactile.h"
+#include "tests/support/error_of.h"
 
 namespace graspbed::controller {
 namespace {
@@ -17,13 +19,9 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Contains;
 
+// The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "(no error)";
+  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
 }
 
 TEST(ControllerFactoryTest, KnowsGripSlipAndOpenLoop) {

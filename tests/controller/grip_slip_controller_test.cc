@@ -7,9 +7,11 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "tests/controller/synthetic_tactile.h"
+#include "tests/support/error_of.h"
 
 namespace graspbed::controller {
 namespace {
@@ -89,13 +91,9 @@ class ClosedLoop {
 
 GripSlipConfig DefaultConfig() { return GripSlipConfig{}; }
 
+// The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "(no error)";
+  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
 }
 
 TEST(GripSlipControllerTest, ClosesUntilContactThenLoadsToInitialGrip) {

@@ -3,20 +3,24 @@
 // holds the light objects, loses the objects of the slip scenarios. The sensor makes the difference.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 
+#include "tests/support/cli_runner.h"
+#include "tests/support/temp_dir.h"
+
 namespace graspbed::controller {
 namespace {
 
 namespace fs = std::filesystem;
+using graspbed::testing::CliBinary;
+using graspbed::testing::CliResult;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
 
 /// Open-loop effort of the baseline run: about 3 N of pinch, 4x what the 100 g boxes need.
 constexpr double kBaselineEffort = 0.15;
@@ -34,36 +38,22 @@ struct SuiteRun {
 class ReferenceSuiteTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const char* binary = std::getenv("GRASPBED_BINARY");
-    if (binary == nullptr) GTEST_SKIP() << "GRASPBED_BINARY not set (run through ctest)";
-    binary_ = binary;
-    dir_ = fs::temp_directory_path() /
-           ("graspbed_reference_suite_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!dir_.empty()) fs::remove_all(dir_);
+    if (CliBinary().empty()) GTEST_SKIP() << "GRASPBED_BINARY not set (run through ctest)";
   }
 
   SuiteRun RunSuite(const std::string& extra_arguments) {
-    const fs::path json_path = dir_ / "suite_stdout.json";
-    const std::string command = binary_ + " suite scenarios -j 2 --no-plots --json --out " + (dir_ / "out").string() +
-                                " " + extra_arguments + " >" + json_path.string() + " 2>" +
-                                (dir_ / "stderr").string();
+    const CliResult cli =
+        RunCli("suite scenarios -j 2 --no-plots --json --out " + (dir_ / "out").string() + " " + extra_arguments);
     SuiteRun result;
-    const int status = std::system(command.c_str());
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(json_path);
-    const nlohmann::json suite = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    result.exit_code = cli.exit_code;
+    const nlohmann::json suite = nlohmann::json::parse(cli.out, nullptr, /*allow_exceptions=*/false);
     if (suite.is_discarded() || !suite.contains("runs")) return result;
     for (const nlohmann::json& run : suite["runs"]) result.runs[run["scenario"].get<std::string>()] = run;
     return result;
   }
 
-  std::string binary_;
-  fs::path dir_;
+  const TempDir temp_dir_{"reference_suite"};
+  const fs::path dir_ = temp_dir_.path();
 };
 
 /// Names of the failed expectations of one run.

@@ -10,11 +10,13 @@
 
 #include "sensor/fea/mesh.h"
 #include "sensor/fea/plane_stress.h"
+#include "tests/support/error_of.h"
 
 namespace graspbed::fea {
 namespace {
 
 using ::testing::HasSubstr;
+using graspbed::testing::ErrorOf;
 
 constexpr double kExactTol = 1e-10;    // "exact" up to rounding, for strains of order 1e-3
 constexpr double kYoungsMpa = 197000.0;
@@ -173,15 +175,6 @@ TEST(ElementTest, MeshRectanglesPutsEdgesOnGeometryAndExtraLines) {
   EXPECT_EQ(mesh.CellElement(mesh.CellsX() - 1, 0), -1);
   EXPECT_GE(mesh.CellElement(0, 0), 0);
   for (size_t k = 1; k < mesh.x_lines.size(); ++k) EXPECT_LE(mesh.x_lines[k] - mesh.x_lines[k - 1], 0.05 + 1e-12);
-}
-
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::exception& error) {
-    return error.what();
-  }
-  return "(no error)";
 }
 
 TEST(ElementTest, RefusesUnconstrainedPartsAndBadInput) {

@@ -3,23 +3,21 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 #include "common/yaml_map.h"
 #include "sensor/fea/fea_config.h"
+#include "tests/support/error_of.h"
 
 namespace graspbed::fea {
 namespace {
 
 using ::testing::HasSubstr;
 
+// The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "(no error)";
+  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
 }
 
 std::string LoadError(const std::string& yaml) {

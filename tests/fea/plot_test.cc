@@ -8,22 +8,18 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/support/temp_dir.h"
+
 namespace graspbed::plot {
 namespace {
 
 namespace fs = std::filesystem;
+using graspbed::testing::TempDir;
 
 class PlotTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("graspbed_plot_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  const TempDir temp_dir_{"plot_test"};
+  const fs::path dir_ = temp_dir_.path();
 };
 
 // Pixels of `path` close to the palette's first colour (0, 0.45, 0.70).
@@ -126,7 +122,8 @@ TEST(NiceTicksTest, PicksRoundSteps) {
 TEST(NonFiniteTest, NaNPointsBreakTheLineWithoutFailing) {
   Chart chart;
   chart.series = {{"gappy", {0, 1, 2, 3}, {0, NAN, 2, 3}}};
-  const fs::path path = fs::temp_directory_path() / "graspbed_plot_nan_test.png";
+  const TempDir dir("plot_nan_test");
+  const fs::path path = dir.path() / "graspbed_plot_nan_test.png";
   EXPECT_NO_THROW(WritePng(chart, path.string(), 200, 150));
   fs::remove(path);
 }

@@ -12,6 +12,7 @@
 #include "sensor/tactile_state.h"
 #include "sim/scenario/script_player.h"
 #include "tests/scenario/scenario_test_util.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario {
 namespace {
@@ -21,7 +22,7 @@ using testing::kHeldInAirS;
 using testing::RunScenarioText;
 using testing::ScenarioRun;
 using testing::Signals;
-using testing::TempDir;
+using graspbed::testing::TempDir;
 
 constexpr double kPositionTolM = 1.5e-3;  // wrist servo tracking and object settling
 constexpr double kForceTolN = 1e-6;       // script force/mass columns are set exactly

@@ -23,6 +23,9 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/scenario/scenario_test_util.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 extern char** environ;
 
@@ -30,12 +33,12 @@ namespace graspbed::scenario {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::CliBinary;
-using testing::CliResult;
 using testing::HeldBoxScenario;
-using testing::ReadText;
-using testing::RunCli;
-using testing::TempDir;
+using graspbed::testing::CliBinary;
+using graspbed::testing::CliResult;
+using graspbed::testing::ReadText;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
 
 // Exit codes of the CLI (app/command_registry.h, app/cmd_run.cc).
 constexpr int kExitOk = 0;

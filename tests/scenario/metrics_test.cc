@@ -12,6 +12,7 @@
 
 #include "sim/scenario/runner.h"
 #include "tests/scenario/scenario_test_util.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario {
 namespace {
@@ -19,7 +20,7 @@ namespace {
 using testing::HeldBoxScenario;
 using testing::RunScenarioText;
 using testing::ScenarioRun;
-using testing::TempDir;
+using graspbed::testing::TempDir;
 
 constexpr double kTimeTolS = 1e-9;
 constexpr double kTickS = 0.001;  // control period of the synthetic ticks

@@ -1,49 +1,14 @@
 #include "tests/scenario/scenario_test_util.h"
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <atomic>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
-#include <stdexcept>
 
 #include "sim/scenario/scenario_config.h"
 
 namespace graspbed::scenario::testing {
-
-TempDir::TempDir() {
-  static std::atomic<int> counter{0};
-  path_ = std::filesystem::temp_directory_path() /
-          ("graspbed_scenario_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  std::filesystem::remove_all(path_);
-  std::filesystem::create_directories(path_);
-}
-
-TempDir::~TempDir() {
-  std::error_code ignored;
-  std::filesystem::remove_all(path_, ignored);
-}
-
-std::string TempDir::Write(const std::string& name, const std::string& text) const {
-  const std::filesystem::path full = path_ / name;
-  std::filesystem::create_directories(full.parent_path());
-  std::ofstream out(full);
-  if (!out) throw std::runtime_error("cannot write " + full.string());
-  out << text;
-  return full.string();
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) return "";
-  std::stringstream text;
-  text << stream.rdbuf();
-  return text.str();
-}
 
 std::string HeldBoxScenario(double duration_s, const std::string& extra_script, const std::string& extra) {
   return "duration_s: " + std::to_string(duration_s) + R"(
@@ -107,7 +72,7 @@ size_t Signals::RowAt(double time_s) const {
   return time_.empty() ? 0 : time_.size() - 1;
 }
 
-ScenarioRun RunScenarioText(const TempDir& dir, const std::string& name, const std::string& yaml) {
+ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name, const std::string& yaml) {
   const std::string file = dir.Write(name + ".yaml", yaml);
   const ScenarioConfig config = LoadScenario(file);
   RunOptions options;
@@ -115,29 +80,6 @@ ScenarioRun RunScenarioText(const TempDir& dir, const std::string& name, const s
   options.write_plots = false;
   RunResult result = RunScenario(config, options);
   return {std::move(result), Signals(options.out_dir + "/signals.csv")};
-}
-
-std::string CliBinary() {
-  const char* binary = std::getenv("GRASPBED_BINARY");
-  return binary == nullptr ? "" : binary;
-}
-
-CliResult RunCli(const std::string& arguments) {
-  CliResult result;
-  const std::string binary = CliBinary();
-  if (binary.empty()) {
-    result.err = "GRASPBED_BINARY not set";
-    return result;
-  }
-  TempDir capture;
-  const std::string out_path = capture.Path("stdout");
-  const std::string err_path = capture.Path("stderr");
-  const std::string command = binary + " " + arguments + " >" + out_path + " 2>" + err_path + " </dev/null";
-  const int status = std::system(command.c_str());
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = ReadText(out_path);
-  result.err = ReadText(err_path);
-  return result;
 }
 
 }  // namespace graspbed::scenario::testing

@@ -1,34 +1,15 @@
 #pragma once
-// Helpers for scenario tests: temporary directories, scenario files built from a shared held-object
-// scene, in-process runs with their signals.csv read back, and the real CLI ($GRASPBED_BINARY).
+// Helpers for scenario tests: scenario files built from a shared held-object scene, and in-process runs
+// with their signals.csv read back. Temporary directories, file reads and CLI runs are in tests/support.
 
-#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "sim/scenario/runner.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario::testing {
-
-/// A fresh directory under the system temp dir, removed on destruction.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  /// Writes `text` to `name` (sub-directories created) and returns the full path.
-  std::string Write(const std::string& name, const std::string& text) const;
-  std::string Path(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-/// Whole file as a string ("" when it cannot be read).
-std::string ReadText(const std::string& path);
 
 /// A box of 100 g (friction 0.7) between the fingers of a hand pre-shaped 5 mm wider than it, under the
 /// open-loop controller at its default effort: closed at 0.04 s, touched after the readout's tare
@@ -69,18 +50,6 @@ struct ScenarioRun {
   RunResult result;
   Signals signals;
 };
-ScenarioRun RunScenarioText(const TempDir& dir, const std::string& name, const std::string& yaml);
-
-/// Result of running the CLI.
-struct CliResult {
-  int exit_code = -1;  ///< -1 when it did not exit normally
-  std::string out;     ///< stdout
-  std::string err;     ///< stderr
-};
-/// Runs `$GRASPBED_BINARY <arguments>` through the shell (arguments must be shell-safe), stdout and
-/// stderr captured to files (neither is a terminal).
-CliResult RunCli(const std::string& arguments);
-/// The CLI binary, or "" when GRASPBED_BINARY is not set.
-std::string CliBinary();
+ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name, const std::string& yaml);
 
 }  // namespace graspbed::scenario::testing

@@ -11,7 +11,8 @@
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
-#include "tests/sensor/test_files.h"
+#include "tests/support/error_of.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::sensor {
 namespace {

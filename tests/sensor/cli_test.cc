@@ -1,93 +1,67 @@
 // Runs the real `graspbed` executable ($GRASPBED_BINARY) for the sensor subcommands.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
-#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "tests/sensor/test_files.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::sensor {
 namespace {
 
 using ::testing::HasSubstr;
+using testing::CliBinary;
+using testing::CliResult;
+using testing::RunCli;
 using testing::SourcePath;
 using testing::TempDir;
 
 constexpr double kOhmTol = 0.5;
 constexpr double kForceTolN = 1e-6;
 
-struct Result {
-  int exit_code = -1;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-// Runs `graspbed <arguments>` through the shell; arguments must be shell-safe.
-Result RunCli(const std::string& arguments) {
-  const char* binary = std::getenv("GRASPBED_BINARY");
-  if (binary == nullptr) return {-1, "", "GRASPBED_BINARY not set"};
-  TempDir dir;
-  const std::string err_path = dir.Path("stderr");
-  const std::string command = std::string(binary) + " " + arguments + " 2>" + err_path;
-  Result result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer;
-  size_t count;
-  while ((count = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.out.append(buffer.data(), count);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (FILE* err = std::fopen(err_path.c_str(), "r")) {
-    while ((count = std::fread(buffer.data(), 1, buffer.size(), err)) > 0) result.err.append(buffer.data(), count);
-    std::fclose(err);
-  }
-  return result;
-}
-
 class SensorCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (std::getenv("GRASPBED_BINARY") == nullptr) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
+    if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
   }
 };
 
 TEST_F(SensorCliTest, ForwardPrintsPaperNumbers) {
-  const Result text = RunCli("sensor forward --fn 10 --ft 10");
+  const CliResult text = RunCli("sensor forward --fn 10 --ft 10");
   EXPECT_EQ(text.exit_code, 0) << text.err;
   EXPECT_THAT(text.out, HasSubstr("R1 = 6664.0 Ohm"));
   EXPECT_THAT(text.out, HasSubstr("R2 = 3876.0 Ohm"));
   EXPECT_THAT(text.out, HasSubstr("dR1/R1 = +0.9600"));
-  const Result json = RunCli("sensor forward --fn 0 --ft 10 --json");
+  const CliResult json = RunCli("sensor forward --fn 0 --ft 10 --json");
   ASSERT_EQ(json.exit_code, 0) << json.err;
   const nlohmann::json parsed = nlohmann::json::parse(json.out);
   EXPECT_NEAR(parsed.at("r1").get<double>(), 4794, kOhmTol);
   EXPECT_NEAR(parsed.at("r2").get<double>(), 2006, kOhmTol);
   EXPECT_EQ(parsed.at("fn").get<double>(), 0.0);
   EXPECT_EQ(parsed.at("ft").get<double>(), 10.0);
-  const Result normal = RunCli("sensor forward --fn 10 --json");
+  const CliResult normal = RunCli("sensor forward --fn 10 --json");
   EXPECT_NEAR(nlohmann::json::parse(normal.out).at("r1").get<double>(), 5270, kOhmTol);
   EXPECT_NEAR(nlohmann::json::parse(normal.out).at("r2").get<double>(), 5270, kOhmTol);
 }
 
 TEST_F(SensorCliTest, InvertGivesTenAndTen) {
-  const Result json = RunCli("sensor invert --r1 6664 --r2 3876 --json");
+  const CliResult json = RunCli("sensor invert --r1 6664 --r2 3876 --json");
   ASSERT_EQ(json.exit_code, 0) << json.err;
   const nlohmann::json parsed = nlohmann::json::parse(json.out);
   EXPECT_NEAR(parsed.at("fn").get<double>(), 10.0, kForceTolN);
   EXPECT_NEAR(parsed.at("ft").get<double>(), 10.0, kForceTolN);
   EXPECT_EQ(parsed.at("r1").get<double>(), 6664);
   EXPECT_EQ(parsed.at("r2").get<double>(), 3876);
-  const Result text = RunCli("sensor invert --r1 5270 --r2 5270 --r0 3400");
+  const CliResult text = RunCli("sensor invert --r1 5270 --r2 5270 --r0 3400");
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_THAT(text.out, HasSubstr("Fn = 10.000 N"));
   EXPECT_THAT(text.out, HasSubstr("Ft = 0.000 N"));
   // Another tare resistance shifts the answer.
-  const Result tare = RunCli("sensor invert --r1 3500 --r2 3500 --r0 3500 --json");
+  const CliResult tare = RunCli("sensor invert --r1 3500 --r2 3500 --r0 3500 --json");
   EXPECT_NEAR(nlohmann::json::parse(tare.out).at("fn").get<double>(), 0.0, kForceTolN);
 }
 
@@ -112,7 +86,7 @@ TEST_F(SensorCliTest, BadInputExitsTwoWithAMessage) {
       {"sensor invert --r1 3400", "--r2 is required"},
   };
   for (const auto& c : cases) {
-    const Result result = RunCli(c.arguments);
+    const CliResult result = RunCli(c.arguments);
     EXPECT_EQ(result.exit_code, 2) << c.arguments;
     EXPECT_THAT(result.err, HasSubstr(c.message)) << c.arguments;
     EXPECT_EQ(result.out, "") << c.arguments;
@@ -121,7 +95,7 @@ TEST_F(SensorCliTest, BadInputExitsTwoWithAMessage) {
 
 TEST_F(SensorCliTest, HelpOnEachSubcommand) {
   for (const char* command : {"sensor", "sensor forward", "sensor invert", "sensor layout", "sensor calibrate"}) {
-    const Result result = RunCli(std::string(command) + " --help");
+    const CliResult result = RunCli(std::string(command) + " --help");
     EXPECT_EQ(result.exit_code, 0) << command;
     EXPECT_THAT(result.out, HasSubstr("Usage")) << command;
   }
@@ -129,11 +103,11 @@ TEST_F(SensorCliTest, HelpOnEachSubcommand) {
 }
 
 TEST_F(SensorCliTest, LayoutPrintsPoses) {
-  const Result text = RunCli("sensor layout");
+  const CliResult text = RunCli("sensor layout");
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_THAT(text.out, HasSubstr("layout default_20"));
   EXPECT_THAT(text.out, HasSubstr("20 units"));
-  const Result json = RunCli("sensor layout --json --layout " + SourcePath("sensor/layouts/paper_3x3.yaml"));
+  const CliResult json = RunCli("sensor layout --json --layout " + SourcePath("sensor/layouts/paper_3x3.yaml"));
   ASSERT_EQ(json.exit_code, 0) << json.err;
   const nlohmann::json parsed = nlohmann::json::parse(json.out);
   ASSERT_EQ(parsed.at("units").size(), 9u);
@@ -141,7 +115,7 @@ TEST_F(SensorCliTest, LayoutPrintsPoses) {
   EXPECT_NEAR(parsed.at("units")[4].at("position_m")[2].get<double>(), -4e-3, 1e-12);
   TempDir dir;
   const std::string bad = dir.Write("bad.yaml", "name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0}\n");
-  const Result error = RunCli("sensor layout --layout " + bad);
+  const CliResult error = RunCli("sensor layout --layout " + bad);
   EXPECT_EQ(error.exit_code, 2);
   EXPECT_THAT(error.err, HasSubstr(bad + ":3: units[0].arc_mm = null: missing required key"));
 }
@@ -161,7 +135,7 @@ TEST_F(SensorCliTest, CalibrateFitsALogAndWritesAFile) {
   const std::string layout_path =
       dir.Write("one.yaml", "name: one\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n");
   const std::string out_path = dir.Path("cal.yaml");
-  const Result result =
+  const CliResult result =
       RunCli("sensor calibrate --json --log " + log_path + " --out " + out_path + " --layout " + layout_path);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json parsed = nlohmann::json::parse(result.out);
@@ -170,8 +144,8 @@ TEST_F(SensorCliTest, CalibrateFitsALogAndWritesAFile) {
   std::FILE* written = std::fopen(out_path.c_str(), "r");
   ASSERT_NE(written, nullptr);
   std::fclose(written);
-  const Result missing = RunCli("sensor calibrate --log " + dir.Path("none.csv") + " --out " + out_path + " --layout " +
-                             layout_path);
+  const CliResult missing =
+      RunCli("sensor calibrate --log " + dir.Path("none.csv") + " --out " + out_path + " --layout " + layout_path);
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_THAT(missing.err, HasSubstr("none.csv: cannot open file"));
 }

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "tests/sensor/test_files.h"
+#include "tests/support/error_of.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::sensor {
 namespace {

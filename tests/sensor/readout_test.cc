@@ -6,7 +6,8 @@
 #include <cmath>
 #include <vector>
 
-#include "tests/sensor/test_files.h"
+#include "tests/support/error_of.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::sensor {
 namespace {

@@ -9,7 +9,8 @@
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
-#include "tests/sensor/test_files.h"
+#include "tests/support/error_of.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::sensor {
 namespace {

@@ -13,8 +13,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -24,10 +22,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
 extern char** environ;
 
 namespace graspbed::serial {
 namespace {
+
+using graspbed::testing::CliBinary;
+using graspbed::testing::ReadText;
+using graspbed::testing::TempDir;
 
 constexpr char kScenario[] = "tests/serial/data/e2e_lift.yaml";
 constexpr int kUnits = 20;                 // the scenario's layout (default_20)
@@ -49,13 +55,6 @@ constexpr double kMaxSlipMm = 2.0;
 constexpr double kSensedVsTrueRelTol = 0.3;
 // "Few dropped": a loaded machine can stall the host long enough for the emulator's FIFO to overflow.
 constexpr double kMaxDroppedFraction = 0.02;
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 /// A child process with stdout and stderr in files. Ended by its pid only (SIGTERM, then SIGKILL).
 class Child {
@@ -98,8 +97,8 @@ class Child {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
-  std::string out() const { return ReadFile(out_path_); }
-  std::string err() const { return ReadFile(err_path_); }
+  std::string out() const { return ReadText(out_path_); }
+  std::string err() const { return ReadText(err_path_); }
 
  private:
   pid_t pid_ = -1;
@@ -111,16 +110,10 @@ class Child {
 class EndToEndTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const char* binary = std::getenv("GRASPBED_BINARY");
-    if (binary == nullptr) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
-    binary_ = binary;
-    char pattern[] = "/tmp/graspbed_e2e_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
+    if (binary_.empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
 
-  std::string Path(const std::string& name) const { return dir_ + "/" + name; }
+  std::string Path(const std::string& name) const { return dir_.Path(name); }
 
   /// Runs `graspbed args...` to completion; its parsed stdout JSON (a failure when it is none).
   nlohmann::json RunJson(std::vector<std::string> args, const std::string& tag) {
@@ -141,8 +134,8 @@ class EndToEndTest : public ::testing::Test {
     }
   }
 
-  std::string binary_;
-  std::string dir_;
+  const std::string binary_ = CliBinary();
+  const TempDir dir_{"e2e"};
 };
 
 TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {

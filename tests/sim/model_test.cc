@@ -4,33 +4,29 @@
 #include <mujoco/mujoco.h>
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <string>
 
 #include "sim/model_generator.h"
 #include "tests/sim/sim_fixture.h"
+#include "tests/support/files.h"
 
 namespace graspbed::sim {
 namespace {
+
+using graspbed::testing::ReadText;
+using graspbed::testing::SourcePath;
 
 constexpr double kPoseTolM = 1e-9;
 /// The MJCF carries 8 significant digits, so a unit axis comes back within a few 1e-9.
 constexpr double kAxisTol = 1e-7;
 constexpr double kForceTolN = 0.05;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 class ModelTest : public testing::MujocoTest {};
 
 TEST_F(ModelTest, CheckedInModelIsCurrent) {
-  const std::string path = std::string(GRASPBED_SOURCE_DIR) + "/models/hand_default.xml";
-  const std::string checked_in = ReadFile(path);
+  const std::string path = SourcePath("models/hand_default.xml");
+  const std::string checked_in = ReadText(path);
   ASSERT_FALSE(checked_in.empty()) << path;
   const std::string generated = GenerateMjcf(DefaultLayout(), SceneConfig{});
   if (checked_in == generated) return;
@@ -87,8 +83,7 @@ TEST_F(ModelTest, MesaGeomsFollowTheLayoutInOrder) {
 
 TEST_F(ModelTest, EveryShippedLayoutAndShapeLoadsAndSettles) {
   for (const char* layout_file : {"default_20.yaml", "paper_3x3.yaml"}) {
-    const sensor::Layout layout =
-        sensor::LoadLayout(std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/" + layout_file);
+    const sensor::Layout layout = sensor::LoadLayout(SourcePath(std::string("sensor/layouts/") + layout_file));
     for (ObjectShape shape : {ObjectShape::kBox, ObjectShape::kCylinder, ObjectShape::kSphere}) {
       SceneConfig scene;
       scene.object.shape = shape;

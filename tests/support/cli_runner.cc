@@ -1,0 +1,36 @@
+#include "tests/support/cli_runner.h"
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::testing {
+
+std::string CliBinary() {
+  const char* binary = std::getenv("GRASPBED_BINARY");
+  return binary == nullptr ? "" : binary;
+}
+
+CliResult RunCli(const std::string& arguments) {
+  CliResult result;
+  const std::string binary = CliBinary();
+  if (binary.empty()) {
+    result.err = "GRASPBED_BINARY not set";
+    return result;
+  }
+  // Files rather than a pipe: stdout and stderr are both kept, and neither can fill up and block.
+  const TempDir capture("cli_capture");
+  const std::string out_path = capture.Path("stdout");
+  const std::string err_path = capture.Path("stderr");
+  const std::string command = binary + " " + arguments + " >" + out_path + " 2>" + err_path + " </dev/null";
+  const int status = std::system(command.c_str());
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = ReadText(out_path);
+  result.err = ReadText(err_path);
+  return result;
+}
+
+}  // namespace graspbed::testing

@@ -1,0 +1,26 @@
+#pragma once
+// Runs of the real `graspbed` executable, which ctest names in $GRASPBED_BINARY (see
+// graspbed_add_test in tests/CMakeLists.txt).
+
+#include <string>
+
+namespace graspbed::testing {
+
+/// The CLI binary, or "" when GRASPBED_BINARY is not set (the test was not started by ctest). Each
+/// fixture decides whether that skips or fails its tests.
+std::string CliBinary();
+
+/// Outcome of one CLI run.
+struct CliResult {
+  int exit_code = -1;  ///< -1 when it did not exit normally (or could not be started)
+  std::string out;     ///< everything written to stdout
+  std::string err;     ///< everything written to stderr
+};
+
+/// Runs `$GRASPBED_BINARY <arguments>` to completion through the shell (arguments must be
+/// shell-safe), in the test's working directory, with stdin from /dev/null and stdout and stderr
+/// captured to files (neither is a terminal). Without GRASPBED_BINARY: exit code -1 and a message
+/// in `err`.
+CliResult RunCli(const std::string& arguments);
+
+}  // namespace graspbed::testing
