@@ -183,6 +183,13 @@ TEST_F(CliTest, RunExitsTwoOnBadInputWithFileLineAndKeyAndWritesNothing) {
   EXPECT_EQ(RunCli("run " + good + " --out " + out + " --set object.mass_kg=-2").exit_code, kExitBadInput);
   EXPECT_EQ(ReadText(out + "/summary.json"), before);
   EXPECT_FALSE(fs::exists(out + "/INCOMPLETE"));
+  // An output directory that cannot be made (under a regular file) is bad input too, not a failed run.
+  const std::string file_in_the_way = dir_.Write("not_a_dir", "x");
+  const CliResult unwritable = RunCli("run " + good + " --no-plots --out " + file_in_the_way + "/out");
+  EXPECT_EQ(unwritable.exit_code, kExitBadInput) << unwritable.err;
+  EXPECT_NE(unwritable.err.find("--out " + file_in_the_way + "/out: cannot create the output directory"),
+            std::string::npos)
+      << unwritable.err;
 }
 
 // ---- determinism ------------------------------------------------------------------------------------------

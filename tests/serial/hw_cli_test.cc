@@ -1,0 +1,65 @@
+// `graspbed hw` refuses bad controller settings before it touches a port: the config's controller
+// section (file, line, key, value) and --param, each with exit code 2.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "tests/support/cli_runner.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::serial {
+namespace {
+
+using ::testing::HasSubstr;
+using graspbed::testing::CliResult;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
+
+constexpr int kExitBadInput = 2;
+
+class HwCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (graspbed::testing::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
+  }
+  TempDir dir_{"hw_cli"};
+};
+
+TEST_F(HwCliTest, ControllerParameterOutOfRangeInTheConfigNamesFileLineKeyAndValue) {
+  const std::string config =
+      dir_.Write("hw.yaml", "controller:\n  name: grip_slip\n  params:\n    min_grip_n: 2\n    max_grip_n: 300\n");
+  const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr(config + ":5: controller.params.max_grip_n = 300"));
+  EXPECT_THAT(result.err, HasSubstr("must be in [0.1, 200] N"));
+}
+
+TEST_F(HwCliTest, UnknownControllerAndUnknownKeyInTheConfigAreRefused) {
+  std::string config = dir_.Write("name.yaml", "controller: {name: pid}\n");
+  CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("controller.name = pid"));
+  EXPECT_THAT(result.err, HasSubstr("grip_slip"));  // lists the valid names
+
+  config = dir_.Write("key.yaml", "controller:\n  name: grip_slip\n  ceiling: 3\n");
+  result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr(config + ":3"));
+  EXPECT_THAT(result.err, HasSubstr("ceiling"));
+}
+
+TEST_F(HwCliTest, BadParamOnTheCommandLineIsRefusedBeforeThePortIsOpened) {
+  CliResult result = RunCli("hw --port " + dir_.Path("no-device") + " --param safety_margin=abc");
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("--param safety_margin=abc: expected NAME=NUMBER"));
+
+  result = RunCli("hw --port " + dir_.Path("no-device") + " --param no_such_gain=1");
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("has no parameter 'no_such_gain'"));
+  // Refused before the port: the missing device is not what the message is about.
+  EXPECT_THAT(result.err, ::testing::Not(HasSubstr("does not exist")));
+}
+
+}  // namespace
+}  // namespace graspbed::serial
