@@ -9,7 +9,7 @@
 #include "controller/grasp_controller.h"
 #include "controller/grip_slip_controller.h"
 #include "controller/open_loop_controller.h"
-#include "tests/controller/allocation_counter.h"
+#include "tests/support/allocation_counter.h"
 #include "tests/controller/synthetic_tactile.h"
 #include "tests/support/error_of.h"
 
@@ -111,9 +111,9 @@ TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
     plant.Step(command, loads[static_cast<size_t>(i)], 1e-3);
     sensor::TactileState state = sensor.Frame(plant.Contact(), t);
     if (i >= 2500 && i < 2600) state.stale = true;
-    const long before = testing::AllocationCount();
+    const long before = graspbed::testing::AllocationCount();
     command = controller->Update(state, t);
-    allocations += testing::AllocationCount() - before;
+    allocations += graspbed::testing::AllocationCount() - before;
   }
   EXPECT_GT(controller->telemetry().slip_events, 0) << "the run should have exercised the slip path";
   EXPECT_EQ(allocations, 0);

@@ -1,28 +1,17 @@
 // The per-frame path (StrainModel::Sample, Readout::Process, Inversion::Invert) must not allocate:
-// this executable replaces the global operator new with a counting one.
+// this executable links the counting replacement of the global operator new.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
+#include "tests/support/allocation_counter.h"
 
 namespace {
-std::atomic<long> allocations{0};
 int* volatile escaped = nullptr;  // keeps the probe allocation from being optimised away
 }  // namespace
-
-void* operator new(std::size_t size) {
-  ++allocations;
-  if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
-  throw std::bad_alloc();
-}
-void operator delete(void* memory) noexcept { std::free(memory); }
-void operator delete(void* memory, std::size_t) noexcept { std::free(memory); }
 
 namespace graspbed::sensor {
 namespace {
@@ -50,19 +39,19 @@ TEST(AllocationTest, PerFramePathAllocatesNothing) {
   RawFrame frame;
   ReadoutFrame readout_frame;
   TactileState state;
-  const long before = allocations.load();
+  const long before = graspbed::testing::AllocationCount();
   for (int i = 0; i < 50; ++i) {  // spans taring and tared frames
     model.Sample(loads, i * 1e-3, &frame);
     readout.Process(frame, &readout_frame);
     inversion.Invert(readout_frame, &state);
   }
-  EXPECT_EQ(allocations.load() - before, 0);
+  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
   EXPECT_TRUE(readout.tared());
   EXPECT_EQ(state.validity[2], UnitValidity::kOpen);
   // The counter does count: a vector allocates.
   std::vector<int> probe(10);
   escaped = probe.data();
-  EXPECT_GT(allocations.load() - before, 0);
+  EXPECT_GT(graspbed::testing::AllocationCount() - before, 0);
 }
 
 }  // namespace

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "controller/grasp_controller.h"
-#include "tests/sim/allocation_counter.h"
+#include "tests/support/allocation_counter.h"
 #include "tests/sim/sim_fixture.h"
 
 namespace graspbed::sim {
@@ -125,13 +125,13 @@ TEST_F(RigTest, StepSamplingAndControlAllocateNothing) {
   rig.controller().SetIntent(controller::GraspIntent::kClose);
   rig.AdvanceTo(0.9);  // in contact, tared
   std::vector<sensor::UnitLoad> loads(rig.simulation().unit_count());
-  const long before = testing::AllocationCount();
+  const long before = graspbed::testing::AllocationCount();
   for (int i = 0; i < 400; ++i) {
     rig.Step();
     rig.simulation().ComputeUnitLoads(loads);
     (void)rig.simulation().truth();
   }
-  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
   EXPECT_GT(rig.loop().state().contact_count, 0);
 }
 

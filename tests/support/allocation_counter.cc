@@ -1,11 +1,12 @@
-#include "tests/controller/allocation_counter.h"
+#include "tests/support/allocation_counter.h"
 
 #include <atomic>
 #include <cstdlib>
 #include <new>
 
 // Replacements of the global allocation functions, in their own translation unit so the compiler
-// never sees a new/free pair inlined together.
+// never sees a new/free pair inlined together. AllocationCount() is what pulls this object out of
+// the static library into a test executable.
 namespace {
 std::atomic<long> allocation_count{0};
 }  // namespace
@@ -21,8 +22,8 @@ void operator delete(void* pointer, std::size_t) noexcept { std::free(pointer); 
 void operator delete[](void* pointer) noexcept { std::free(pointer); }
 void operator delete[](void* pointer, std::size_t) noexcept { std::free(pointer); }
 
-namespace graspbed::controller::testing {
+namespace graspbed::testing {
 
 long AllocationCount() { return allocation_count.load(); }
 
-}  // namespace graspbed::controller::testing
+}  // namespace graspbed::testing
