@@ -309,10 +309,12 @@ void GripSlipController::RespondToSlip(double time_s) {
   ++telemetry_.slip_events;
   refractory_until_s_ = time_s + config_.slip_refractory_s;
   // At slip the contact sits on its friction cone: the ratio measured now is the friction
-  // coefficient (or an upper bound of the part still sticking). The ratio cue itself compares
-  // against the estimate, so only the independent cues teach the estimate.
+  // coefficient (or an upper bound of the part still sticking). The filtered ratio lags a sudden
+  // load step, so this frame's own ratio counts too: the larger of the two is the better estimate of
+  // where the cone is. The ratio cue itself compares against the estimate, so only the independent
+  // cues teach the estimate.
   if ((signals.vibration_slip || signals.centroid_slip) && signals.tangential_load_n >= config_.friction_learn_min_load_n) {
-    const double observed = std::min(signals.ratio, friction_);
+    const double observed = std::min(std::max(signals.ratio, signals.instant_ratio), friction_);
     friction_ = std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
   }
   const double grip_n = diagnostics_.measured_grip_n;

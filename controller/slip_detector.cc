@@ -212,6 +212,7 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     const double axial = ratio_filter_.Update(component[0]);
     const double circumferential = ratio_circumferential_filter_.Update(component[1]);
     signals_.ratio = std::hypot(axial, circumferential);
+    signals_.instant_ratio = std::hypot(component[0], component[1]);
     // Delta method: variance of the magnitude from the components' variances, reduced by the
     // low-pass; the learned shear noise sets the scale.
     if (signals_.ratio > 0.0) {
@@ -223,6 +224,7 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     ratio_filter_.Clear();
     ratio_circumferential_filter_.Clear();
     signals_.ratio = 0.0;
+    signals_.instant_ratio = 0.0;
   }
   signals_.tangential_load_n = signals_.ratio * std::max(grip_n, 0.0);
   signals_.ratio_threshold = config_.ratio_slip_fraction * friction_estimate + config_.ratio_noise_sigmas * noise_sigma;

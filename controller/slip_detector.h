@@ -68,6 +68,9 @@ struct SlipDetectorConfig {
 /// What the detector saw in the newest frame. Which cues fired is reported separately.
 struct SlipSignals {
   double ratio = 0.0;                  ///< filtered tangential/normal load ratio [-]
+  /// The same ratio from this frame alone, unfiltered [-]: at a slip onset the filtered ratio still
+  /// lags a step of load, this one does not (noisier; used to learn friction, not to detect).
+  double instant_ratio = 0.0;
   double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
   double tangential_load_n = 0.0;      ///< ratio times measured grip: load the grip must hold [N]
   /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
