@@ -80,44 +80,28 @@ double SecondsSince(Clock::time_point start) {
 /// Everything `hw --config FILE` can set (docs/hardware.md "Configuration").
 struct HwRunConfig {
   serial::HardwareConfig serial;
-  controller::ControlLoopConfig loop;
-  /// The controller and its parameters (names as in a scenario's controller section, so a controller
-  /// tuned in simulation runs with the same numbers on the hand).
-  std::string controller = "grip_slip";
-  controller::ControllerParams controller_params;
-  /// Task grip ceiling [N]; 0 = none (the controller's own overall ceiling still holds).
-  double grip_ceiling_n = 0.0;
-  /// Control ticks per second when frames do not arrive (ticks also follow every frame) [Hz].
-  double rate_hz = 1000.0;
+  /// The controller section exactly as in a scenario (name, params, grip_ceiling_n, rate_hz,
+  /// stale_timeout_s), so a controller tuned in simulation runs with the same numbers on the hand.
+  /// rate_hz: control ticks per second when frames do not arrive (ticks also follow every frame).
+  scenario::ControllerOptions controller;
+  controller::ControlLoopConfig loop;  ///< readout, inversion; stale timeout from `controller`
 };
 
+/// Reads `hw --config FILE`; an empty path gives the defaults (the reference controller).
 HwRunConfig LoadHwRunConfig(const std::string& path) {
-  const common::YamlMap root = common::YamlMap::LoadFile(path);
+  YAML::Node no_file(YAML::NodeType::Map);
+  const common::YamlMap root = path.empty() ? common::YamlMap(no_file, "(no --config)", "")
+                                            : common::YamlMap::LoadFile(path);
   HwRunConfig config;
   if (const auto section = root.GetMap("serial")) config.serial = serial::HardwareConfigFromYaml(*section);
-  if (const auto section = root.GetMap("control")) {
-    config.rate_hz = section->GetNumber("rate_hz", config.rate_hz, {1.0, 20000.0, false});
-    config.loop.stale_timeout_s =
-        section->GetNumber("stale_timeout_s", config.loop.stale_timeout_s, common::NumberRule::Positive());
-    section->RejectUnknownKeys();
-  }
   if (const auto section = root.GetMap("controller")) {
-    config.controller = section->GetString("name", config.controller, controller::ControllerNames());
-    config.grip_ceiling_n = section->GetNumber("grip_ceiling_n", config.grip_ceiling_n, {0.0, 1000.0, true});
-    if (const auto params = section->GetMap("params")) {
-      // Names and ranges are the controller's own: add the parameters one by one, so the first that
-      // the controller refuses is the one named, with its file and line.
-      for (const std::string& key : params->Keys()) {
-        config.controller_params[key] = params->RequireNumber(key);
-        try {
-          controller::MakeController(config.controller, config.controller_params);
-        } catch (const std::invalid_argument& error) {
-          params->Fail(key, error.what());
-        }
-      }
-    }
-    section->RejectUnknownKeys();
+    config.controller = scenario::LoadControllerOptions(*section, "grip_slip");
+  } else {
+    YAML::Node empty(YAML::NodeType::Map);
+    config.controller = scenario::LoadControllerOptions(common::YamlMap(empty, root.file(), "controller"),
+                                                        "grip_slip");
   }
+  config.loop.stale_timeout_s = config.controller.stale_timeout_s;
   if (const auto section = root.GetMap("readout")) config.loop.readout = sensor::LoadReadoutConfig(*section);
   if (const auto section = root.GetMap("inversion")) {
     config.loop.inversion = sensor::LoadInversionConfig(*section);
@@ -150,21 +134,38 @@ class FrameLogger {
     out_ << '\n';
     thread_ = std::thread([this] { Run(); });
   }
-  ~FrameLogger() { Finish(); }
+  /// Stops the writer thread; a log that was not Finish()ed stays PATH.partial (never looks complete).
+  ~FrameLogger() { StopThread(); }
   FrameLogger(const FrameLogger&) = delete;
   FrameLogger& operator=(const FrameLogger&) = delete;
 
-  /// Writes what is left, closes and renames the file. Call after the link has stopped.
+  /// Writes what is left, closes and renames the file. Call after the link has stopped. On a write
+  /// or rename failure the file stays PATH.partial and error() says why.
   void Finish() {
-    if (!thread_.joinable()) return;
-    done_ = true;
-    thread_.join();
+    if (!StopThread()) return;
+    out_.flush();
     out_.close();
-    std::filesystem::rename(path_ + ".partial", path_);
+    if (out_.fail()) {
+      error_ = "writing " + path_ + ".partial failed (disk full?); left as .partial";
+      return;
+    }
+    std::error_code rename_error;
+    std::filesystem::rename(path_ + ".partial", path_, rename_error);
+    if (rename_error) error_ = "renaming " + path_ + ".partial failed: " + rename_error.message();
   }
   uint64_t rows() const { return rows_; }
+  /// Empty unless Finish() could not complete the file.
+  const std::string& error() const { return error_; }
 
  private:
+  /// Joins the writer thread once it has drained the tap; false when it was already stopped.
+  bool StopThread() {
+    if (!thread_.joinable()) return false;
+    done_ = true;
+    thread_.join();
+    return true;
+  }
+
   void Run() {
     for (;;) {
       const bool last_round = done_.load();
@@ -211,6 +212,7 @@ class FrameLogger {
   std::thread thread_;
   std::atomic<bool> done_{false};
   std::atomic<uint64_t> rows_{0};
+  std::string error_;
 };
 
 struct HwOptions {
@@ -235,7 +237,7 @@ controller::GraspIntent ParseIntent(const std::string& text) {
 }
 
 void RunHw(const HwOptions& options) {
-  HwRunConfig config = options.config.empty() ? HwRunConfig{} : LoadHwRunConfig(options.config);
+  HwRunConfig config = LoadHwRunConfig(options.config);
   if (!options.port.empty()) config.serial.port = options.port;
   if (config.serial.port.empty()) {
     throw std::invalid_argument("hw: no serial port: give --port PATH or serial.port in --config");
@@ -251,9 +253,13 @@ void RunHw(const HwOptions& options) {
                                               ? sensor::PaperCalibration(units)
                                               : sensor::LoadCalibration(options.calibration, units);
   // --controller picks another controller than the config's; the config's parameters belong to its own.
-  if (!options.controller.empty() && options.controller != config.controller) {
-    config.controller = options.controller;
-    config.controller_params.clear();
+  scenario::ControllerOptions& chosen = config.controller;
+  if (!options.controller.empty() && options.controller != chosen.name) {
+    chosen.name = options.controller;
+    chosen.params.clear();
+    for (const auto& parameter : controller::ControllerParameters(chosen.name)) {
+      chosen.params[parameter.name] = parameter.default_value;
+    }
   }
   for (const std::string& assignment : options.params) {
     const size_t equals = assignment.find('=');
@@ -263,24 +269,30 @@ void RunHw(const HwOptions& options) {
     if (equals == 0 || number.empty() || end != number.c_str() + number.size() || !std::isfinite(value)) {
       throw std::invalid_argument("--param " + assignment + ": expected NAME=NUMBER");
     }
-    config.controller_params[assignment.substr(0, equals)] = value;
+    chosen.params[assignment.substr(0, equals)] = value;
   }
-  std::unique_ptr<controller::GraspController> grasp =
-      controller::MakeController(config.controller, config.controller_params);
-  if (config.grip_ceiling_n > 0.0) grasp->SetGripCeiling(config.grip_ceiling_n);
+  // The factory names an unknown parameter, a value out of its range or a cross-field conflict.
+  std::unique_ptr<controller::GraspController> grasp = controller::MakeController(chosen.name, chosen.params);
+  if (chosen.grip_ceiling_n > 0.0) grasp->SetGripCeiling(chosen.grip_ceiling_n);
+  // The log must be writable before the port is touched (refused, like all bad input, up front).
+  if (!options.log.empty() && !std::ofstream(options.log + ".partial", std::ios::trunc)) {
+    throw std::invalid_argument("--log " + options.log + ": cannot write this file");
+  }
 
   serial::HardwareBackend backend(config.serial, units, layout.name);
   serial::HardwareActuator actuator(backend, config.serial);
   serial::SerialLink& link = *backend.link();
   if (!options.log.empty()) link.EnableTap(16384);
+  // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
+  StopSignalGuard signals;
   try {
     backend.Start();
     actuator.Start();
   } catch (const std::runtime_error& error) {
     // Missing port, no permission, busy, no HELLO, wrong unit count: refused before running.
+    if (!options.log.empty()) std::filesystem::remove(options.log + ".partial");
     throw std::invalid_argument(error.what());
   }
-  StopSignalGuard signals;
   controller::ControlLoop loop(backend, *grasp, actuator, layout, calibration, config.loop);
   std::unique_ptr<FrameLogger> logger;
   if (!options.log.empty()) {
@@ -289,7 +301,7 @@ void RunHw(const HwOptions& options) {
   }
 
   // Tick on every frame arrival, and at rate_hz when frames stop (stale detection, commands).
-  const double period_s = 1.0 / config.rate_hz;
+  const double period_s = 1.0 / chosen.rate_hz;
   const Clock::time_point start = Clock::now();
   uint64_t seen = 0;
   bool intent_given = false;
@@ -307,6 +319,7 @@ void RunHw(const HwOptions& options) {
     if (!loop.state().stale) peak_total_fn_n = std::max(peak_total_fn_n, loop.state().total_fn_n);
   }
   const double run_s = SecondsSince(start);
+  const bool connected_at_end = link.connected();  // before Stop() closes the port
   // PROTOCOL.md's clean shutdown order: stream stop, motor off (both sent by the link's shutdown when
   // the motor shares the port; a separate motor port is switched off just after), restore, close.
   backend.Stop();
@@ -344,17 +357,23 @@ void RunHw(const HwOptions& options) {
     summary["log"] = options.log;
     summary["log_rows"] = logger->rows();
     summary["log_rows_lost"] = link.tap_overflows();
+    if (!logger->error().empty()) summary["log_error"] = logger->error();
   }
+  // The run failed (exit 1) when the device was gone at the end or the log could not be completed.
+  summary["connected_at_end"] = connected_at_end;
+  const bool failed = !connected_at_end || (logger && !logger->error().empty());
   if (!link.last_error().empty()) summary["last_error"] = link.last_error();
   if (options.json) {
     std::cout << summary.dump(2) << '\n';
-    return;
+  } else {
+    std::cout << "hw " << config.serial.port << ": " << run_s << " s, " << counters.frames << " frames, "
+              << counters.corrupt << " corrupt, " << counters.dropped << " dropped, " << counters.unknown_packets
+              << " unknown, " << counters.reconnects << " reconnects, " << counters.stale_periods
+              << " stale periods, " << counters.sessions << " sessions; peak grip " << peak_total_fn_n
+              << " N (sensed)" << (connected_at_end ? "" : "; device DISCONNECTED at the end")
+              << (logger && !logger->error().empty() ? "; log: " + logger->error() : "") << '\n';
   }
-  std::cout << "hw " << config.serial.port << ": " << run_s << " s, " << counters.frames << " frames, "
-            << counters.corrupt << " corrupt, " << counters.dropped << " dropped, " << counters.unknown_packets
-            << " unknown, " << counters.reconnects << " reconnects, " << counters.stale_periods
-            << " stale periods, " << counters.sessions << " sessions; peak grip " << peak_total_fn_n
-            << " N (sensed)\n";
+  if (failed) throw CLI::RuntimeError(kExitFailed);  // main() returns the code silently
 }
 
 // ---- emulate -----------------------------------------------------------------------------------------
@@ -419,7 +438,7 @@ class SimulatedDevice {
       if (!host_done_) {
         scenario::TickSample sample;
         sample.time_s = sim_time_s_;
-        sample.intent = player_.intent();
+        sample.intent = host_intent_;  // the host's controller closes and opens, not the script
         sample.truth = &truth;
         sample.state = &no_estimate_;
         tracker_.Update(sample);
@@ -445,6 +464,10 @@ class SimulatedDevice {
   /// Emulator thread: the motor state the device drives.
   void Motor(const serial::EmulatedMotor& motor) {
     rig_.actuator().Write({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
+    // What the host means, as far as the motor shows it: closing effort = grasp, opening effort =
+    // release. The motor going off (watchdog, stream loss) is no decision of the host's.
+    if (motor.enable && motor.effort > 0.0) host_intent_ = controller::GraspIntent::kClose;
+    if (motor.enable && motor.effort < 0.0) host_intent_ = controller::GraspIntent::kOpen;
   }
 
   /// Ground truth and the metrics of `graspbed run` (same keys) as the host left the hand.
@@ -494,6 +517,7 @@ class SimulatedDevice {
   double target_s_ = 0.0;
   std::atomic<bool> started_{false};
   std::atomic<bool> host_done_{false};
+  controller::GraspIntent host_intent_ = controller::GraspIntent::kIdle;  ///< emulator thread only
   sensor::RawFrame latest_;
   double initial_object_z_m_ = 0.0;
   mutable std::mutex mutex_;  // guards the values below, read by the main thread
@@ -570,7 +594,10 @@ void RunEmulate(const EmulateOptions& options) {
   std::cout << "emulate " << options.link << " (" << ended_by << "): " << summary["sim_time_s"].get<double>()
             << " s simulated, " << stats.frames_sent << " frames sent, " << stats.motor_commands
             << " motor commands, " << stats.watchdog_trips << " watchdog trips; object "
-            << (metrics["dropped"].get<bool>() ? "DROPPED" : "held") << ", lifted "
+            << (!metrics["grasped"].get<bool>() ? "not grasped"
+                : metrics["dropped"].get<bool>() ? "DROPPED"
+                                                 : "held")
+            << ", lifted "
             << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak grip "
             << metrics["peak_grip_n"].get<double>() << " N, slip " << metrics["max_slip_mm"].get<double>()
             << " mm\n";

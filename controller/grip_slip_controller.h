@@ -37,7 +37,7 @@ struct GripSlipConfig {
   double load_rate_n_per_s = 20.0;      ///< ramp rate of the grip target while loading [N/s]
   double load_timeout_s = 0.3;          ///< loading ends after this long even if the grip lags [s]
   double min_grip_n = 1.5;              ///< grip target never drops below this while holding [N]
-  double max_grip_n = 10.0;             ///< overall grip ceiling (sum over the units; the sensor's rated range) [N]
+  double max_grip_n = 10.0;             ///< overall grip ceiling, sum over the units (tuning choice, docs/controller.md) [N]
   double safety_margin = 1.4;           ///< grip = tangential load / friction estimate x this
   double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
   double unit_range_n = 10.0;           ///< a saturated (out-of-range) unit counts as this force [N]

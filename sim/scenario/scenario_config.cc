@@ -266,6 +266,12 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     s.fea_config = std::filesystem::absolute(path).lexically_normal().string();
   }
   if (s.sensitivities == "fea") {
+    // Two sources for one number would leave the user guessing which one ran.
+    if (auto sub = map.GetMap("strain_model")) {
+      for (const char* key : {"kn_per_n", "kt_per_n"}) {
+        if (sub->Has(key)) sub->Fail(key, "set by the FEA with sensitivities: fea; remove one of the two");
+      }
+    }
     // The unit's geometry and material decide kn and kt (about 0.1 s of analysis).
     const fea::Sensitivities analysed =
         fea::ComputeSensitivities(fea::LoadFeaConfig(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
@@ -285,9 +291,11 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   return s;
 }
 
-ControllerOptions LoadControllerOptions(const YamlMap& map) {
+}  // namespace
+
+ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& default_name) {
   ControllerOptions c;
-  c.name = map.GetString("name", c.name, controller::ControllerNames());
+  c.name = map.GetString("name", default_name, controller::ControllerNames());
   const std::vector<controller::ControllerParameter> declared = controller::ControllerParameters(c.name);
   for (const auto& parameter : declared) c.params[parameter.name] = parameter.default_value;
   if (auto params = map.GetMap("params")) {
@@ -307,8 +315,24 @@ ControllerOptions LoadControllerOptions(const YamlMap& map) {
   c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, 100000.0));
   c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, NumberRule::Positive());
   map.RejectUnknownKeys();
+  // Each value is in its range; what is left are the controller's cross-field checks (e.g. min_grip_n
+  // <= max_grip_n). Build it once and blame the parameter its message names.
+  try {
+    controller::MakeController(c.name, c.params);
+  } catch (const std::invalid_argument& error) {
+    const std::string message = error.what();
+    if (auto params = map.GetMap("params")) {
+      for (const std::string& key : params->Keys()) {
+        if (message.find("parameter " + key + " ") != std::string::npos) params->Fail(key, message);
+      }
+      map.Fail("params", message);
+    }
+    map.Fail("name", message);
+  }
   return c;
 }
+
+namespace {
 
 ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   const YamlMap map(root, file, "");
@@ -519,8 +543,14 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
   EmitNumber(out, "r0_ohm", m.nominal.r0_ohm);
   EmitNumber(out, "gauge_factor", m.nominal.gauge_factor);
-  EmitNumber(out, "kn_per_n", m.nominal.kn_per_n);
-  EmitNumber(out, "kt_per_n", m.nominal.kt_per_n);
+  if (s.sensitivities == "fea") {
+    // Derived, not set: reloading this file runs the analysis again (and refuses explicit values).
+    out << YAML::Comment("kn_per_n " + FormatDouble(m.nominal.kn_per_n) + ", kt_per_n " +
+                         FormatDouble(m.nominal.kt_per_n) + " /N from the FEA");
+  } else {
+    EmitNumber(out, "kn_per_n", m.nominal.kn_per_n);
+    EmitNumber(out, "kt_per_n", m.nominal.kt_per_n);
+  }
   EmitNumber(out, "rated_force_n", m.nominal.rated_force_n);
   EmitNumber(out, "r0_spread_fraction", m.r0_spread_fraction);
   EmitNumber(out, "sensitivity_spread_fraction", m.sensitivity_spread_fraction);

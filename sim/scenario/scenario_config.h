@@ -159,6 +159,11 @@ struct ControllerOptions {
   double stale_timeout_s = 0.02;    ///< no frame for this long: state stale, controller holds [s]
 };
 
+/// Reads a controller section (name, params, grip_ceiling_n, rate_hz, stale_timeout_s; the same in a
+/// scenario and in `graspbed hw --config`). Unknown keys, names and parameters, out-of-range values
+/// and the controller's own cross-field checks are refused at the offending key with file and line.
+ControllerOptions LoadControllerOptions(const common::YamlMap& map, const std::string& default_name = "open_loop");
+
 /// A complete scenario.
 struct ScenarioConfig {
   std::string name;          ///< default: the file name without .yaml

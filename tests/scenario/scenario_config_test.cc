@@ -309,5 +309,23 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
   }
 }
 
+TEST(ScenarioConfigTest, ControllerCrossFieldChecksNameTheParameterAndLine) {
+  const std::string error = ErrorOf("controller:\n  name: grip_slip\n  params:\n    safety_margin: 2\n    min_grip_n: 12\n");
+  EXPECT_NE(error.find("test.yaml:5: controller.params.min_grip_n = 12"), std::string::npos) << error;
+  EXPECT_NE(error.find("must not exceed max_grip_n"), std::string::npos) << error;
+  EXPECT_EQ(ErrorOf("controller:\n  name: grip_slip\n  params: {min_grip_n: 12, max_grip_n: 20}\n"), "");
+}
+
+TEST(ScenarioConfigTest, FeaSensitivitiesAndExplicitKnAreRefusedTogether) {
+  const std::string error =
+      ErrorOf("sensor:\n  sensitivities: fea\n  strain_model:\n    noise_ohm: 1\n    kt_per_n: 2e-4\n");
+  EXPECT_NE(error.find("test.yaml:5: sensor.strain_model.kt_per_n = 2e-4: set by the FEA"), std::string::npos)
+      << error;
+  // The resolved file of an FEA scenario carries the derived values only as a comment, so it loads.
+  const ScenarioConfig config = LoadScenarioFromString("sensor: {sensitivities: fea}\n", "t.yaml");
+  const ScenarioConfig again = LoadScenarioFromString(EmitScenarioYaml(config), "resolved.yaml");
+  EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kt_per_n, config.sensor.strain_model.nominal.kt_per_n);
+}
+
 }  // namespace
 }  // namespace graspbed::scenario

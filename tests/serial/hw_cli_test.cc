@@ -32,7 +32,32 @@ TEST_F(HwCliTest, ControllerParameterOutOfRangeInTheConfigNamesFileLineKeyAndVal
   const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
   EXPECT_EQ(result.exit_code, kExitBadInput);
   EXPECT_THAT(result.err, HasSubstr(config + ":5: controller.params.max_grip_n = 300"));
-  EXPECT_THAT(result.err, HasSubstr("must be in [0.1, 200] N"));
+  EXPECT_THAT(result.err, HasSubstr("must be <= 200"));
+}
+
+TEST_F(HwCliTest, CrossFieldChecksSeeEveryParameterWhateverTheirOrder) {
+  // Both orders are valid: the check runs on the whole set, not one key at a time.
+  for (const char* params : {"{min_grip_n: 12, max_grip_n: 20}", "{max_grip_n: 20, min_grip_n: 12}"}) {
+    SCOPED_TRACE(params);
+    const std::string config = dir_.Write("order.yaml", std::string("controller:\n  params: ") + params + "\n");
+    const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+    EXPECT_EQ(result.exit_code, kExitBadInput);
+    EXPECT_THAT(result.err, HasSubstr("does not exist"));  // got past the config to the port
+  }
+  // Alone, min_grip_n 12 exceeds the default 10 N ceiling: named at its line.
+  const std::string config = dir_.Write("alone.yaml", "controller:\n  params:\n    min_grip_n: 12\n");
+  const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr(config + ":3: controller.params.min_grip_n = 12"));
+  EXPECT_THAT(result.err, HasSubstr("must not exceed max_grip_n"));
+}
+
+TEST_F(HwCliTest, AnUnwritableLogIsRefusedBeforeThePort) {
+  const std::string file_in_the_way = dir_.Write("not_a_dir", "x");
+  const CliResult result =
+      RunCli("hw --port " + dir_.Path("no-device") + " --log " + file_in_the_way + "/frames.csv");
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("--log " + file_in_the_way + "/frames.csv: cannot write this file"));
 }
 
 TEST_F(HwCliTest, UnknownControllerAndUnknownKeyInTheConfigAreRefused) {
