@@ -335,7 +335,9 @@ GroundTruth Simulation::truth() const {
   double thumb_on_object = 0.0;
   double slip_weighted = 0.0;
   double slip_weight = 0.0;
-  mjtNum tangential_world[3] = {0.0, 0.0, 0.0};
+  // Tangential force of each digit on the object, world frame [N].
+  mjtNum finger_tangential[3] = {0.0, 0.0, 0.0};
+  mjtNum thumb_tangential[3] = {0.0, 0.0, 0.0};
   for (int c = 0; c < d->ncon; ++c) {
     const mjContact& contact = d->contact[c];
     const int side1 = geom_side_[contact.geom1];
@@ -374,9 +376,13 @@ GroundTruth Simulation::truth() const {
       thumb_on_object += normal;
       ++t.thumb_contacts;
     }
-    // contact.frame rows are the normal and the two tangent directions (world frame).
+    // contact.frame rows are the normal (from geom1 to geom2) and the two tangent directions, world
+    // frame; mj_contactForce gives the force on geom2 in it. MuJoCo orders the pair by geom type,
+    // so the object may be either: flip the sign when it is geom1 to get the force on the object.
+    const double on_object = contact.geom2 == object_geom_ ? 1.0 : -1.0;
+    mjtNum* tangential = side == kFinger ? finger_tangential : thumb_tangential;
     for (int k = 0; k < 3; ++k) {
-      tangential_world[k] += local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k];
+      tangential[k] += on_object * (local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k]);
     }
     mjtNum v_object[3];
     mjtNum v_digit[3];
@@ -393,9 +399,14 @@ GroundTruth Simulation::truth() const {
   if (slip_weight > 0.0) t.mean_slip_speed_m_s = slip_weighted / slip_weight;
   if (t.holder_normal_force_n > 1e-9) t.sensed_share = t.sensed_normal_force_n / t.holder_normal_force_n;
   t.object_squeeze_n = std::max(finger_on_object, thumb_on_object);
-  t.object_tangential_load_n = mju_norm3(tangential_world);
+  for (int k = 0; k < 3; ++k) t.object_tangential_force_n[k] = finger_tangential[k] + thumb_tangential[k];
+  t.object_tangential_load_n = mju_norm3(t.object_tangential_force_n.data());
+  // Both digits press with the same squeeze, and each must hold its own tangential force inside
+  // its friction cone: the digit carrying more sets the grip (half the total when they share evenly).
   const double friction = m->geom_friction[3 * object_geom_];
-  if (friction > 0.0) t.required_grip_n = t.object_tangential_load_n / (2.0 * friction);
+  if (friction > 0.0) {
+    t.required_grip_n = std::max(mju_norm3(finger_tangential), mju_norm3(thumb_tangential)) / friction;
+  }
   return t;
 }
 

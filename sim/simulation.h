@@ -67,11 +67,16 @@ struct GroundTruth {
   /// holder shell itself (pushed through the mesas).
   double max_mesa_penetration_m = 0.0;
   bool object_touches_holder_shell = false;
-  /// Magnitude of the summed tangential contact force of both digits on the object, world frame [N]:
-  /// the load the pinch carries by friction (weight, pulls, inertia).
+  /// Total tangential contact force the finger and the thumb exert on the object, world frame [N]
+  /// (held still under gravity: the weight, pointing up).
+  std::array<double, 3> object_tangential_force_n{};
+  /// Its magnitude [N]: the load the pinch carries by friction (weight, pulls, inertia).
   double object_tangential_load_n = 0.0;
-  /// Least squeeze per digit that carries that load at the object's current friction coefficient:
-  /// tangential load / (2 mu) [N]. Peak grip over this is the grasp's efficiency.
+  /// Least squeeze per digit that holds the object at its current friction coefficient mu:
+  /// max(|Ft finger|, |Ft thumb|) / mu [N], with Ft a digit's tangential force on the object (world
+  /// frame). Both digits press with the same squeeze and each must keep its own share inside its
+  /// friction cone; an even share gives tangential load / (2 mu). Peak grip over this is the
+  /// grasp's efficiency.
   double required_grip_n = 0.0;
   int finger_contacts = 0;  ///< contacts between the object and the finger
   int thumb_contacts = 0;   ///< contacts between the object and the thumb

@@ -1,7 +1,10 @@
-// The closed loop on the simulated clock: the open-loop baseline closes on and lifts a box;
-// determinism bit for bit; the backend's rate, latency and frame drops; no allocation per step.
+// The closed loop on the simulated clock: the open-loop baseline closes on and lifts a box; the
+// ground truth's tangential load and required grip of a held object; determinism bit for bit; the
+// backend's rate, latency and frame drops; no allocation per step.
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -15,6 +18,11 @@ namespace {
 constexpr double kLiftHeightM = 0.05;
 constexpr double kHeightTolM = 0.005;
 constexpr double kForceTolN = 0.5;
+// Held still, the pinch's tangential load is the weight (measured: 0.981 N of 0.981 N for the box).
+constexpr double kWeightRelTol = 0.03;
+// Required grip over the even-share grip m g / (2 mu) (measured: 1.07 for the box).
+constexpr double kMaxUnevenShare = 2.0;
+constexpr double kTwistNm = 0.02;  // about the vertical: a 0.4 N couple across the 50 mm box
 
 class RigTest : public testing::MujocoTest {
  protected:
@@ -46,6 +54,67 @@ TEST_F(RigTest, OpenLoopBaselineClosesOnAndLiftsABox) {
   EXPECT_GT(state.contact_count, 0);
   EXPECT_NEAR(state.total_fn_n, truth.finger_normal_force_n * std::cos(0.211), 0.03 * truth.finger_normal_force_n);
   EXPECT_EQ(rig.loop().command().grip_effort, 0.5);
+}
+
+TEST_F(RigTest, AStillPinchCarriesTheWeightAndNeedsEachDigitsShareOfGrip) {
+  // The default object: a 100 g box at friction 0.8, lifted and then held still (no pull, no
+  // acceleration), so the pinch carries exactly its weight by friction.
+  SimRigConfig config;
+  const double mass_kg = config.scene.object.mass_kg;
+  const double friction = config.scene.object.friction;
+  ASSERT_EQ(config.scene.object.shape, ObjectShape::kBox);
+  ASSERT_DOUBLE_EQ(mass_kg, 0.1);
+  ASSERT_DOUBLE_EQ(friction, 0.8);
+  SimRig& rig = MakeRig(config, "open_loop", {{"close_effort", 0.5}});
+  CloseAndLift(rig, 3.0);
+  const GroundTruth truth = rig.simulation().truth();
+  ASSERT_NEAR(truth.object_height_above_table_m, kLiftHeightM, kHeightTolM);
+  const double weight_n = mass_kg * config.scene.physics.gravity_m_s2;
+  EXPECT_NEAR(truth.object_tangential_load_n, weight_n, kWeightRelTol * weight_n);
+  EXPECT_NEAR(truth.object_tangential_force_n[2], weight_n, kWeightRelTol * weight_n);  // holds it up
+  // At least an even share of the weight per digit; an uneven share needs more, but not many times.
+  EXPECT_GE(truth.required_grip_n, weight_n / (2.0 * friction) * (1.0 - kWeightRelTol));
+  EXPECT_LT(truth.required_grip_n, kMaxUnevenShare * weight_n / (2.0 * friction));
+}
+
+TEST_F(RigTest, TheTangentialForceIsOnTheObjectWhicheverGeomOfTheContactItIs) {
+  // MuJoCo orders a contact's geoms by type, and a cylinder comes before the digits' boxes: the
+  // object is geom1, and mj_contactForce's force on geom2 is the digit's share, not the object's.
+  SimRigConfig config;
+  config.scene.object.shape = ObjectShape::kCylinder;
+  config.scene.object.size_m = {0.05, 0.0, 0.08};
+  SimRig& rig = MakeRig(config, "open_loop", {{"close_effort", 0.5}});
+  CloseAndLift(rig, 3.0);
+  const mjModel* m = rig.simulation().model();
+  const mjData* d = rig.simulation().data();
+  const int object_geom = mj_name2id(m, mjOBJ_GEOM, "object_geom");
+  int object_first = 0;
+  for (int c = 0; c < d->ncon; ++c) object_first += d->contact[c].geom1 == object_geom ? 1 : 0;
+  ASSERT_GT(object_first, 0) << "the premise: MuJoCo put the object first in its contacts";
+  const GroundTruth truth = rig.simulation().truth();
+  ASSERT_NEAR(truth.object_height_above_table_m, kLiftHeightM, kHeightTolM);
+  const double weight_n = config.scene.object.mass_kg * config.scene.physics.gravity_m_s2;
+  EXPECT_NEAR(truth.object_tangential_force_n[2], weight_n, kWeightRelTol * weight_n);
+}
+
+TEST_F(RigTest, ATwistHeldByACoupleNeedsEachDigitsShareOfItInGrip) {
+  // A torque about the vertical on the held box is carried by opposite horizontal friction forces
+  // at the finger and the thumb: they cancel in the total (which stays the weight), but each digit
+  // must hold its own inside its friction cone.
+  SimRigConfig config;
+  const double friction = config.scene.object.friction;
+  const double lever_m = config.scene.object.size_m[0];  // between the pinched faces
+  SimRig& rig = MakeRig(config, "open_loop", {{"close_effort", 0.5}});
+  CloseAndLift(rig, 2.5);
+  const int object_body = mj_name2id(rig.simulation().model(), mjOBJ_BODY, "object");
+  rig.simulation().mutable_data()->xfrc_applied[6 * object_body + 5] = kTwistNm;  // about world z
+  rig.AdvanceTo(3.0);  // the wrist stays where the lift left it
+  const GroundTruth truth = rig.simulation().truth();
+  ASSERT_NEAR(truth.object_height_above_table_m, kLiftHeightM, kHeightTolM);
+  const double weight_n = config.scene.object.mass_kg * config.scene.physics.gravity_m_s2;
+  const double couple_n = kTwistNm / lever_m;
+  EXPECT_NEAR(truth.object_tangential_load_n, weight_n, kWeightRelTol * weight_n);
+  EXPECT_GE(truth.required_grip_n, std::hypot(0.5 * weight_n, couple_n) / friction * (1.0 - kWeightRelTol));
 }
 
 TEST_F(RigTest, SameSeedGivesIdenticalFramesDifferentSeedDoesNot) {
