@@ -202,7 +202,7 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.max_slip_mm = copy.slip_distance_m_ * 1e3;
   m.peak_grip_n = copy.peak_grip_n_;
   m.needed_grip_n = copy.needed_grip_n_;
-  if (copy.needed_grip_n_ > 0.0) m.grip_efficiency_ratio = copy.peak_grip_n_ / copy.needed_grip_n_;
+  if (copy.needed_grip_n_ >= kMinNeededGripN) m.grip_efficiency_ratio = copy.peak_grip_n_ / copy.needed_grip_n_;
   m.crushed = copy.crush_limit_n_ > 0.0 && copy.peak_grip_n_ > copy.crush_limit_n_;
   m.slip_events = copy.event_count_;
   m.missed_slip_events = copy.missed_;

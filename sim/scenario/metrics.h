@@ -37,10 +37,12 @@ struct Metrics {
   double max_slip_mm = 0.0;       ///< slip distance accumulated above the creep speed while held [mm]
   double peak_grip_n = 0.0;       ///< largest squeeze on the object over the run [N]
   bool crushed = false;           ///< peak_grip_n above object.crush_limit_n (fragile objects only)
-  /// Largest grip the held object needed: max over holding ticks of its tangential load / (2 mu) [N].
+  /// Largest grip the held object needed: max over holding ticks of the ground truth's
+  /// required_grip_n, max(|Ft finger|, |Ft thumb|) / mu [N].
   double needed_grip_n = 0.0;
   /// peak_grip_n / needed_grip_n: how many times harder than necessary the hand squeezed at its
-  /// worst [-]; empty when the object was never held with load.
+  /// worst [-]; empty when the object was never held with load (needed_grip_n below
+  /// MetricsTracker::kMinNeededGripN, e.g. grasped but never lifted).
   std::optional<double> grip_efficiency_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
@@ -79,6 +81,10 @@ class MetricsTracker {
  public:
   /// Most slip events kept with their details (more are counted, not stored).
   static constexpr int kMaxEvents = 256;
+  /// Least needed grip that counts as a real load for grip_efficiency_ratio [N]: the default
+  /// contact threshold. Below it (an object grasped but never lifted needs ~1e-6 N) the ratio
+  /// would only measure MuJoCo's residual contact forces.
+  static constexpr double kMinNeededGripN = 0.05;
 
   /// `contact_threshold_n`: per-unit Fn above which a (tick, unit) pair enters the RMSEs [N].
   MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n);

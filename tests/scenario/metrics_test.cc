@@ -288,6 +288,25 @@ TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
   EXPECT_FALSE(released.Finish(0.3, 0.1, 0.0).dropped);
 }
 
+TEST_F(TrackerTest, GripEfficiencyOnlyForARealLoad) {
+  // Grasped but never lifted: the needed grip is MuJoCo's residual contact force, no load.
+  truth_.required_grip_n = 1e-6;
+  Run(0.5, 0.0);
+  const Metrics unloaded = tracker_.Finish(0.5, 0.1, 0.0);
+  EXPECT_DOUBLE_EQ(unloaded.needed_grip_n, 1e-6);
+  EXPECT_FALSE(unloaded.grip_efficiency_ratio.has_value()) << *unloaded.grip_efficiency_ratio;
+  // Just below the minimum load still gives none; a lifted object's load gives peak / needed.
+  truth_.required_grip_n = 0.5 * MetricsTracker::kMinNeededGripN;
+  Run(0.6, 0.0);
+  EXPECT_FALSE(tracker_.Finish(0.6, 0.1, 0.0).grip_efficiency_ratio.has_value());
+  truth_.required_grip_n = 0.6;
+  Run(1.0, 0.0);
+  const Metrics loaded = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_DOUBLE_EQ(loaded.needed_grip_n, 0.6);
+  ASSERT_TRUE(loaded.grip_efficiency_ratio.has_value());
+  EXPECT_DOUBLE_EQ(*loaded.grip_efficiency_ratio, 2.0 / 0.6);  // the 2 N squeeze over the 0.6 N needed
+}
+
 TEST_F(TrackerTest, StableWindowAndCrushAndEstimationError) {
   // Squeeze wobbling by 50 % for 0.3 s, then steady: stable from the steady part on.
   for (int i = 0; i < 300; ++i) {
