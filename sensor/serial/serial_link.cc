@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -232,6 +233,7 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
   }
   if (!handshake_) {
     handshake_ = true;
+    last_refused_units_ = -1;  // refused frames of the new connection are reported afresh
     if (ever_connected_) counter_reconnects_.fetch_add(1);
     if (!ever_connected_) {
       counter_sessions_.fetch_add(1);
@@ -259,15 +261,19 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   if (!has_sensor() || !handshake_) return;  // frames before the HELLO belong to nobody's session
   if (frame.unit_count != expected_units_) {
     ++extra_corrupt_;
-    // The message once per change of count, not per frame: this path runs at the frame rate.
+    // The message once per episode of refused frames (or change of count within one), not per
+    // frame: this path runs at the frame rate. An accepted frame or a handshake ends the episode.
     if (frame.unit_count == last_refused_units_) return;
     last_refused_units_ = frame.unit_count;
     std::ostringstream message;
     message << "serial port " << path_ << ": frames carry " << static_cast<int>(frame.unit_count)
-            << " units but layout '" << layout_name_ << "' has " << expected_units_ << "; frames dropped";
+            << " units but layout '" << layout_name_ << "' has " << expected_units_
+            << "; frames dropped from device time " << std::fixed << std::setprecision(3)
+            << frame.device_time_us * 1e-6 << " s";
     SetError(message.str());
     return;
   }
+  last_refused_units_ = -1;  // a later refused frame starts a new episode and is reported again
   if (have_last_frame_) {
     const int seq_step = static_cast<int16_t>(frame.sequence - last_frame_seq_);
     const int64_t time_step = static_cast<int32_t>(frame.device_time_us - last_frame_time_us_);

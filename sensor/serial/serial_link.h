@@ -136,7 +136,8 @@ class SerialLink {
   uint16_t motor_seq_ = 0;
   uint16_t stream_seq_ = 0;
   uint64_t extra_corrupt_ = 0;  // frames refused for a wrong unit count
-  int last_refused_units_ = -1;  // unit count of the last refused frame (its message is set)
+  // Unit count of the current episode of refused frames (its message is set); -1 outside one.
+  int last_refused_units_ = -1;
   uint64_t extra_unknown_ = 0;  // host-to-device packets echoed back to us
 
   // Shared with other threads.

@@ -492,6 +492,26 @@ TEST_F(HardwareTest, FramesWithTheWrongUnitCountAreRefused) {
   EXPECT_EQ(backend_->counters().frames, frames);  // nothing of them reaches the readout
 }
 
+TEST_F(HardwareTest, ASecondEpisodeOfWrongUnitCountFramesIsReportedAgain) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 5; }));
+  emulator_->SetFrameUnitCount(9);
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().corrupt >= 5; }));
+  const std::string first = backend_->link()->last_error();
+  EXPECT_NE(first.find("frames carry 9 units"), std::string::npos) << first;
+  // The device recovers, then sends the same wrong count again: a new episode with its own message.
+  emulator_->SetFrameUnitCount(kUnits);
+  const uint64_t frames = backend_->counters().frames;
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > frames + 5; }));
+  const uint64_t corrupt = backend_->counters().corrupt;
+  emulator_->SetFrameUnitCount(9);
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().corrupt >= corrupt + 5; }));
+  const std::string second = backend_->link()->last_error();
+  EXPECT_NE(second.find("frames carry 9 units"), std::string::npos) << second;
+  EXPECT_NE(second, first) << "the second episode left the first one's message";
+}
+
 TEST_F(HardwareTest, CleanShutdownStopsStreamMotorAndRestoresThePort) {
   StartEmulator();
   const std::string slave = [&] {
