@@ -38,7 +38,7 @@ struct SuiteRun {
 class ReferenceSuiteTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (CliBinary().empty()) GTEST_SKIP() << "GRASPBED_BINARY not set (run through ctest)";
+    if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
   }
 
   SuiteRun RunSuite(const std::string& extra_arguments) {

@@ -4,17 +4,20 @@
 
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 
 #include "sensor/calibration.h"
 #include "sensor/fea/fea_config.h"
 #include "sensor/fea/unit_analysis.h"
 #include "sim/scenario/scenario_config.h"
+#include "tests/support/error_of.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario {
 namespace {
 
-namespace fs = std::filesystem;
+using graspbed::testing::TempDir;
 
 constexpr double kPaperKn = 5.5e-4;
 constexpr double kPaperKt = 4.1e-4;
@@ -22,12 +25,7 @@ constexpr double kPaperKt = 4.1e-4;
 constexpr double kLinearTol = 1e-9;
 
 std::string ErrorOf(const std::string& text) {
-  try {
-    LoadScenarioFromString(text, "test.yaml");
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "";
+  return graspbed::testing::ErrorOf<std::invalid_argument>([&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 
 TEST(SensitivitiesTest, PaperIsTheDefault) {
@@ -50,8 +48,8 @@ TEST(SensitivitiesTest, FeaTakesKnAndKtFromTheAnalysisOfTheShippedUnit) {
 }
 
 TEST(SensitivitiesTest, AStifferSteelInTheFeaConfigHalvesTheSensitivities) {
-  const fs::path dir = fs::temp_directory_path() / "graspbed_sensitivities_test";
-  fs::create_directories(dir);
+  const TempDir temp("sensitivities_stiff");
+  const std::filesystem::path& dir = temp.path();
   // The shipped config with twice the Young's modulus: a linear model halves every strain.
   std::ifstream shipped(fea::DefaultFeaConfigPath());
   std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
@@ -72,7 +70,6 @@ TEST(SensitivitiesTest, AStifferSteelInTheFeaConfigHalvesTheSensitivities) {
   const ScenarioConfig again = LoadScenarioFromString(EmitScenarioYaml(stiff), (dir / "resolved.yaml").string());
   EXPECT_EQ(again.sensor.fea_config, (dir / "stiff.yaml").lexically_normal().string());
   EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kn_per_n, stiff.sensor.strain_model.nominal.kn_per_n);
-  fs::remove_all(dir);
 }
 
 TEST(SensitivitiesTest, BadValuesNameFileLineKeyAndValue) {
@@ -91,8 +88,8 @@ TEST(SensitivitiesTest, BadValuesNameFileLineKeyAndValue) {
 TEST(SensitivitiesTest, AUnitWhoseGaugeDoesNotSenseShearIsRefusedAtTheSensitivitiesKey) {
   // A 0.3 mm beam puts the sign change of the shear profile inside the resistors: kt comes out
   // negative, and the strain model cannot use it.
-  const fs::path dir = fs::temp_directory_path() / "graspbed_sensitivities_thick";
-  fs::create_directories(dir);
+  const TempDir temp("sensitivities_thick");
+  const std::filesystem::path& dir = temp.path();
   std::ifstream shipped(fea::DefaultFeaConfigPath());
   std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
   const std::string shipped_beam = "beam_thickness_mm: 0.2";
@@ -105,7 +102,6 @@ TEST(SensitivitiesTest, AUnitWhoseGaugeDoesNotSenseShearIsRefusedAtTheSensitivit
   EXPECT_NE(error.find("test.yaml:3"), std::string::npos) << error;
   EXPECT_NE(error.find("sensor.sensitivities"), std::string::npos) << error;
   EXPECT_NE(error.find("kt_per_n"), std::string::npos) << error;
-  fs::remove_all(dir);
 }
 
 }  // namespace
