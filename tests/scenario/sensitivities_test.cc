@@ -12,6 +12,7 @@
 #include "sensor/fea/unit_analysis.h"
 #include "sim/scenario/scenario_config.h"
 #include "tests/support/error_of.h"
+#include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario {
@@ -26,6 +27,14 @@ constexpr double kLinearTol = 1e-9;
 
 std::string ErrorOf(const std::string& text) {
   return graspbed::testing::ErrorOf<std::invalid_argument>([&] { LoadScenarioFromString(text, "test.yaml"); });
+}
+
+/// The shipped FEA config with `from` replaced by `to`; "" when `from` is not in it.
+std::string ShippedFeaConfigWith(const std::string& from, const std::string& to) {
+  std::string text = graspbed::testing::ReadText(fea::DefaultFeaConfigPath());
+  const size_t at = text.find(from);
+  if (at == std::string::npos) return "";
+  return text.replace(at, from.size(), to);
 }
 
 TEST(SensitivitiesTest, PaperIsTheDefault) {
@@ -51,12 +60,8 @@ TEST(SensitivitiesTest, AStifferSteelInTheFeaConfigHalvesTheSensitivities) {
   const TempDir temp("sensitivities_stiff");
   const std::filesystem::path& dir = temp.path();
   // The shipped config with twice the Young's modulus: a linear model halves every strain.
-  std::ifstream shipped(fea::DefaultFeaConfigPath());
-  std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
-  const std::string shipped_modulus = "youngs_modulus_gpa: 197";
-  const size_t at = text.find(shipped_modulus);
-  ASSERT_NE(at, std::string::npos) << "shipped FEA config no longer names " << shipped_modulus;
-  text.replace(at, shipped_modulus.size(), "youngs_modulus_gpa: 394");
+  const std::string text = ShippedFeaConfigWith("youngs_modulus_gpa: 197", "youngs_modulus_gpa: 394");
+  ASSERT_FALSE(text.empty()) << "shipped FEA config no longer names youngs_modulus_gpa: 197";
   std::ofstream(dir / "stiff.yaml") << text;
   std::ofstream(dir / "scenario.yaml") << "sensor: {sensitivities: fea, fea_config: stiff.yaml}\n";
 
@@ -90,12 +95,8 @@ TEST(SensitivitiesTest, AUnitWhoseGaugeDoesNotSenseShearIsRefusedAtTheSensitivit
   // negative, and the strain model cannot use it.
   const TempDir temp("sensitivities_thick");
   const std::filesystem::path& dir = temp.path();
-  std::ifstream shipped(fea::DefaultFeaConfigPath());
-  std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
-  const std::string shipped_beam = "beam_thickness_mm: 0.2";
-  const size_t at = text.find(shipped_beam);
-  ASSERT_NE(at, std::string::npos);
-  text.replace(at, shipped_beam.size(), "beam_thickness_mm: 0.3");
+  const std::string text = ShippedFeaConfigWith("beam_thickness_mm: 0.2", "beam_thickness_mm: 0.3");
+  ASSERT_FALSE(text.empty());
   std::ofstream(dir / "thick.yaml") << text;
   const std::string error = ErrorOf("duration_s: 1\nsensor:\n  sensitivities: fea\n  fea_config: " +
                                     (dir / "thick.yaml").string() + "\n");
