@@ -1,7 +1,6 @@
 // `graspbed hw`: the shared control loop against the tactile readout and hand electronics over a
 // serial link. `graspbed emulate`: the simulated hand behind a pseudo-terminal, speaking the same
 // protocol as the device, so `hw` runs end to end without hardware. docs/hardware.md.
-#include <signal.h>
 
 #include <algorithm>
 #include <array>
@@ -24,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/command_registry.h"
+#include "app/stop_signal.h"
 #include "common/yaml_map.h"
 #include "controller/control_loop.h"
 #include "controller/grasp_controller.h"
@@ -43,33 +43,6 @@ namespace graspbed::app {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void OnStopSignal(int) { g_stop.store(true); }
-
-/// SIGINT/SIGTERM end the command cleanly (stream stop, motor off) for its lifetime.
-class StopSignalGuard {
- public:
-  StopSignalGuard() {
-    g_stop.store(false);
-    struct sigaction action {};
-    action.sa_handler = &OnStopSignal;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &previous_int_);
-    sigaction(SIGTERM, &action, &previous_term_);
-  }
-  ~StopSignalGuard() {
-    sigaction(SIGINT, &previous_int_, nullptr);
-    sigaction(SIGTERM, &previous_term_, nullptr);
-  }
-  StopSignalGuard(const StopSignalGuard&) = delete;
-  StopSignalGuard& operator=(const StopSignalGuard&) = delete;
-
- private:
-  struct sigaction previous_int_ {};
-  struct sigaction previous_term_ {};
-};
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -306,7 +279,7 @@ void RunHw(const HwOptions& options) {
   uint64_t seen = 0;
   bool intent_given = false;
   double peak_total_fn_n = 0.0;
-  while (!g_stop.load()) {
+  while (!StopRequested().load()) {
     if (options.duration_s > 0.0 && SecondsSince(start) >= options.duration_s) break;
     link.WaitForFrame(seen, period_s);
     seen = link.published();
@@ -351,7 +324,7 @@ void RunHw(const HwOptions& options) {
       {"peak_total_fn_n", peak_total_fn_n},
       {"final_total_fn_n", loop.state().total_fn_n},
       {"final_valid_units", loop.state().valid_count},
-      {"interrupted", g_stop.load()},
+      {"interrupted", StopRequested().load()},
   };
   if (logger) {
     summary["log"] = options.log;
@@ -558,7 +531,7 @@ void RunEmulate(const EmulateOptions& options) {
   const double duration_s = options.duration_s >= 0.0 ? options.duration_s : config.duration_s;
   const bool one_trial = !options.scenario.empty();
   std::string ended_by = "signal";
-  while (!g_stop.load()) {
+  while (!StopRequested().load()) {
     if (duration_s > 0.0 && device.started() && device.sim_time_s() >= duration_s) {
       ended_by = "duration";
       break;

@@ -1,5 +1,4 @@
 // `graspbed run | suite | sweep | merge`: scripted scenarios, regression suites and parameter sweeps.
-#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "app/command_registry.h"
+#include "app/stop_signal.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/suite.h"
@@ -24,32 +24,6 @@ namespace fs = std::filesystem;
 
 /// Exit code after Ctrl-C (128 + SIGINT, the shell convention).
 constexpr int kExitInterrupted = 130;
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void OnInterrupt(int) {
-  g_stop.store(true);
-  // A second Ctrl-C ends the process the usual way.
-  signal(SIGINT, SIG_DFL);
-}
-
-/// Installs the SIGINT handler for the lifetime of a command.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    g_stop.store(false);
-    struct sigaction action {};
-    action.sa_handler = &OnInterrupt;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &previous_);
-  }
-  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
-  InterruptGuard(const InterruptGuard&) = delete;
-  InterruptGuard& operator=(const InterruptGuard&) = delete;
-
- private:
-  struct sigaction previous_ {};
-};
 
 bool StderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
 
@@ -80,7 +54,7 @@ void RunCommand(const RunCommandOptions& options) {
   scenario::RunOptions run;
   run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
   run.write_plots = !options.no_plots;
-  run.stop = &g_stop;
+  run.stop = &StopRequested();
   const bool terminal = StderrIsTerminal();
   if (terminal) {
     run.progress = [&config](double sim_s, double duration_s) {
@@ -88,7 +62,7 @@ void RunCommand(const RunCommandOptions& options) {
       std::fflush(stderr);
     };
   }
-  InterruptGuard guard;
+  StopSignalGuard guard;
   const scenario::RunResult result = scenario::RunScenario(config, run);
   if (terminal) std::fprintf(stderr, "\r\033[K");
 
@@ -149,7 +123,7 @@ void SuiteCommand(const SuiteCommandOptions& options) {
   suite.jobs = options.jobs;
   suite.out_dir = options.out_dir;
   suite.write_plots = !options.no_plots;
-  suite.stop = &g_stop;
+  suite.stop = &StopRequested();
   const bool terminal = StderrIsTerminal();
   suite.on_finished = [terminal](int done, int total, const scenario::SuiteRun& run) {
     if (!terminal) return;
@@ -157,7 +131,7 @@ void SuiteCommand(const SuiteCommandOptions& options) {
                  !run.error.empty() ? "error" : run.result.passed ? "pass" : "FAIL");
     std::fflush(stderr);
   };
-  InterruptGuard guard;
+  StopSignalGuard guard;
   const scenario::SuiteResult result = scenario::RunSuite(configs, suite);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   if (options.json) {
@@ -202,14 +176,14 @@ void SweepCommand(const SweepCommandOptions& options) {
   sweep.shard = scenario::ParseShard(options.shard);
   sweep.jobs = options.jobs;
   sweep.out_dir = options.out_dir;
-  sweep.stop = &g_stop;
+  sweep.stop = &StopRequested();
   const bool terminal = StderrIsTerminal();
   sweep.on_finished = [terminal](int done, int total) {
     if (!terminal) return;
     std::fprintf(stderr, "\r\033[K  sweep: %d/%d runs", done, total);
     std::fflush(stderr);
   };
-  InterruptGuard guard;
+  StopSignalGuard guard;
   const scenario::SweepOutcome outcome = scenario::RunSweep(spec, sweep);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   std::printf("sweep %s shard %s: %d of %d runs finished, %d passed, %.2f s -> %s/results.csv, results.jsonl\n",
