@@ -10,11 +10,12 @@
 #include <string>
 
 #include "sensor/raw_frame.h"
+#include "sim/hand_kinematics.h"
 
 namespace graspbed::sim {
 namespace {
 
-// Geometry of the hand around the holder, chosen for a prosthetic pinch hand of adult size [m].
+// Jaw fixture geometry, chosen for a pinch of adult size [m].
 constexpr double kPalmHalfHeightM = 0.015;
 constexpr double kLinkLengthM = 0.04;          // palm -> holder top
 constexpr double kLinkHalfThicknessM = 0.003;  // along the closing direction
@@ -22,9 +23,26 @@ constexpr double kLinkHalfWidthM = 0.005;
 constexpr double kLinkSetBackM = 0.0025;       // link face behind the mesa tops
 constexpr double kThumbPadHalfThicknessM = 0.004;
 constexpr double kThumbPadHalfWidthM = 0.007;
-constexpr double kMesaRootDepthM = 0.2e-3;     // mesa box reaches this far into its groove
 constexpr double kStrokeMarginM = 0.002;       // digits stop this far short of touching when closed
+
+// Shared by both hands.
+constexpr double kMesaRootDepthM = 0.2e-3;     // mesa box reaches this far into its groove
 constexpr int kHolderSegments = 48;            // polygon sides of the elliptic holder mesh
+
+// Prosthetic hand [m]. The rounded fingertip: an ellipsoid cap on the holder's distal end.
+constexpr double kTipCapLengthM = 0.005;
+constexpr double kProximalRadiusM = 0.0055;    // proximal phalanx capsule
+constexpr double kMiddleRadiusM = 0.004;       // middle phalanx capsule
+constexpr double kThumbProximalRadiusM = 0.0075;
+constexpr double kPalmMarginM = 0.012;         // palm box beyond the MCP and the thumb base
+constexpr double kPalmHalfWidthM = 0.012;      // palm box along H y
+// Pinch height: a box or upright cylinder is pinched this far below its top, so the middle
+// phalanx passes over the object; the pad never comes closer to the table than kMinPadHeightM
+// (holder half length + tip cap + 3 mm).
+constexpr double kPinchBelowTopM = 0.013;
+constexpr double kMinPadHeightM = 0.023;
+// Wrap: the object's surface stands this far off the palm in the pre-shape.
+constexpr double kWrapPalmClearanceM = 0.004;
 
 // Fixed-format numbers so the text (and the checked-in model) is reproducible.
 class Writer {
@@ -38,6 +56,11 @@ class Writer {
   }
   std::string Vec(const Eigen::Vector3d& v) { return Num(v.x()) + " " + Num(v.y()) + " " + Num(v.z()); }
   std::string Vec(double x, double y, double z) { return Num(x) + " " + Num(y) + " " + Num(z); }
+  /// MJCF quat (w x y z) of a rotation by `angle` [rad] about the unit axis (x, y, z).
+  std::string AxisAngle(double x, double y, double z, double angle) {
+    const double s = std::sin(0.5 * angle);
+    return Num(std::cos(0.5 * angle)) + " " + Vec(s * x, s * y, s * z);
+  }
 
  private:
   std::ostringstream out_;
@@ -47,94 +70,83 @@ double MesaTopOffset(const sensor::Layout& layout) {
   return 0.5 * layout.holder.minor_axis_m + layout.unit.mesa_height_m;
 }
 
-}  // namespace
+// Jaw fixture: holder frame origin relative to the wrist and the digits' travel [m].
+struct JawGeometry {
+  double holder_center_below_wrist_m = 0.0;
+  double finger_open_x_m = 0.0;
+  double thumb_pad_open_x_m = 0.0;
+  double mesa_top_offset_m = 0.0;
+  double stroke_m = 0.0;
+};
 
-HandGeometry ComputeHandGeometry(const sensor::Layout& layout, const SceneConfig& scene) {
-  HandGeometry g;
+JawGeometry ComputeJawGeometry(const sensor::Layout& layout, double open_gap_m) {
+  JawGeometry g;
   g.holder_center_below_wrist_m = kPalmHalfHeightM + kLinkLengthM + 0.5 * layout.holder.length_m;
   g.mesa_top_offset_m = MesaTopOffset(layout);
-  g.finger_open_x_m = -0.5 * scene.hand.open_gap_m - g.mesa_top_offset_m;
-  g.thumb_pad_open_x_m = 0.5 * scene.hand.open_gap_m;
-  g.stroke_m = 0.5 * scene.hand.open_gap_m - kStrokeMarginM;
+  g.finger_open_x_m = -0.5 * open_gap_m - g.mesa_top_offset_m;
+  g.thumb_pad_open_x_m = 0.5 * open_gap_m;
+  g.stroke_m = 0.5 * open_gap_m - kStrokeMarginM;
   return g;
 }
 
-std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene) {
-  scene.Validate();
-  if (layout.unit_count() < 1 || layout.unit_count() > sensor::kMaxUnits) {
-    throw std::invalid_argument("layout " + layout.name + ": " + std::to_string(layout.unit_count()) +
-                                " units, the model supports 1.." + std::to_string(sensor::kMaxUnits));
-  }
-  const HandGeometry g = ComputeHandGeometry(layout, scene);
-  const ObjectConfig& object = scene.object;
-  const HandConfig& hand = scene.hand;
-  const PhysicsConfig& physics = scene.physics;
-  const double a = 0.5 * layout.holder.major_axis_m;
-  const double b = 0.5 * layout.holder.minor_axis_m;
-  const double half_length = 0.5 * layout.holder.length_m;
+ProstheticKinematics MakeKinematics(const sensor::Layout& layout, const SceneConfig& scene) {
+  return ProstheticKinematics(scene.hand.finger, scene.hand.thumb, layout.holder.length_m,
+                              0.5 * layout.holder.minor_axis_m, layout.unit.mesa_height_m);
+}
 
-  // Default pre-grasp pose: holder centre level with the object centre, digits straddling it.
-  const double object_z = object.initial_position_m[2] < 0.0 ? object.RestHalfHeightM() : object.initial_position_m[2];
-  std::array<double, 3> wrist = hand.initial_wrist_position_m;
-  if (std::isnan(wrist[0])) wrist[0] = object.initial_position_m[0];
-  if (std::isnan(wrist[1])) wrist[1] = object.initial_position_m[1];
-  if (std::isnan(wrist[2])) wrist[2] = object_z + g.holder_center_below_wrist_m;
+// World height of the object's lowest point above its centre when resting [m] and of the pinch.
+double ObjectCentreZ(const ObjectConfig& object) {
+  return object.initial_position_m[2] < 0.0 ? object.RestHalfHeightM() : object.initial_position_m[2];
+}
 
-  Writer w;
+double PinchHeightM(const ObjectConfig& object) {
+  const double centre = ObjectCentreZ(object);
+  // A ball is pinched at its equator (above it the squeeze would push it out of the grasp).
+  if (object.shape == ObjectShape::kSphere) return std::max(centre, kMinPadHeightM);
+  const double top = centre + object.RestHalfHeightM();
+  return std::max(top - kPinchBelowTopM, std::min(centre, kMinPadHeightM));
+}
+
+// The holder: shell mesh, optional rounded tip, one mesa per unit and the pad site, holder frame
+// (x = beam of the phalanx towards the tip, -z = palmar).
+void WriteHolderGeoms(Writer& w, const sensor::Layout& layout, const std::string& indent, double mass_kg,
+                      bool tip_cap) {
   std::ostringstream& o = w.out();
-  o << "<!-- graspbed scene, generated by `graspbed model` from layout '" << layout.name
-    << "'. Do not edit: regenerate. -->\n";
-  o << "<mujoco model=\"graspbed_" << layout.name << "\">\n";
-  o << "  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n";
-  o << "  <option timestep=\"" << w.Num(physics.timestep_s) << "\" gravity=\"0 0 " << w.Num(-physics.gravity_m_s2)
-    << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal") << "\" impratio=\""
-    << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations << "\" iterations=\""
-    << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
-    << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
-  // Sized for a pinch on all mesas (a few hundred constraint rows) with margin; MuJoCo 2.x allocates
-  // njmax^2 doubles for the solver, so njmax 4000 would cost 128 MB per run for nothing.
-  o << "  <size nconmax=\"300\" njmax=\"1000\" nstack=\"1000000\"/>\n";
-  o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
-  o << "  <default>\n";
-  o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
-    << "\" solimp=\"" << w.Num(object.solimp[0]) << " " << w.Num(object.solimp[1]) << " " << w.Num(object.solimp[2])
-    << " " << w.Num(object.solimp[3]) << " " << w.Num(object.solimp[4]) << "\" friction=\"" << w.Num(hand.friction)
-    << " 0.005 0.0001\"/>\n";
-  o << "  </default>\n";
-
-  // The holder: an elliptic cylinder (no such primitive in MuJoCo) as a convex mesh, holder frame.
-  o << "  <asset>\n    <mesh name=\"holder_mesh\" vertex=\"";
-  for (int ring = 0; ring < 2; ++ring) {
-    const double x = ring == 0 ? -half_length : half_length;
-    for (int i = 0; i < kHolderSegments; ++i) {
-      const double t = 2.0 * std::numbers::pi * i / kHolderSegments;
-      o << (ring == 0 && i == 0 ? "" : "  ") << w.Vec(x, a * std::sin(t), -b * std::cos(t));
-    }
+  o << indent << "<geom name=\"holder_shell\" type=\"mesh\" mesh=\"holder_mesh\" mass=\"" << w.Num(mass_kg)
+    << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+  if (tip_cap) {
+    o << indent << "<geom name=\"fingertip_cap\" type=\"ellipsoid\" size=\""
+      << w.Vec(kTipCapLengthM, 0.5 * layout.holder.major_axis_m, 0.5 * layout.holder.minor_axis_m) << "\" pos=\""
+      << w.Vec(0.5 * layout.holder.length_m, 0, 0) << "\" mass=\"0.001\" rgba=\"0.85 0.82 0.75 1\"/>\n";
   }
-  o << "\"/>\n  </asset>\n";
-
-  o << "  <worldbody>\n";
-  o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
-  if (physics.table) {
-    o << "    <body name=\"table\">\n";
-    o << "      <geom name=\"table_geom\" type=\"box\" size=\"0.3 0.3 0.02\" pos=\"0 0 -0.02\" rgba=\"0.55 0.45 0.35 1\""
-      << " friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
-    o << "    </body>\n";
+  // Mesas: boxes in the holder frame; local x = beam axis, local z = outward normal; the top face is
+  // mesa_height above the surface point, the root sits a little inside the groove.
+  const double mesa_total = layout.unit.mesa_height_m + kMesaRootDepthM;
+  for (int i = 0; i < layout.unit_count(); ++i) {
+    const sensor::UnitPose& unit = layout.units[i];
+    const Eigen::Vector3d outward = -unit.inward_normal.normalized();
+    const Eigen::Vector3d beam = unit.beam_axis.normalized();
+    const Eigen::Vector3d cross = outward.cross(beam);
+    const Eigen::Vector3d center = unit.position_m + outward * (layout.unit.mesa_height_m - 0.5 * mesa_total);
+    o << indent << "<geom name=\"unit_" << i << "\" type=\"box\" size=\""
+      << w.Vec(0.5 * layout.unit.mesa_length_m, 0.5 * layout.unit.mesa_width_m, 0.5 * mesa_total) << "\" pos=\""
+      << w.Vec(center) << "\" xyaxes=\"" << w.Vec(beam) << " " << w.Vec(cross) << "\" mass=\"0.0001\""
+      << " rgba=\"" << (unit.orientation == sensor::BeamOrientation::kAxial ? "0.85 0.2 0.2 1" : "0.2 0.35 0.85 1")
+      << "\"/>\n";
   }
+  o << indent << "<site name=\"finger_pad\" pos=\"" << w.Vec(0, 0, -MesaTopOffset(layout))
+    << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
+}
 
-  // Wrist carriage on three stiff position servos; palm, finger and thumb hang below it.
-  o << "    <body name=\"wrist\" pos=\"" << w.Vec(wrist[0], wrist[1], wrist[2]) << "\">\n";
-  for (const char* axis : {"x", "y", "z"}) {
-    const std::string dir = axis[0] == 'x' ? "1 0 0" : axis[0] == 'y' ? "0 1 0" : "0 0 1";
-    o << "      <joint name=\"wrist_" << axis << "\" type=\"slide\" axis=\"" << dir << "\" damping=\""
-      << w.Num(hand.wrist_damping_n_s_m) << "\"/>\n";
-  }
-  const double palm_half_x = 0.5 * hand.open_gap_m + 0.02;
+void WriteJawHand(Writer& w, const sensor::Layout& layout, const SceneConfig& scene, const HandPlacement& place) {
+  std::ostringstream& o = w.out();
+  const HandConfig& hand = scene.hand;
+  const JawGeometry g = ComputeJawGeometry(layout, place.open_gap_m);
+  const double half_length = 0.5 * layout.holder.length_m;
+  const double palm_half_x = 0.5 * place.open_gap_m + 0.02;
   o << "      <body name=\"palm\">\n";
   o << "        <geom name=\"palm_geom\" type=\"box\" size=\"" << w.Vec(palm_half_x, 0.02, kPalmHalfHeightM)
     << "\" mass=\"" << w.Num(hand.palm_mass_kg) << "\" rgba=\"0.3 0.3 0.35 1\"/>\n";
-
-  // Finger: slides towards +x; its distal phalanx is the holder with one mesa per unit.
   // The motor's back-EMF (F = stall (effort - v_gap / v0)) as joint damping: MuJoCo integrates joint
   // damping implicitly, while an affine actuator bias this stiff on digits this light is explicit and
   // diverges at 0.5 ms. Each slide moves at half the gap speed and carries the full tendon force,
@@ -155,30 +167,12 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
   o << "          <body name=\"holder\" pos=\"" << w.Vec(0, 0, -g.holder_center_below_wrist_m)
     << "\" xyaxes=\"0 0 -1 0 -1 0\">\n";
-  o << "            <geom name=\"holder_shell\" type=\"mesh\" mesh=\"holder_mesh\" mass=\"" << w.Num(digit_tip_mass)
-    << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
-  // Mesas: boxes in the holder frame; local x = beam axis, local z = outward normal; the top face is
-  // mesa_height above the surface point, the root sits a little inside the groove.
-  const double mesa_total = layout.unit.mesa_height_m + kMesaRootDepthM;
-  for (int i = 0; i < layout.unit_count(); ++i) {
-    const sensor::UnitPose& unit = layout.units[i];
-    const Eigen::Vector3d outward = -unit.inward_normal.normalized();
-    const Eigen::Vector3d beam = unit.beam_axis.normalized();
-    const Eigen::Vector3d cross = outward.cross(beam);
-    const Eigen::Vector3d center =
-        unit.position_m + outward * (layout.unit.mesa_height_m - 0.5 * mesa_total);
-    o << "            <geom name=\"unit_" << i << "\" type=\"box\" size=\""
-      << w.Vec(0.5 * layout.unit.mesa_length_m, 0.5 * layout.unit.mesa_width_m, 0.5 * mesa_total) << "\" pos=\""
-      << w.Vec(center) << "\" xyaxes=\"" << w.Vec(beam) << " " << w.Vec(cross) << "\" mass=\"0.0001\""
-      << " rgba=\"" << (unit.orientation == sensor::BeamOrientation::kAxial ? "0.85 0.2 0.2 1" : "0.2 0.35 0.85 1")
-      << "\"/>\n";
-  }
+  WriteHolderGeoms(w, layout, "            ", digit_tip_mass, false);
   o << "          </body>\n";
   o << "        </body>\n";
 
   // Thumb: a flat pad opposite the holder, slides towards -x.
-  const double thumb_body_x = g.thumb_pad_open_x_m;
-  o << "        <body name=\"thumb\" pos=\"" << w.Vec(thumb_body_x, 0, 0) << "\">\n";
+  o << "        <body name=\"thumb\" pos=\"" << w.Vec(g.thumb_pad_open_x_m, 0, 0) << "\">\n";
   o << "          <joint name=\"thumb_slide\" type=\"slide\" axis=\"-1 0 0\" limited=\"true\" range=\"0 "
     << w.Num(g.stroke_m) << "\" armature=\"" << w.Num(hand.motor.armature_kg) << "\" damping=\"" << w.Num(digit_damping)
     << "\"/>\n";
@@ -190,14 +184,301 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << w.Vec(kThumbPadHalfThicknessM, kThumbPadHalfWidthM, half_length) << "\" pos=\""
     << w.Vec(kThumbPadHalfThicknessM, 0, -g.holder_center_below_wrist_m) << "\" mass=\"" << w.Num(digit_tip_mass)
     << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+  o << "          <site name=\"thumb_pad\" pos=\"" << w.Vec(0, 0, -g.holder_center_below_wrist_m)
+    << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
   o << "        </body>\n";
   o << "      </body>\n";
+}
+
+void WriteJawTransmission(Writer& w, const SceneConfig& scene) {
+  std::ostringstream& o = w.out();
+  // One motor closes both digits: the grip tendon is the total closure; the coupling keeps them
+  // symmetric; the brake (off until the actuator asks for it) locks the finger where it is.
+  o << "  <tendon>\n    <fixed name=\"grip\">\n      <joint joint=\"finger_slide\" coef=\"1\"/>\n"
+    << "      <joint joint=\"thumb_slide\" coef=\"1\"/>\n    </fixed>\n  </tendon>\n";
+  o << "  <equality>\n";
+  o << "    <joint name=\"digit_coupling\" joint1=\"thumb_slide\" joint2=\"finger_slide\" polycoef=\"0 1 0 0 0\""
+    << " solref=\"0.002 1\"/>\n";
+  o << "    <joint name=\"grip_brake\" joint1=\"finger_slide\" polycoef=\"0 0 0 0 0\" active=\"false\""
+    << " solref=\"0.002 1\"/>\n";
+  o << "  </equality>\n";
+  // Grip motor on the tendon: force = stall x effort (the speed term is the slides' damping).
+  const double stall = scene.hand.motor.stall_force_n;
+  o << "  <actuator>\n";
+  o << "    <general name=\"grip_motor\" tendon=\"grip\" ctrllimited=\"true\" ctrlrange=\"-1 1\" gainprm=\""
+    << w.Num(stall) << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall) << "\"/>\n";
+}
+
+// xyaxes of a phalanx frame whose local x (towards the tip) points along (dx, 0, dz) of its parent
+// and whose local y is the parent's -y (flexion about local +y), for the index finger.
+std::string IndexAxes(Writer& w, double angle_rad) {
+  return w.Vec(-std::cos(angle_rad), 0, -std::sin(angle_rad)) + " 0 -1 0";
+}
+std::string ThumbAxes(Writer& w, double angle_rad) {
+  return w.Vec(std::cos(angle_rad), 0, -std::sin(angle_rad)) + " 0 1 0";
+}
+
+void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneConfig& scene,
+                         const HandPlacement& place) {
+  std::ostringstream& o = w.out();
+  const HandConfig& hand = scene.hand;
+  const ProstheticKinematics kin = MakeKinematics(layout, scene);
+  const FingerConfig& finger = hand.finger;
+  const ThumbConfig& thumb = hand.thumb;
+  const DigitMotorConfig& motor = hand.digit_motor;
+  const double mcp0 = place.preshape_joint[0];
+  const double thumb0 = place.preshape_joint[1];
+  const double opposition = scene.ThumbOppositionRad();
+  // The pinch is in the hand frame H; a wrap turns H so that its palmar side (-z) faces world +y.
+  const std::string hand_quat = hand.grasp == GraspType::kWrap ? w.AxisAngle(1, 0, 0, 0.5 * std::numbers::pi) : "1 0 0 0";
+  const double palm_min_x = std::min(kin.mcp_xz().x(), kin.thumb_base_xz().x()) - kPalmMarginM;
+  const double palm_max_x = std::max(kin.mcp_xz().x(), kin.thumb_base_xz().x()) + kPalmMarginM;
+  const double half_depth = 0.5 * ProstheticKinematics::kPalmDepthM;
+  o << "      <body name=\"palm\" quat=\"" << hand_quat << "\" childclass=\"hand\">\n";
+  o << "        <geom name=\"palm_geom\" type=\"box\" size=\""
+    << w.Vec(0.5 * (palm_max_x - palm_min_x), kPalmHalfWidthM, half_depth) << "\" pos=\""
+    << w.Vec(0.5 * (palm_min_x + palm_max_x), 0, -half_depth) << "\" mass=\"" << w.Num(hand.palm_mass_kg)
+    << "\" rgba=\"0.3 0.3 0.35 1\"/>\n";
+
+  // Index: MCP driven by its motor (back-EMF as implicit joint damping, as for the jaw), PIP held
+  // to ratio x MCP by the linkage (an equality), DIP fixed. Joint values are absolute flexion
+  // angles: `ref` is the pre-shape, at which the bodies below are posed.
+  const double proximal_mass = 0.5 * hand.digit_mass_kg;
+  const double middle_mass = 0.25 * hand.digit_mass_kg;
+  const double distal_mass = 0.25 * hand.digit_mass_kg;
+  const double index_damping = motor.damping_n_m_s + place.stall_effort[0] / motor.no_load_speed_rad_s;
+  const double thumb_damping = motor.damping_n_m_s + place.stall_effort[1] / motor.no_load_speed_rad_s;
+  const double pip0 = finger.pip_mcp_ratio * mcp0;
+  o << "        <body name=\"finger\" pos=\"" << w.Vec(kin.mcp_xz().x(), 0, kin.mcp_xz().y()) << "\" xyaxes=\""
+    << IndexAxes(w, finger.mcp_rest_angle_rad + mcp0) << "\">\n";
+  o << "          <joint name=\"index_mcp\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(mcp0)
+    << "\" limited=\"true\" range=\"" << w.Num(ProstheticKinematics::kMcpMinRad) << " "
+    << w.Num(ProstheticKinematics::kMcpMaxRad) << "\" armature=\"" << w.Num(motor.armature_kg_m2) << "\" damping=\""
+    << w.Num(index_damping) << "\"/>\n";
+  o << "          <geom name=\"finger_proximal\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(finger.proximal_length_m)
+    << " 0 0\" size=\"" << w.Num(kProximalRadiusM) << "\" mass=\"" << w.Num(proximal_mass)
+    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "          <body name=\"finger_middle\" pos=\"" << w.Vec(finger.proximal_length_m, 0, 0) << "\" quat=\""
+    << w.AxisAngle(0, 1, 0, pip0) << "\">\n";
+  o << "            <joint name=\"index_pip\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(pip0)
+    << "\" damping=\"" << w.Num(motor.damping_n_m_s) << "\"/>\n";
+  o << "            <geom name=\"finger_middle\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(finger.middle_length_m)
+    << " 0 0\" size=\"" << w.Num(kMiddleRadiusM) << "\" mass=\"" << w.Num(middle_mass)
+    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  // Distal phalanx = the holder, turned by the fixed DIP flexion; its frame sits at its centre.
+  const double half_length = 0.5 * layout.holder.length_m;
+  const double dip = finger.dip_flexion_rad;
+  o << "            <body name=\"holder\" pos=\""
+    << w.Vec(finger.middle_length_m + half_length * std::cos(dip), 0, -half_length * std::sin(dip)) << "\" quat=\""
+    << w.AxisAngle(0, 1, 0, dip) << "\">\n";
+  WriteHolderGeoms(w, layout, "              ", distal_mass, true);
+  o << "            </body>\n";
+  o << "          </body>\n";
+  o << "        </body>\n";
+
+  // Thumb: opposition about the palm normal (held at the pre-shape's angle), then flexion; a fixed
+  // IP bend and a rounded, unsensorised tip.
+  o << "        <body name=\"thumb\" pos=\"" << w.Vec(kin.thumb_base_xz().x(), 0, kin.thumb_base_xz().y())
+    << "\" quat=\"" << w.AxisAngle(0, 0, 1, opposition) << "\">\n";
+  o << "          <joint name=\"thumb_opposition\" type=\"hinge\" axis=\"0 0 1\" ref=\"" << w.Num(opposition)
+    << "\" limited=\"true\" range=\"-0.2 1.7\" armature=\"" << w.Num(motor.armature_kg_m2) << "\"/>\n";
+  o << "          <geom name=\"thumb_base\" type=\"sphere\" size=\"" << w.Num(kThumbProximalRadiusM)
+    << "\" mass=\"0.002\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "          <body name=\"thumb_proximal\" xyaxes=\"" << ThumbAxes(w, thumb0) << "\">\n";
+  o << "            <joint name=\"thumb_flexion\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(thumb0)
+    << "\" limited=\"true\" range=\"" << w.Num(ProstheticKinematics::kThumbMinRad) << " "
+    << w.Num(ProstheticKinematics::kThumbMaxRad) << "\" armature=\"" << w.Num(motor.armature_kg_m2)
+    << "\" damping=\"" << w.Num(thumb_damping) << "\"/>\n";
+  o << "            <geom name=\"thumb_proximal\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(thumb.proximal_length_m)
+    << " 0 0\" size=\"" << w.Num(kThumbProximalRadiusM) << "\" mass=\"" << w.Num(0.6 * hand.digit_mass_kg)
+    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "            <body name=\"thumb_distal\" pos=\"" << w.Vec(thumb.proximal_length_m, 0, 0) << "\" quat=\""
+    << w.AxisAngle(0, 1, 0, thumb.ip_flexion_rad) << "\">\n";
+  o << "              <geom name=\"thumb_pad\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(thumb.distal_length_m)
+    << " 0 0\" size=\"" << w.Num(thumb.tip_radius_m) << "\" mass=\"" << w.Num(0.4 * hand.digit_mass_kg)
+    << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+  // The tip's face towards the index in the nominal pinch (distal segment about vertical).
+  o << "              <site name=\"thumb_pad\" pos=\"" << w.Vec(thumb.distal_length_m, 0, -thumb.tip_radius_m)
+    << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
+  o << "            </body>\n";
+  o << "          </body>\n";
+  o << "        </body>\n";
+  o << "      </body>\n";
+}
+
+void WriteProstheticTransmission(Writer& w, const SceneConfig& scene, const HandPlacement& place) {
+  std::ostringstream& o = w.out();
+  const FingerConfig& finger = scene.hand.finger;
+  // The linkage: PIP - PIP0 = ratio (MCP - MCP0), stiff as a rigid linkage is. The opposition is
+  // held where the pre-shape put it. Brakes hold the driven joints where they are when engaged.
+  o << "  <equality>\n";
+  o << "    <joint name=\"pip_coupling\" joint1=\"index_pip\" joint2=\"index_mcp\" polycoef=\"0 "
+    << w.Num(finger.pip_mcp_ratio) << " 0 0 0\" solref=\"0.002 1\"/>\n";
+  o << "    <joint name=\"thumb_opposition_lock\" joint1=\"thumb_opposition\" polycoef=\"0 0 0 0 0\""
+    << " solref=\"0.002 1\"/>\n";
+  o << "    <joint name=\"index_brake\" joint1=\"index_mcp\" polycoef=\"0 0 0 0 0\" active=\"false\""
+    << " solref=\"0.002 1\"/>\n";
+  o << "    <joint name=\"thumb_brake\" joint1=\"thumb_flexion\" polycoef=\"0 0 0 0 0\" active=\"false\""
+    << " solref=\"0.002 1\"/>\n";
+  o << "  </equality>\n";
+  // One DC motor per digit, torque = stall x effort (the speed term is the joint's damping).
+  o << "  <actuator>\n";
+  const char* names[2] = {"index_motor", "thumb_motor"};
+  const char* joints[2] = {"index_mcp", "thumb_flexion"};
+  for (int k = 0; k < 2; ++k) {
+    const double stall = place.stall_effort[k];
+    o << "    <general name=\"" << names[k] << "\" joint=\"" << joints[k]
+      << "\" ctrllimited=\"true\" ctrlrange=\"-1 1\" gainprm=\"" << w.Num(stall)
+      << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall) << "\"/>\n";
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> GripMotorNames(HandModel model) {
+  if (model == HandModel::kJaw) return {"grip_motor"};
+  return {"index_motor", "thumb_motor"};
+}
+
+std::vector<std::string> GripBrakeNames(HandModel model) {
+  if (model == HandModel::kJaw) return {"grip_brake"};
+  return {"index_brake", "thumb_brake"};
+}
+
+HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) {
+  const ObjectConfig& object = scene.object;
+  const HandConfig& hand = scene.hand;
+  HandPlacement place;
+  place.object_width_m = scene.ObjectWidthM();
+  place.open_gap_m = scene.OpenGapM();
+  const std::array<double, 3>& wrist_set = hand.initial_wrist_position_m;
+  std::array<double, 3> wrist{};
+  if (hand.model == HandModel::kJaw) {
+    const JawGeometry g = ComputeJawGeometry(layout, place.open_gap_m);
+    // Holder centre level with the object centre, digits straddling it.
+    wrist = {object.initial_position_m[0], object.initial_position_m[1],
+             ObjectCentreZ(object) + g.holder_center_below_wrist_m};
+    place.stall_effort = {hand.motor.stall_force_n, hand.motor.stall_force_n};
+    place.contact_joint = {0.5 * (place.open_gap_m - place.object_width_m),
+                           0.5 * (place.open_gap_m - place.object_width_m)};
+  } else {
+    const ProstheticKinematics kin = MakeKinematics(layout, scene);
+    const double max_aperture = kin.MaxApertureM();
+    if (place.open_gap_m > max_aperture) {
+      std::ostringstream message;
+      message << "hand.open_gap_m / object.size_m: a pre-shape of " << place.open_gap_m * 1e3
+              << " mm is wider than the prosthetic hand opens (" << max_aperture * 1e3 << " mm)";
+      throw std::invalid_argument(message.str());
+    }
+    if (hand.grasp == GraspType::kPinch) {
+      // The pinch centre of the hand frame (x = 0) over the object; each digit's contact angle for
+      // this width, and the height at which their contacts meet the object.
+      const double half_width = 0.5 * place.object_width_m;
+      place.contact_joint = {kin.McpForPadX(-half_width), kin.ThumbForTipX(half_width)};
+      place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m), kin.ThumbForTipX(0.5 * place.open_gap_m)};
+      const double contact_z =
+          0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() + kin.ThumbTip(place.contact_joint[1]).point_xz.y());
+      wrist = {object.initial_position_m[0], object.initial_position_m[1], PinchHeightM(object) - contact_z};
+    } else {
+      // Wrap: the object's axis in front of the palm between MCP and thumb base, the digits open.
+      const double radius = 0.5 * place.object_width_m;
+      const double centre_x = 0.5 * (kin.mcp_xz().x() + kin.thumb_base_xz().x());
+      const double centre_z = -ProstheticKinematics::kPalmDepthM - kWrapPalmClearanceM - radius;
+      // H (x, y, z) -> world (x, -z, y) for the wrap's turn about world x.
+      wrist = {object.initial_position_m[0] - centre_x, object.initial_position_m[1] + centre_z, ObjectCentreZ(object)};
+      place.preshape_joint = {kin.McpForPadX(centre_x - 0.5 * place.open_gap_m),
+                              kin.ThumbForTipX(centre_x + 0.5 * place.open_gap_m)};
+      place.contact_joint = {kin.McpForPadX(centre_x - radius), kin.ThumbForTipX(centre_x + radius)};
+    }
+    // Motors sized so that at stall each digit presses stall_pinch_force_n on the object in this
+    // grasp's contact posture: torque = force x lever arm there.
+    place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),
+                         std::abs(kin.ThumbLeverArmM(place.contact_joint[1]))};
+    for (int k = 0; k < 2; ++k) place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * place.lever_arm_m[k];
+  }
+  for (int k = 0; k < 3; ++k) place.wrist_position_m[k] = std::isnan(wrist_set[k]) ? wrist[k] : wrist_set[k];
+  return place;
+}
+
+std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene) {
+  scene.Validate();
+  if (layout.unit_count() < 1 || layout.unit_count() > sensor::kMaxUnits) {
+    throw std::invalid_argument("layout " + layout.name + ": " + std::to_string(layout.unit_count()) +
+                                " units, the model supports 1.." + std::to_string(sensor::kMaxUnits));
+  }
+  const HandPlacement place = PlaceHand(layout, scene);
+  const ObjectConfig& object = scene.object;
+  const HandConfig& hand = scene.hand;
+  const PhysicsConfig& physics = scene.physics;
+  const double a = 0.5 * layout.holder.major_axis_m;
+  const double b = 0.5 * layout.holder.minor_axis_m;
+  const double half_length = 0.5 * layout.holder.length_m;
+
+  Writer w;
+  std::ostringstream& o = w.out();
+  o << "<!-- graspbed scene, generated by `graspbed model` from layout '" << layout.name << "', "
+    << ToString(hand.model) << " hand, " << ToString(hand.grasp) << " pre-shape. Do not edit: regenerate. -->\n";
+  o << "<mujoco model=\"graspbed_" << layout.name << "\">\n";
+  o << "  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n";
+  o << "  <option timestep=\"" << w.Num(physics.timestep_s) << "\" gravity=\"0 0 " << w.Num(-physics.gravity_m_s2)
+    << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal") << "\" impratio=\""
+    << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations << "\" iterations=\""
+    << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
+    << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
+  // Sized for a pinch on all mesas (a few hundred constraint rows) with margin; MuJoCo 2.x allocates
+  // njmax^2 doubles for the solver, so njmax 4000 would cost 128 MB per run for nothing.
+  o << "  <size nconmax=\"300\" njmax=\"1000\" nstack=\"1000000\"/>\n";
+  o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
+  o << "  <default>\n";
+  o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
+    << "\" solimp=\"" << w.Num(object.solimp[0]) << " " << w.Num(object.solimp[1]) << " " << w.Num(object.solimp[2])
+    << " " << w.Num(object.solimp[3]) << " " << w.Num(object.solimp[4]) << "\" friction=\"" << w.Num(hand.friction)
+    << " 0.005 0.0001\"/>\n";
+  // Prosthetic hand geoms (class "hand"): contype 2 / conaffinity 1 touch the object and the table
+  // (contype 1 / conaffinity 3) but never each other: the linkage, not contact, keeps the digits
+  // apart, and every pair the collision check skips is time saved.
+  o << "    <default class=\"hand\"><geom contype=\"2\" conaffinity=\"1\"/></default>\n";
+  o << "  </default>\n";
+
+  // The holder: an elliptic cylinder (no such primitive in MuJoCo) as a convex mesh, holder frame.
+  o << "  <asset>\n    <mesh name=\"holder_mesh\" vertex=\"";
+  for (int ring = 0; ring < 2; ++ring) {
+    const double x = ring == 0 ? -half_length : half_length;
+    for (int i = 0; i < kHolderSegments; ++i) {
+      const double t = 2.0 * std::numbers::pi * i / kHolderSegments;
+      o << (ring == 0 && i == 0 ? "" : "  ") << w.Vec(x, a * std::sin(t), -b * std::cos(t));
+    }
+  }
+  o << "\"/>\n  </asset>\n";
+
+  o << "  <worldbody>\n";
+  o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
+  if (physics.table) {
+    o << "    <body name=\"table\">\n";
+    o << "      <geom name=\"table_geom\" type=\"box\" size=\"0.3 0.3 0.02\" pos=\"0 0 -0.02\" rgba=\"0.55 0.45 0.35 1\""
+      << " contype=\"1\" conaffinity=\"3\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
+    o << "    </body>\n";
+  }
+
+  // Wrist carriage on three stiff position servos; the hand hangs below it.
+  const std::array<double, 3>& wrist = place.wrist_position_m;
+  o << "    <body name=\"wrist\" pos=\"" << w.Vec(wrist[0], wrist[1], wrist[2]) << "\">\n";
+  for (const char* axis : {"x", "y", "z"}) {
+    const std::string dir = axis[0] == 'x' ? "1 0 0" : axis[0] == 'y' ? "0 1 0" : "0 0 1";
+    o << "      <joint name=\"wrist_" << axis << "\" type=\"slide\" axis=\"" << dir << "\" damping=\""
+      << w.Num(hand.wrist_damping_n_s_m) << "\"/>\n";
+  }
+  if (hand.model == HandModel::kJaw) {
+    WriteJawHand(w, layout, scene, place);
+  } else {
+    WriteProstheticHand(w, layout, scene, place);
+  }
   o << "    </body>\n";
 
   // The object: a free body whose geom has contact priority, so its friction and compliance govern.
   const double yaw = object.initial_yaw_rad;
   o << "    <body name=\"object\" pos=\""
-    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], object_z) << "\" quat=\""
+    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], ObjectCentreZ(object)) << "\" quat=\""
     << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
   o << "      <freejoint name=\"object_free\"/>\n";
   o << "      <geom name=\"object_geom\" ";
@@ -214,27 +495,17 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
       break;
   }
   o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim << "\" friction=\""
-    << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " 0.0001\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+    << w.Num(object.friction) << " " << w.Num(object.torsional_friction)
+    << " 0.0001\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   o << "    </body>\n";
   o << "  </worldbody>\n";
 
-  // One motor closes both digits: the grip tendon is the total closure; the coupling keeps them
-  // symmetric; the brake (off until the actuator asks for it) locks the finger where it is.
-  o << "  <tendon>\n    <fixed name=\"grip\">\n      <joint joint=\"finger_slide\" coef=\"1\"/>\n"
-    << "      <joint joint=\"thumb_slide\" coef=\"1\"/>\n    </fixed>\n  </tendon>\n";
-  o << "  <equality>\n";
-  o << "    <joint name=\"digit_coupling\" joint1=\"thumb_slide\" joint2=\"finger_slide\" polycoef=\"0 1 0 0 0\""
-    << " solref=\"0.002 1\"/>\n";
-  o << "    <joint name=\"grip_brake\" joint1=\"finger_slide\" polycoef=\"0 0 0 0 0\" active=\"false\""
-    << " solref=\"0.002 1\"/>\n";
-  o << "  </equality>\n";
-
-  // Grip motor on the tendon: force = stall x effort (the speed term is the slides' damping); the
-  // wrist: stiff position servos.
-  const double stall = hand.motor.stall_force_n;
-  o << "  <actuator>\n";
-  o << "    <general name=\"grip_motor\" tendon=\"grip\" ctrllimited=\"true\" ctrlrange=\"-1 1\" gainprm=\""
-    << w.Num(stall) << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall) << "\"/>\n";
+  if (hand.model == HandModel::kJaw) {
+    WriteJawTransmission(w, scene);
+  } else {
+    WriteProstheticTransmission(w, scene, place);
+  }
+  // The wrist: stiff position servos.
   for (const char* axis : {"x", "y", "z"}) {
     o << "    <position name=\"wrist_" << axis << "_servo\" joint=\"wrist_" << axis << "\" kp=\""
       << w.Num(hand.wrist_stiffness_n_m) << "\"/>\n";

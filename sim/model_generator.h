@@ -3,39 +3,55 @@
 /// where the units are) and the scene config. The output loads in mj_loadXML and in MuJoCo's own
 /// tools (mujoco-simulate, mujoco-testspeed) with no other files.
 ///
-/// Names the rest of sim/ relies on (docs/simulation.md, "Model"):
-///   bodies  wrist, palm, finger, holder, thumb, object, table
-///   geoms   unit_0 .. unit_{N-1} (one mesa box per layout unit, layout order), holder_shell (the
-///           elliptic holder, a convex mesh), finger_link, thumb_pad, thumb_link, palm_geom,
-///           object_geom, table_geom
-///   joints  wrist_x, wrist_y, wrist_z (slides), finger_slide, thumb_slide; object_free
-///   tendon  grip (finger_slide + thumb_slide: the closure of the gap)
-///   actuators wrist_x_servo, wrist_y_servo, wrist_z_servo (position), grip_motor (on tendon grip)
-///   equality  digit_coupling (thumb_slide = finger_slide), grip_brake (finger_slide held; off)
+/// Names the rest of sim/ relies on (docs/simulation.md, "Model"), both hand models:
+///   bodies  wrist, palm, finger (root of the sensorised digit), holder (its distal phalanx, the
+///           holder frame), thumb (root of the thumb), object, table
+///   geoms   unit_0 .. unit_{N-1} (one mesa box per layout unit, layout order, holder frame),
+///           holder_shell (the elliptic holder, a convex mesh), thumb_pad, object_geom, table_geom
+///   sites   finger_pad (holder centre on the palmar mesa tops), thumb_pad (the thumb's contact face)
+///   joints  wrist_x, wrist_y, wrist_z (slides); object_free
+///   actuators wrist_x_servo, wrist_y_servo, wrist_z_servo (position); the grip motors (GripMotorNames)
+///   equality  the grip brakes (GripBrakeNames), off until the actuator asks for them
+/// Prosthetic hand: joints index_mcp, index_pip (coupled: pip_coupling), thumb_opposition (held by
+/// thumb_opposition_lock), thumb_flexion; motors index_motor, thumb_motor; brakes index_brake,
+/// thumb_brake. Jaw fixture: joints finger_slide, thumb_slide; tendon grip; motor grip_motor;
+/// equality digit_coupling and grip_brake.
 
+#include <array>
 #include <string>
+#include <vector>
 
 #include "sensor/layout.h"
 #include "sim/scene_config.h"
 
 namespace graspbed::sim {
 
-/// Position of the holder frame's origin relative to the wrist body [m]: the holder axis points
-/// down (holder +x = world -z), its palmar side faces world +x (holder -z = world +x), holder +y =
-/// world -y. With both digits at 0 (fully open).
-struct HandGeometry {
-  double holder_center_below_wrist_m = 0.0;  ///< holder centre z below the wrist origin [m]
-  double finger_open_x_m = 0.0;              ///< holder axis x relative to the wrist when open [m]
-  double thumb_pad_open_x_m = 0.0;           ///< thumb pad face x relative to the wrist when open [m]
-  double mesa_top_offset_m = 0.0;            ///< palmar mesa top beyond the holder axis along +x [m]
-  double stroke_m = 0.0;                     ///< travel of each digit from open to closed [m]
+/// Where the generated hand stands at the start and how its motors are sized; world frame unless
+/// noted.
+struct HandPlacement {
+  std::array<double, 3> wrist_position_m{};  ///< initial wrist body origin [m]
+  /// Pre-shape and expected contact joint angles of the driven joints (prosthetic: index MCP and
+  /// thumb flexion [rad]; jaw: finger and thumb slide [m]).
+  std::array<double, 2> preshape_joint{};
+  std::array<double, 2> contact_joint{};
+  double open_gap_m = 0.0;       ///< pre-shape aperture between pad and thumb [m]
+  double object_width_m = 0.0;   ///< object extent across the grasp [m]
+  /// Stall torque (prosthetic) [N m] or force (jaw) [N] per grip motor.
+  std::array<double, 2> stall_effort{};
+  /// Pad and thumb lever arms at contact (prosthetic) [m]; 1 for the jaw.
+  std::array<double, 2> lever_arm_m{1.0, 1.0};
 };
 
-/// The hand geometry that GenerateMjcf uses for `layout` and `scene`.
-HandGeometry ComputeHandGeometry(const sensor::Layout& layout, const SceneConfig& scene);
+/// Computes the start pose and motor sizing that GenerateMjcf uses. Throws std::invalid_argument
+/// naming the keys when the object does not fit the hand (wider than its aperture).
+HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene);
+
+/// Names of the grip motors and of their brakes for `model`, in the same order.
+std::vector<std::string> GripMotorNames(HandModel model);
+std::vector<std::string> GripBrakeNames(HandModel model);
 
 /// Full MJCF text of the scene. Throws std::invalid_argument if the layout or scene is invalid
-/// (e.g. more units than sensor::kMaxUnits).
+/// (e.g. more units than sensor::kMaxUnits, an object too wide for the hand).
 std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene);
 
 }  // namespace graspbed::sim

@@ -22,6 +22,12 @@ void RequireNonNegative(const std::string& field, double value) {
   if (!(value >= 0.0) || !std::isfinite(value)) Bad(field, value, "must be >= 0");
 }
 
+HandModel ParseHandModel(const std::string& text) {
+  return text == "jaw" ? HandModel::kJaw : HandModel::kProsthetic;  // GetString restricted the names
+}
+
+GraspType ParseGrasp(const std::string& text) { return text == "wrap" ? GraspType::kWrap : GraspType::kPinch; }
+
 ObjectShape ParseShape(const std::string& text) {
   if (text == "box") return ObjectShape::kBox;
   if (text == "cylinder") return ObjectShape::kCylinder;
@@ -47,6 +53,26 @@ const char* ToString(ObjectShape shape) {
       return "sphere";
   }
   return "?";
+}
+
+const char* ToString(HandModel model) { return model == HandModel::kJaw ? "jaw" : "prosthetic"; }
+
+const char* ToString(GraspType grasp) { return grasp == GraspType::kWrap ? "wrap" : "pinch"; }
+
+double SceneConfig::ObjectWidthM() const {
+  if (object.shape != ObjectShape::kBox) return object.size_m[0];
+  // A box's extent along the pinch (world x), turned by its yaw.
+  return std::abs(std::cos(object.initial_yaw_rad)) * object.size_m[0] +
+         std::abs(std::sin(object.initial_yaw_rad)) * object.size_m[1];
+}
+
+double SceneConfig::OpenGapM() const {
+  if (!std::isnan(hand.open_gap_m)) return hand.open_gap_m;
+  return ObjectWidthM() + 2.0 * hand.preshape_clearance_m;
+}
+
+double SceneConfig::ThumbOppositionRad() const {
+  return std::isnan(hand.thumb.opposition_rad) ? 0.0 : hand.thumb.opposition_rad;
 }
 
 double ObjectConfig::RestHalfHeightM() const {
@@ -76,8 +102,31 @@ void SceneConfig::Validate() const {
   }
   RequirePositive("object.solimp[2]", object.solimp[2]);
   RequireNonNegative("object.crush_limit_n", object.crush_limit_n);
-  RequirePositive("hand.open_gap_m", hand.open_gap_m);
-  if (hand.open_gap_m > 0.2) Bad("hand.open_gap_m", hand.open_gap_m, "must be <= 0.2");
+  if (!std::isnan(hand.open_gap_m)) {
+    RequirePositive("hand.open_gap_m", hand.open_gap_m);
+    if (hand.open_gap_m > 0.2) Bad("hand.open_gap_m", hand.open_gap_m, "must be <= 0.2");
+  }
+  RequireNonNegative("hand.preshape_clearance_m", hand.preshape_clearance_m);
+  if (OpenGapM() <= ObjectWidthM()) {
+    Bad("hand.open_gap_m", OpenGapM(), "the pre-shape must be wider than the object (object.size_m across the grasp: " +
+                                           std::to_string(ObjectWidthM()) + " m)");
+  }
+  if (hand.model == HandModel::kJaw && hand.grasp != GraspType::kPinch) {
+    Bad("hand.grasp", 0, "the jaw fixture only pinches");
+  }
+  if (hand.grasp == GraspType::kWrap && object.shape != ObjectShape::kCylinder) {
+    Bad("hand.grasp", 0, "a wrap grasps an upright cylinder (object.shape: cylinder)");
+  }
+  RequirePositive("hand.finger.proximal_length_m", hand.finger.proximal_length_m);
+  RequirePositive("hand.finger.middle_length_m", hand.finger.middle_length_m);
+  RequirePositive("hand.finger.pip_mcp_ratio", hand.finger.pip_mcp_ratio);
+  RequirePositive("hand.thumb.proximal_length_m", hand.thumb.proximal_length_m);
+  RequirePositive("hand.thumb.distal_length_m", hand.thumb.distal_length_m);
+  RequirePositive("hand.thumb.tip_radius_m", hand.thumb.tip_radius_m);
+  RequirePositive("hand.digit_motor.stall_pinch_force_n", hand.digit_motor.stall_pinch_force_n);
+  RequirePositive("hand.digit_motor.no_load_speed_rad_s", hand.digit_motor.no_load_speed_rad_s);
+  RequireNonNegative("hand.digit_motor.armature_kg_m2", hand.digit_motor.armature_kg_m2);
+  RequireNonNegative("hand.digit_motor.damping_n_m_s", hand.digit_motor.damping_n_m_s);
   RequirePositive("hand.palm_mass_kg", hand.palm_mass_kg);
   RequirePositive("hand.digit_mass_kg", hand.digit_mass_kg);
   RequirePositive("hand.friction", hand.friction);
@@ -121,7 +170,11 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
   }
   if (auto hand = map.GetMap("hand")) {
     HandConfig& h = scene.hand;
+    h.model = ParseHandModel(hand->GetString("model", ToString(h.model), {"prosthetic", "jaw"}));
+    h.grasp = ParseGrasp(hand->GetString("grasp", ToString(h.grasp), {"pinch", "wrap"}));
     h.open_gap_m = hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(0.001, 0.2));
+    h.preshape_clearance_m =
+        hand->GetNumber("preshape_clearance_m", h.preshape_clearance_m, NumberRule::Between(0.0, 0.05));
     h.palm_mass_kg = hand->GetNumber("palm_mass_kg", h.palm_mass_kg, NumberRule::Positive());
     h.digit_mass_kg = hand->GetNumber("digit_mass_kg", h.digit_mass_kg, NumberRule::Positive());
     h.friction = hand->GetNumber("friction", h.friction, NumberRule::Positive());
@@ -134,6 +187,35 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
       m.no_load_speed_m_s = motor->GetNumber("no_load_speed_m_s", m.no_load_speed_m_s, NumberRule::Positive());
       m.armature_kg = motor->GetNumber("armature_kg", m.armature_kg, NumberRule::NonNegative());
       m.damping_n_s_m = motor->GetNumber("damping_n_s_m", m.damping_n_s_m, NumberRule::NonNegative());
+      motor->RejectUnknownKeys();
+    }
+    if (auto finger = hand->GetMap("finger")) {
+      FingerConfig& f = h.finger;
+      f.proximal_length_m = finger->GetNumber("proximal_length_m", f.proximal_length_m, NumberRule::Between(0.02, 0.07));
+      f.middle_length_m = finger->GetNumber("middle_length_m", f.middle_length_m, NumberRule::Between(0.01, 0.05));
+      f.pip_mcp_ratio = finger->GetNumber("pip_mcp_ratio", f.pip_mcp_ratio, NumberRule::Between(0.5, 2.0));
+      f.dip_flexion_rad = finger->GetNumber("dip_flexion_rad", f.dip_flexion_rad, NumberRule::Between(0.0, 1.0));
+      f.mcp_rest_angle_rad =
+          finger->GetNumber("mcp_rest_angle_rad", f.mcp_rest_angle_rad, NumberRule::Between(-0.6, 0.6));
+      finger->RejectUnknownKeys();
+    }
+    if (auto thumb = hand->GetMap("thumb")) {
+      ThumbConfig& t = h.thumb;
+      t.proximal_length_m = thumb->GetNumber("proximal_length_m", t.proximal_length_m, NumberRule::Between(0.02, 0.07));
+      t.distal_length_m = thumb->GetNumber("distal_length_m", t.distal_length_m, NumberRule::Between(0.01, 0.05));
+      t.tip_radius_m = thumb->GetNumber("tip_radius_m", t.tip_radius_m, NumberRule::Between(0.004, 0.015));
+      t.ip_flexion_rad = thumb->GetNumber("ip_flexion_rad", t.ip_flexion_rad, NumberRule::Between(0.0, 1.2));
+      t.opposition_rad = thumb->GetNumber("opposition_rad", t.opposition_rad, NumberRule::Between(-0.2, 1.7));
+      thumb->RejectUnknownKeys();
+    }
+    if (auto motor = hand->GetMap("digit_motor")) {
+      DigitMotorConfig& m = h.digit_motor;
+      m.stall_pinch_force_n =
+          motor->GetNumber("stall_pinch_force_n", m.stall_pinch_force_n, NumberRule::Between(1.0, 200.0));
+      m.no_load_speed_rad_s =
+          motor->GetNumber("no_load_speed_rad_s", m.no_load_speed_rad_s, NumberRule::Between(0.1, 50.0));
+      m.armature_kg_m2 = motor->GetNumber("armature_kg_m2", m.armature_kg_m2, NumberRule::Between(0.0, 1.0));
+      m.damping_n_m_s = motor->GetNumber("damping_n_m_s", m.damping_n_m_s, NumberRule::Between(0.0, 10.0));
       motor->RejectUnknownKeys();
     }
     hand->RejectUnknownKeys();

@@ -5,8 +5,8 @@
 /// Validate(). Docs: docs/simulation.md.
 ///
 /// World frame: z up, the table top is the plane z = 0, the object starts centred at x = y = 0.
-/// The hand closes along world x: the sensorised finger sits at -x and moves towards +x, the thumb
-/// sits at +x and moves towards -x; the finger's palmar side (holder -z) faces world +x.
+/// Both hand models pinch along world x: the sensorised index finger's pad meets the object on its
+/// -x side, the thumb on its +x side. The prosthetic hand's kinematics: docs/simulation.md.
 
 #include <array>
 #include <limits>
@@ -50,9 +50,30 @@ struct ObjectConfig {
   double RestHalfHeightM() const;
 };
 
-/// The single grip motor, driving both digits through the linkage. The digits close in parallel
-/// (the holder keeps its orientation), so the motor's output is a force on the grip tendon whose
-/// length is the closure of finger + thumb; pinch force = tendon force at rest.
+/// Which hand the scene carries.
+enum class HandModel {
+  /// The default: an index finger flexing at MCP and PIP (PIP coupled to MCP by a linkage, DIP fixed)
+  /// whose distal phalanx is the sensor holder, and an opposable thumb; one DC motor per digit.
+  kProsthetic,
+  /// The bench fixture: finger and thumb on two coupled slide joints, the holder never turns.
+  kJaw,
+};
+/// "prosthetic" / "jaw".
+const char* ToString(HandModel model);
+
+/// The grasp the pre-shape prepares (prosthetic hand; the jaw only pinches).
+enum class GraspType {
+  /// Index fingertip pad against the thumb tip, hand above the object, near its top.
+  kPinch,
+  /// The hand turned palm-towards the object from the side; finger and thumb curl around it.
+  kWrap,
+};
+/// "pinch" / "wrap".
+const char* ToString(GraspType grasp);
+
+/// The jaw fixture's single grip motor, driving both digits through the linkage. The digits close in
+/// parallel (the holder keeps its orientation), so the motor's output is a force on the grip tendon
+/// whose length is the closure of finger + thumb; pinch force = tendon force at rest.
 struct MotorConfig {
   /// Tendon force at stall, effort 1 [N]; equals the static fingertip pinch force. >= 15 N so the
   /// 10 N sensor range can be exceeded.
@@ -66,10 +87,55 @@ struct MotorConfig {
   double damping_n_s_m = 1.0;
 };
 
+/// The prosthetic index finger (adult index: proximal 39-45 mm, middle 22-26 mm). Its distal phalanx
+/// is the sensor holder (cross-section and length from the layout) with a rounded tip.
+struct FingerConfig {
+  double proximal_length_m = 0.043;  ///< MCP -> PIP [m]
+  double middle_length_m = 0.024;    ///< PIP -> DIP [m]
+  /// PIP flexion per radian of MCP flexion, fixed by the linkage (commercial fingers: 1 to 1.3) [-].
+  double pip_mcp_ratio = 1.1;
+  /// Fixed flexion of the DIP joint (the holder against the middle phalanx) [rad].
+  double dip_flexion_rad = 0.2;
+  /// Fixed angle of the proximal phalanx at MCP = 0 below the palm plane, towards flexion [rad].
+  double mcp_rest_angle_rad = -0.06;
+};
+
+/// The opposable thumb: a rotation about the palm normal set by the pre-shape, then one flexion joint
+/// with a fixed interphalangeal bend; an unsensorised rounded tip.
+struct ThumbConfig {
+  double proximal_length_m = 0.040;  ///< flexion joint -> IP [m]
+  double distal_length_m = 0.030;    ///< IP -> tip centre [m]
+  double tip_radius_m = 0.008;       ///< radius of the rounded distal segment [m]
+  double ip_flexion_rad = 0.35;      ///< fixed interphalangeal flexion [rad]
+  /// Opposition (rotation about the palm normal at the thumb base) [rad]; NaN: from the grasp (0 in
+  /// a pinch and a wrap: the thumb flexes in the index finger's plane).
+  double opposition_rad = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The prosthetic hand's motors: one DC motor per digit (index MCP, thumb flexion), both commanded
+/// with the one grip effort. Torque = stall x (effort - omega / no_load_speed).
+struct DigitMotorConfig {
+  /// Fingertip pinch force at stall, effort 1, in the pinch posture of the object [N]; the index
+  /// motor's stall torque is this times the pad's lever arm there, the thumb's likewise (so the two
+  /// balance on the object). >= 15 N so the 10 N sensor range can be exceeded.
+  double stall_pinch_force_n = 20.0;
+  /// No-load speed of each digit's driven joint [rad/s]: open to closed in about 1 s at effort 1.
+  double no_load_speed_rad_s = 1.6;
+  /// Reflected rotor + gearbox inertia on each driven joint [kg m^2].
+  double armature_kg_m2 = 2e-4;
+  /// Viscous friction on every finger joint [N m s/rad].
+  double damping_n_m_s = 0.002;
+};
+
 /// The hand: geometry of the digits around the object and the wrist servo that scripts move.
 struct HandConfig {
-  /// Gap between the finger's mesa tops and the thumb pad when fully open [m].
-  double open_gap_m = 0.09;
+  HandModel model = HandModel::kProsthetic;
+  GraspType grasp = GraspType::kPinch;
+  /// Pre-shape aperture: gap between the finger's pad (mesa tops) and the thumb at the start [m].
+  /// NaN: follows the object (its width across the pinch + 2 x preshape_clearance_m).
+  double open_gap_m = std::numeric_limits<double>::quiet_NaN();
+  /// Clearance on each side of the object in the automatic pre-shape [m].
+  double preshape_clearance_m = 0.0075;
   /// Mass of the palm (with the wrist carriage) [kg], of each digit [kg].
   double palm_mass_kg = 0.3;
   double digit_mass_kg = 0.03;
@@ -84,7 +150,10 @@ struct HandConfig {
   /// compensated in the servo target, the held object's weight is not (it sags by m g / stiffness).
   double wrist_stiffness_n_m = 20000.0;
   double wrist_damping_n_s_m = 400.0;
-  MotorConfig motor;
+  MotorConfig motor;            ///< jaw fixture only
+  FingerConfig finger;          ///< prosthetic hand only
+  ThumbConfig thumb;            ///< prosthetic hand only
+  DigitMotorConfig digit_motor; ///< prosthetic hand only
 };
 
 /// Solver and contact options (MuJoCo <option>); defaults chosen for grasping, docs/simulation.md.
@@ -105,6 +174,15 @@ struct SceneConfig {
   ObjectConfig object;
   HandConfig hand;
   PhysicsConfig physics;
+
+  /// The object's extent across the grasp [m]: along world x for a pinch (box: with its yaw),
+  /// the diameter for a round object.
+  double ObjectWidthM() const;
+  /// The pre-shape aperture in use [m]: hand.open_gap_m, or the object's width plus clearance on
+  /// both sides when it is NaN (the pre-shape follows the object).
+  double OpenGapM() const;
+  /// Thumb opposition in use [rad].
+  double ThumbOppositionRad() const;
 
   /// Throws std::invalid_argument naming the field and value.
   void Validate() const;

@@ -84,18 +84,25 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   object_geom_ = RequireId(m, mjOBJ_GEOM, "object_geom");
   holder_body_ = RequireId(m, mjOBJ_BODY, "holder");
   holder_shell_geom_ = RequireId(m, mjOBJ_GEOM, "holder_shell");
-  finger_body_ = RequireId(m, mjOBJ_BODY, "finger");
-  thumb_body_ = RequireId(m, mjOBJ_BODY, "thumb");
+  const int finger_body = RequireId(m, mjOBJ_BODY, "finger");
+  const int thumb_body = RequireId(m, mjOBJ_BODY, "thumb");
   wrist_body_ = RequireId(m, mjOBJ_BODY, "wrist");
-  const int finger_joint = RequireId(m, mjOBJ_JOINT, "finger_slide");
-  const int thumb_joint = RequireId(m, mjOBJ_JOINT, "thumb_slide");
-  finger_joint_qpos_ = m->jnt_qposadr[finger_joint];
-  thumb_joint_qpos_ = m->jnt_qposadr[thumb_joint];
-  finger_joint_dof_ = m->jnt_dofadr[finger_joint];
-  thumb_joint_dof_ = m->jnt_dofadr[thumb_joint];
-  grip_actuator_ = RequireId(m, mjOBJ_ACTUATOR, "grip_motor");
-  grip_tendon_ = RequireId(m, mjOBJ_TENDON, "grip");
-  brake_equality_ = RequireId(m, mjOBJ_EQUALITY, "grip_brake");
+  finger_pad_site_ = RequireId(m, mjOBJ_SITE, "finger_pad");
+  thumb_pad_site_ = RequireId(m, mjOBJ_SITE, "thumb_pad");
+  const HandPlacement place = PlaceHand(layout_, scene_);
+  const std::vector<std::string> motors = GripMotorNames(scene_.hand.model);
+  const std::vector<std::string> brakes = GripBrakeNames(scene_.hand.model);
+  for (size_t k = 0; k < motors.size(); ++k) {
+    GripDrive drive;
+    drive.actuator = RequireId(m, mjOBJ_ACTUATOR, motors[k].c_str());
+    drive.brake_equality = RequireId(m, mjOBJ_EQUALITY, brakes[k].c_str());
+    drive.brake_joint_qpos = m->jnt_qposadr[m->eq_obj1id[drive.brake_equality]];
+    drive.stall = place.stall_effort[k];
+    drive.no_load_speed = scene_.hand.model == HandModel::kJaw ? scene_.hand.motor.no_load_speed_m_s
+                                                               : scene_.hand.digit_motor.no_load_speed_rad_s;
+    drive.lever_arm_m = place.lever_arm_m[k];
+    grip_drives_.push_back(drive);
+  }
   const char* servo_names[3] = {"wrist_x_servo", "wrist_y_servo", "wrist_z_servo"};
   const char* joint_names[3] = {"wrist_x", "wrist_y", "wrist_z"};
   for (int k = 0; k < 3; ++k) {
@@ -103,7 +110,7 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     wrist_joint_qpos_[k] = m->jnt_qposadr[RequireId(m, mjOBJ_JOINT, joint_names[k])];
   }
 
-  // geom -> unit and geom -> side tables, built once.
+  // geom -> unit and geom -> side tables, built once: a digit is its root body's subtree.
   geom_unit_.assign(m->ngeom, -1);
   geom_side_.assign(m->ngeom, kOther);
   for (int i = 0; i < layout_.unit_count(); ++i) {
@@ -112,13 +119,17 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   }
   const int palm_body = RequireId(m, mjOBJ_BODY, "palm");
   for (int g = 0; g < m->ngeom; ++g) {
-    const int body = m->geom_bodyid[g];
-    if (body == finger_body_ || body == holder_body_) {
-      geom_side_[g] = kFinger;
-    } else if (body == thumb_body_) {
-      geom_side_[g] = kThumb;
-    } else if (body == palm_body || body == wrist_body_) {
-      geom_side_[g] = kHandOther;
+    for (int body = m->geom_bodyid[g]; body > 0; body = m->body_parentid[body]) {
+      if (body == finger_body) {
+        geom_side_[g] = kFinger;
+      } else if (body == thumb_body) {
+        geom_side_[g] = kThumb;
+      } else if (body == palm_body || body == wrist_body_) {
+        if (geom_side_[g] == kOther) geom_side_[g] = kHandOther;
+      } else {
+        continue;
+      }
+      break;
     }
   }
   unit_frames_.resize(layout_.unit_count());
@@ -140,6 +151,7 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
   for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
   mj_forward(model_, data_);
+  initial_aperture_m_ = mju_dist3(data_->site_xpos + 3 * finger_pad_site_, data_->site_xpos + 3 * thumb_pad_site_);
 }
 
 Simulation::~Simulation() {
@@ -155,12 +167,14 @@ void Simulation::SetGripEffort(double effort) {
 }
 
 void Simulation::SetGripBrake(bool engaged) {
-  if (engaged && !brake_engaged_) {
-    // Joint equality with only joint1: finger_slide = qpos0 + polycoef[0].
-    model_->eq_data[brake_equality_ * mjNEQDATA + 0] =
-        data_->qpos[finger_joint_qpos_] - model_->qpos0[finger_joint_qpos_];
+  for (const GripDrive& drive : grip_drives_) {
+    if (engaged && !brake_engaged_) {
+      // Joint equality with only joint1: joint = qpos0 + polycoef[0].
+      model_->eq_data[drive.brake_equality * mjNEQDATA + 0] =
+          data_->qpos[drive.brake_joint_qpos] - model_->qpos0[drive.brake_joint_qpos];
+    }
+    model_->eq_active[drive.brake_equality] = engaged ? 1 : 0;
   }
-  model_->eq_active[brake_equality_] = engaged ? 1 : 0;
   brake_engaged_ = engaged;
 }
 
@@ -195,7 +209,7 @@ void Simulation::SetObjectFriction(double friction) {
 }
 
 void Simulation::ApplyControls() {
-  data_->ctrl[grip_actuator_] = brake_engaged_ ? 0.0 : grip_effort_;
+  for (const GripDrive& drive : grip_drives_) data_->ctrl[drive.actuator] = brake_engaged_ ? 0.0 : grip_effort_;
   for (int k = 0; k < 3; ++k) {
     // Joint zero is the initial wrist position; z carries the hand's weight in the target.
     double target = wrist_target_[k] - model_->body_pos[3 * wrist_body_ + k];
@@ -325,11 +339,24 @@ GroundTruth Simulation::truth() const {
       break;
   }
   t.object_height_above_table_m = d->geom_xpos[3 * object_geom_ + 2] - half_extent;
-  t.grip_closure_m = d->qpos[finger_joint_qpos_] + d->qpos[thumb_joint_qpos_];
-  t.grip_velocity_m_s = d->qvel[finger_joint_dof_] + d->qvel[thumb_joint_dof_];
-  // Stall force x effort minus the back-EMF term carried by the slides' damping.
-  t.grip_motor_force_n = d->actuator_force[grip_actuator_] -
-                         scene_.hand.motor.stall_force_n * t.grip_velocity_m_s / scene_.hand.motor.no_load_speed_m_s;
+  {
+    const mjtNum* pad = d->site_xpos + 3 * finger_pad_site_;
+    const mjtNum* tip = d->site_xpos + 3 * thumb_pad_site_;
+    mjtNum across[3] = {tip[0] - pad[0], tip[1] - pad[1], tip[2] - pad[2]};
+    const mjtNum aperture = mju_normalize3(across);
+    t.grip_closure_m = initial_aperture_m_ - aperture;
+    mjtNum pad_vel[6];
+    mjtNum tip_vel[6];
+    mj_objectVelocity(m, d, mjOBJ_SITE, finger_pad_site_, pad_vel, 0);
+    mj_objectVelocity(m, d, mjOBJ_SITE, thumb_pad_site_, tip_vel, 0);
+    const mjtNum rel[3] = {tip_vel[3] - pad_vel[3], tip_vel[4] - pad_vel[4], tip_vel[5] - pad_vel[5]};
+    t.grip_velocity_m_s = -mju_dot3(rel, across);
+  }
+  // Stall x effort minus the back-EMF term carried by the driven joint's damping, as pinch force.
+  const GripDrive& drive = grip_drives_.front();
+  t.grip_motor_force_n =
+      (d->actuator_force[drive.actuator] - drive.stall * d->actuator_velocity[drive.actuator] / drive.no_load_speed) /
+      drive.lever_arm_m;
 
   double finger_on_object = 0.0;
   double thumb_on_object = 0.0;

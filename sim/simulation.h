@@ -43,9 +43,13 @@ struct GroundTruth {
   /// Lowest point of the object above the table top [m] (0 when resting on it).
   double object_height_above_table_m = 0.0;
   std::array<double, 3> wrist_position_m{};        ///< actual wrist position [m]
-  double grip_closure_m = 0.0;                     ///< finger + thumb travel from open [m]
-  double grip_velocity_m_s = 0.0;                  ///< closing speed of the gap [m/s]
-  double grip_motor_force_n = 0.0;                 ///< force the motor applies to the grip tendon [N]
+  /// How far the aperture between the finger's pad and the thumb's contact face (sites finger_pad,
+  /// thumb_pad) has closed since the start [m], either hand model.
+  double grip_closure_m = 0.0;
+  double grip_velocity_m_s = 0.0;                  ///< closing speed of that aperture [m/s]
+  /// The (index) grip motor's drive, back-EMF included, as the pinch force it makes [N]: the jaw's
+  /// tendon force; the index motor's torque over the pad's lever arm in the contact posture.
+  double grip_motor_force_n = 0.0;
   /// Largest relative tangential speed between object and finger/thumb at their contact points
   /// [m/s]; 0 without contact. Includes MuJoCo's residual creep (um/s with noslip).
   double slip_speed_m_s = 0.0;
@@ -160,16 +164,20 @@ class Simulation {
   int object_geom_ = -1;
   int holder_body_ = -1;
   int holder_shell_geom_ = -1;
-  int finger_body_ = -1;
-  int thumb_body_ = -1;
   int wrist_body_ = -1;
-  int finger_joint_qpos_ = -1;
-  int thumb_joint_qpos_ = -1;
-  int finger_joint_dof_ = -1;
-  int thumb_joint_dof_ = -1;
-  int grip_actuator_ = -1;
-  int grip_tendon_ = -1;
-  int brake_equality_ = -1;
+  int finger_pad_site_ = -1;
+  int thumb_pad_site_ = -1;
+  double initial_aperture_m_ = 0.0;  ///< pad-to-thumb site distance at the start [m]
+  /// One per grip motor (jaw: 1, prosthetic: index and thumb), in GripMotorNames order.
+  struct GripDrive {
+    int actuator = -1;
+    int brake_equality = -1;
+    int brake_joint_qpos = -1;  ///< qpos address of the joint the brake holds
+    double stall = 0.0;         ///< stall torque [N m] or force [N]
+    double no_load_speed = 1.0; ///< [rad/s] or [m/s]
+    double lever_arm_m = 1.0;   ///< drive -> pinch force [m] (1 for the jaw)
+  };
+  std::vector<GripDrive> grip_drives_;
   std::array<int, 3> wrist_actuators_{-1, -1, -1};
   std::array<int, 3> wrist_joint_qpos_{-1, -1, -1};
   /// geom id -> unit index (-1 for non-mesa geoms); built once.

@@ -499,7 +499,11 @@ void EmitScene(YAML::Emitter& out, const sim::SceneConfig& scene) {
 
   const sim::HandConfig& h = scene.hand;
   out << YAML::Key << "hand" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "open_gap_m", h.open_gap_m);
+  out << YAML::Key << "model" << YAML::Value << sim::ToString(h.model);
+  out << YAML::Key << "grasp" << YAML::Value << sim::ToString(h.grasp);
+  // NaN means "follows the object"; left out so the loader derives it again.
+  if (!std::isnan(h.open_gap_m)) EmitNumber(out, "open_gap_m", h.open_gap_m);
+  EmitNumber(out, "preshape_clearance_m", h.preshape_clearance_m);
   EmitNumber(out, "palm_mass_kg", h.palm_mass_kg);
   EmitNumber(out, "digit_mass_kg", h.digit_mass_kg);
   EmitNumber(out, "friction", h.friction);
@@ -515,6 +519,26 @@ void EmitScene(YAML::Emitter& out, const sim::SceneConfig& scene) {
   EmitNumber(out, "no_load_speed_m_s", h.motor.no_load_speed_m_s);
   EmitNumber(out, "armature_kg", h.motor.armature_kg);
   EmitNumber(out, "damping_n_s_m", h.motor.damping_n_s_m);
+  out << YAML::EndMap;
+  out << YAML::Key << "finger" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "proximal_length_m", h.finger.proximal_length_m);
+  EmitNumber(out, "middle_length_m", h.finger.middle_length_m);
+  EmitNumber(out, "pip_mcp_ratio", h.finger.pip_mcp_ratio);
+  EmitNumber(out, "dip_flexion_rad", h.finger.dip_flexion_rad);
+  EmitNumber(out, "mcp_rest_angle_rad", h.finger.mcp_rest_angle_rad);
+  out << YAML::EndMap;
+  out << YAML::Key << "thumb" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "proximal_length_m", h.thumb.proximal_length_m);
+  EmitNumber(out, "distal_length_m", h.thumb.distal_length_m);
+  EmitNumber(out, "tip_radius_m", h.thumb.tip_radius_m);
+  EmitNumber(out, "ip_flexion_rad", h.thumb.ip_flexion_rad);
+  if (!std::isnan(h.thumb.opposition_rad)) EmitNumber(out, "opposition_rad", h.thumb.opposition_rad);
+  out << YAML::EndMap;
+  out << YAML::Key << "digit_motor" << YAML::Value << YAML::BeginMap;
+  EmitNumber(out, "stall_pinch_force_n", h.digit_motor.stall_pinch_force_n);
+  EmitNumber(out, "no_load_speed_rad_s", h.digit_motor.no_load_speed_rad_s);
+  EmitNumber(out, "armature_kg_m2", h.digit_motor.armature_kg_m2);
+  EmitNumber(out, "damping_n_m_s", h.digit_motor.damping_n_m_s);
   out << YAML::EndMap << YAML::EndMap;
 
   const sim::PhysicsConfig& p = scene.physics;
