@@ -2,7 +2,7 @@
 // a known force, then sheared along the holder axis. Forces are read back through the simulated
 // backend, Readout and Inversion (not ground truth) and compared with the applied load.
 //
-// Setup: gravity off, no table, the hand open (finger at its joint stop). The holder is curved, so a
+// Setup: gravity off, no table, the prosthetic finger at its pre-shape held there by the grip brake. The holder is curved, so a
 // plate pressed along the palmar axis would meet tilted mesas (about 12 deg at 2.5 mm of arc) and
 // each would only see F cos(tilt); instead the plate is laid perpendicular to the inward normal of
 // column 1 (arc -2.5 mm, units 1, 5, 9, 13, 17), touching exactly that column's five mesa tops, and
@@ -43,6 +43,7 @@ class ContactMappingTest : public testing::MujocoTest {
     scene.object.mass_kg = 0.01;
     scene.object.friction = 1.0;
     simulation_ = &MakeSimulation(DefaultLayout(), scene);
+    simulation_->SetGripBrake(true);
     PlacePlate();
     backend_ = std::make_unique<SimBackend>(*simulation_, SimBackendConfig{}, 1);
     readout_ = std::make_unique<sensor::Readout>(sensor::ReadoutConfig{}, DefaultLayout().unit_count(),

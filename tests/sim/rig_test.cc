@@ -20,18 +20,22 @@ constexpr double kHeightTolM = 0.005;
 constexpr double kForceTolN = 0.5;
 // Held still, the pinch's tangential load is the weight (measured: 0.981 N of 0.981 N for the box).
 constexpr double kWeightRelTol = 0.03;
-// Required grip over the even-share grip m g / (2 mu) (measured: 1.07 for the box).
-constexpr double kMaxUnevenShare = 2.0;
+// Required grip over the even-share grip m g / (2 mu), for the jaw fixture whose digits are mirror
+// images (measured: 1.07 for the box): a fifth above what was measured.
+constexpr double kMaxUnevenShare = 1.25;
+constexpr double kCloseAtS = 0.15;
 constexpr double kTwistNm = 0.02;  // about the vertical: a 0.4 N couple across the 50 mm box
 
 class RigTest : public testing::MujocoTest {
  protected:
   // Scripted lift: close from t = 0, lift the wrist by kLiftHeightM over 0.5 s from t = 1.5 s.
   static void CloseAndLift(SimRig& rig, double end_s) {
-    rig.controller().SetIntent(controller::GraspIntent::kClose);
     const std::array<double, 3> start = rig.simulation().wrist_target();
     while (rig.time_s() < end_s) {
       const double t = rig.time_s();
+      // Close after the readout's 0.1 s tare, as the scenarios do: the prosthetic finger reaches the
+      // object within 0.1 s, and a tare under load would offset every estimate.
+      if (t >= kCloseAtS) rig.controller().SetIntent(controller::GraspIntent::kClose);
       std::array<double, 3> target = start;
       target[2] += kLiftHeightM * std::clamp((t - 1.5) / 0.5, 0.0, 1.0);
       rig.simulation().SetWristTarget(target);
@@ -47,12 +51,15 @@ TEST_F(RigTest, OpenLoopBaselineClosesOnAndLiftsABox) {
   EXPECT_NEAR(truth.object_height_above_table_m, kLiftHeightM, kHeightTolM);
   EXPECT_NEAR(truth.object_squeeze_n, 10.0, kForceTolN);
   EXPECT_LT(truth.slip_speed_m_s, 1e-4);
-  // The controller's view, through the backend, readout and inversion: the pinch on the mesas,
-  // with the tilt of the curved holder (cos 12 deg) taken off.
+  // The controller's view, through the backend, readout and inversion: the units' true normal
+  // loads (ideal sensor: to the inversion's rounding), and those carry the whole finger contact.
   const sensor::TactileState& state = rig.loop().state();
   EXPECT_FALSE(state.stale);
   EXPECT_GT(state.contact_count, 0);
-  EXPECT_NEAR(state.total_fn_n, truth.finger_normal_force_n * std::cos(0.211), 0.03 * truth.finger_normal_force_n);
+  double true_fn = 0.0;
+  for (const sensor::UnitLoad& load : rig.backend().last_loads()) true_fn += load.fn_n;
+  EXPECT_NEAR(state.total_fn_n, true_fn, 1e-6 * true_fn);
+  EXPECT_GT(truth.sensed_share, 0.95);
   EXPECT_EQ(rig.loop().command().grip_effort, 0.5);
 }
 
@@ -65,6 +72,9 @@ TEST_F(RigTest, AStillPinchCarriesTheWeightAndNeedsEachDigitsShareOfGrip) {
   ASSERT_EQ(config.scene.object.shape, ObjectShape::kBox);
   ASSERT_DOUBLE_EQ(mass_kg, 0.1);
   ASSERT_DOUBLE_EQ(friction, 0.8);
+  // The symmetric bench fixture: the share is a property of the ground truth here, not of the hand.
+  config.scene.hand.model = HandModel::kJaw;
+  config.scene.hand.open_gap_m = 0.065;
   SimRig& rig = MakeRig(config, "open_loop", {{"close_effort", 0.5}});
   CloseAndLift(rig, 3.0);
   const GroundTruth truth = rig.simulation().truth();
