@@ -115,7 +115,7 @@ TEST_F(ActionsTest, CloseSqueezesTheObjectAndLiftRaisesIt) {
 TEST_F(ActionsTest, LiftWithoutCloseLeavesTheObjectOnTheTable) {
   const std::string yaml = R"(duration_s: 0.4
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 controller: {name: open_loop}
 script:
   - {at_s: 0.1, action: lift, height_m: 0.05, duration_s: 0.2, profile: linear}
@@ -148,7 +148,7 @@ TEST_F(ActionsTest, OpenReleasesTheObjectWhichFallsBackToTheTable) {
 TEST_F(ActionsTest, MoveTakesTheWristToAnOffsetAndToAnAbsolutePosition) {
   // The pre-grasp wrist pose is computed from the scene; read it from a very short run first.
   const std::string scene = R"(object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 controller: {name: open_loop}
 )";
   const ScenarioRun probe = RunScenarioText(dir_, "probe", "duration_s: 0.01\n" + scene);

@@ -335,7 +335,7 @@ TEST(ExpectationsOnRunsTest, FragileObjectCrushedByAHardGripAndSparedByASoftOne)
   TempDir dir;
   const std::string fragile = R"(duration_s: 0.3
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7, crush_limit_n: 6}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 script:
   - {at_s: 0.04, action: close}
 expectations: {not_crushed: true, max_peak_grip_n: 6}
@@ -379,7 +379,7 @@ TEST(ExpectationsOnRunsTest, SlipUnderASuddenPullIsCaughtByGripSlipAndMissedByAW
   // Grasped, lifted slowly (no slip), then an 8 N downward pull at once.
   const std::string scenario = R"(duration_s: 1.0
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 script:
   - {at_s: 0.04, action: close}
   - {at_s: 0.3, action: lift, height_m: 0.03, duration_s: 0.5}

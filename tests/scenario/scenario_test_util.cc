@@ -10,10 +10,14 @@
 
 namespace graspbed::scenario::testing {
 
+// The scenario-machinery tests (actions, faults, metrics, expectations) run on the slide-joint jaw
+// fixture: its pinch is symmetric and its closing slow and exact, so their timelines and figures
+// test the machinery, not the hand. The prosthetic hand has its own tests (tests/sim) and the
+// shipped scenarios.
 std::string HeldBoxScenario(double duration_s, const std::string& extra_script, const std::string& extra) {
   return "duration_s: " + std::to_string(duration_s) + R"(
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 controller: {name: open_loop}
 script:
   - {at_s: 0.04, action: close}
