@@ -41,8 +41,6 @@ constexpr double kPalmHalfWidthM = 0.012;      // palm box along H y
 // (holder half length + tip cap + 3 mm).
 constexpr double kPinchBelowTopM = 0.013;
 constexpr double kMinPadHeightM = 0.023;
-// Wrap: the object's surface stands this far off the palm in the pre-shape.
-constexpr double kWrapPalmClearanceM = 0.004;
 
 // Fixed-format numbers so the text (and the checked-in model) is reproducible.
 class Writer {
@@ -229,12 +227,10 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   const double mcp0 = place.preshape_joint[0];
   const double thumb0 = place.preshape_joint[1];
   const double opposition = scene.ThumbOppositionRad();
-  // The pinch is in the hand frame H; a wrap turns H so that its palmar side (-z) faces world +y.
-  const std::string hand_quat = hand.grasp == GraspType::kWrap ? w.AxisAngle(1, 0, 0, 0.5 * std::numbers::pi) : "1 0 0 0";
   const double palm_min_x = std::min(kin.mcp_xz().x(), kin.thumb_base_xz().x()) - kPalmMarginM;
   const double palm_max_x = std::max(kin.mcp_xz().x(), kin.thumb_base_xz().x()) + kPalmMarginM;
   const double half_depth = 0.5 * ProstheticKinematics::kPalmDepthM;
-  o << "      <body name=\"palm\" quat=\"" << hand_quat << "\" childclass=\"hand\">\n";
+  o << "      <body name=\"palm\" childclass=\"hand\">\n";
   o << "        <geom name=\"palm_geom\" type=\"box\" size=\""
     << w.Vec(0.5 * (palm_max_x - palm_min_x), kPalmHalfWidthM, half_depth) << "\" pos=\""
     << w.Vec(0.5 * (palm_min_x + palm_max_x), 0, -half_depth) << "\" mass=\"" << w.Num(hand.palm_mass_kg)
@@ -246,8 +242,8 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   const double proximal_mass = 0.5 * hand.digit_mass_kg;
   const double middle_mass = 0.25 * hand.digit_mass_kg;
   const double distal_mass = 0.25 * hand.digit_mass_kg;
-  const double index_damping = motor.damping_n_m_s + place.stall_effort[0] / motor.no_load_speed_rad_s;
-  const double thumb_damping = motor.damping_n_m_s + place.stall_effort[1] / motor.no_load_speed_rad_s;
+  const double index_damping = motor.damping_n_m_s + place.stall_effort[0] / place.no_load_speed[0];
+  const double thumb_damping = motor.damping_n_m_s + place.stall_effort[1] / place.no_load_speed[1];
   const double pip0 = finger.pip_mcp_ratio * mcp0;
   o << "        <body name=\"finger\" pos=\"" << w.Vec(kin.mcp_xz().x(), 0, kin.mcp_xz().y()) << "\" xyaxes=\""
     << IndexAxes(w, finger.mcp_rest_angle_rad + mcp0) << "\">\n";
@@ -359,6 +355,7 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     wrist = {object.initial_position_m[0], object.initial_position_m[1],
              ObjectCentreZ(object) + g.holder_center_below_wrist_m};
     place.stall_effort = {hand.motor.stall_force_n, hand.motor.stall_force_n};
+    place.no_load_speed = {hand.motor.no_load_speed_m_s, hand.motor.no_load_speed_m_s};
     place.contact_joint = {0.5 * (place.open_gap_m - place.object_width_m),
                            0.5 * (place.open_gap_m - place.object_width_m)};
   } else {
@@ -370,31 +367,21 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
               << " mm is wider than the prosthetic hand opens (" << max_aperture * 1e3 << " mm)";
       throw std::invalid_argument(message.str());
     }
-    if (hand.grasp == GraspType::kPinch) {
-      // The pinch centre of the hand frame (x = 0) over the object; each digit's contact angle for
-      // this width, and the height at which their contacts meet the object.
-      const double half_width = 0.5 * place.object_width_m;
-      place.contact_joint = {kin.McpForPadX(-half_width), kin.ThumbForTipX(half_width)};
-      place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m), kin.ThumbForTipX(0.5 * place.open_gap_m)};
-      const double contact_z =
-          0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() + kin.ThumbTip(place.contact_joint[1]).point_xz.y());
-      wrist = {object.initial_position_m[0], object.initial_position_m[1], PinchHeightM(object) - contact_z};
-    } else {
-      // Wrap: the object's axis in front of the palm between MCP and thumb base, the digits open.
-      const double radius = 0.5 * place.object_width_m;
-      const double centre_x = 0.5 * (kin.mcp_xz().x() + kin.thumb_base_xz().x());
-      const double centre_z = -ProstheticKinematics::kPalmDepthM - kWrapPalmClearanceM - radius;
-      // H (x, y, z) -> world (x, -z, y) for the wrap's turn about world x.
-      wrist = {object.initial_position_m[0] - centre_x, object.initial_position_m[1] + centre_z, ObjectCentreZ(object)};
-      place.preshape_joint = {kin.McpForPadX(centre_x - 0.5 * place.open_gap_m),
-                              kin.ThumbForTipX(centre_x + 0.5 * place.open_gap_m)};
-      place.contact_joint = {kin.McpForPadX(centre_x - radius), kin.ThumbForTipX(centre_x + radius)};
-    }
+    // The pinch centre of the hand frame (x = 0) over the object; each digit's contact angle for
+    // this width, and the height at which their contacts meet the object.
+    const double half_width = 0.5 * place.object_width_m;
+    place.contact_joint = {kin.McpForPadX(-half_width), kin.ThumbForTipX(half_width)};
+    place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m), kin.ThumbForTipX(0.5 * place.open_gap_m)};
+    const double contact_z =
+        0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() + kin.ThumbTip(place.contact_joint[1]).point_xz.y());
+    wrist = {object.initial_position_m[0], object.initial_position_m[1], PinchHeightM(object) - contact_z};
     // Motors sized so that at stall each digit presses stall_pinch_force_n on the object in this
     // grasp's contact posture: torque = force x lever arm there.
     place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),
                          std::abs(kin.ThumbLeverArmM(place.contact_joint[1]))};
     for (int k = 0; k < 2; ++k) place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * place.lever_arm_m[k];
+    const double omega = hand.digit_motor.no_load_speed_rad_s;
+    place.no_load_speed = {omega, omega * place.lever_arm_m[0] / place.lever_arm_m[1]};
   }
   for (int k = 0; k < 3; ++k) place.wrist_position_m[k] = std::isnan(wrist_set[k]) ? wrist[k] : wrist_set[k];
   return place;

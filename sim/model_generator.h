@@ -40,6 +40,9 @@ struct HandPlacement {
   std::array<double, 2> stall_effort{};
   /// Pad and thumb lever arms at contact (prosthetic) [m]; 1 for the jaw.
   std::array<double, 2> lever_arm_m{1.0, 1.0};
+  /// No-load speed per grip motor [rad/s] (prosthetic: the thumb's scaled so that its tip closes
+  /// as fast as the pad, and both digits meet the object together) or [m/s] (jaw).
+  std::array<double, 2> no_load_speed{1.0, 1.0};
 };
 
 /// Computes the start pose and motor sizing that GenerateMjcf uses. Throws std::invalid_argument

@@ -26,7 +26,7 @@ HandModel ParseHandModel(const std::string& text) {
   return text == "jaw" ? HandModel::kJaw : HandModel::kProsthetic;  // GetString restricted the names
 }
 
-GraspType ParseGrasp(const std::string& text) { return text == "wrap" ? GraspType::kWrap : GraspType::kPinch; }
+GraspType ParseGrasp(const std::string&) { return GraspType::kPinch; }  // the only name GetString allows
 
 ObjectShape ParseShape(const std::string& text) {
   if (text == "box") return ObjectShape::kBox;
@@ -57,7 +57,7 @@ const char* ToString(ObjectShape shape) {
 
 const char* ToString(HandModel model) { return model == HandModel::kJaw ? "jaw" : "prosthetic"; }
 
-const char* ToString(GraspType grasp) { return grasp == GraspType::kWrap ? "wrap" : "pinch"; }
+const char* ToString(GraspType) { return "pinch"; }
 
 double SceneConfig::ObjectWidthM() const {
   if (object.shape != ObjectShape::kBox) return object.size_m[0];
@@ -110,12 +110,6 @@ void SceneConfig::Validate() const {
   if (OpenGapM() <= ObjectWidthM()) {
     Bad("hand.open_gap_m", OpenGapM(), "the pre-shape must be wider than the object (object.size_m across the grasp: " +
                                            std::to_string(ObjectWidthM()) + " m)");
-  }
-  if (hand.model == HandModel::kJaw && hand.grasp != GraspType::kPinch) {
-    Bad("hand.grasp", 0, "the jaw fixture only pinches");
-  }
-  if (hand.grasp == GraspType::kWrap && object.shape != ObjectShape::kCylinder) {
-    Bad("hand.grasp", 0, "a wrap grasps an upright cylinder (object.shape: cylinder)");
   }
   RequirePositive("hand.finger.proximal_length_m", hand.finger.proximal_length_m);
   RequirePositive("hand.finger.middle_length_m", hand.finger.middle_length_m);
@@ -171,7 +165,7 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
   if (auto hand = map.GetMap("hand")) {
     HandConfig& h = scene.hand;
     h.model = ParseHandModel(hand->GetString("model", ToString(h.model), {"prosthetic", "jaw"}));
-    h.grasp = ParseGrasp(hand->GetString("grasp", ToString(h.grasp), {"pinch", "wrap"}));
+    h.grasp = ParseGrasp(hand->GetString("grasp", ToString(h.grasp), {"pinch"}));
     h.open_gap_m = hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(0.001, 0.2));
     h.preshape_clearance_m =
         hand->GetNumber("preshape_clearance_m", h.preshape_clearance_m, NumberRule::Between(0.0, 0.05));

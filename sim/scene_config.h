@@ -61,14 +61,13 @@ enum class HandModel {
 /// "prosthetic" / "jaw".
 const char* ToString(HandModel model);
 
-/// The grasp the pre-shape prepares (prosthetic hand; the jaw only pinches).
+/// The grasp the pre-shape prepares. Only the precision pinch exists so far (a wrap against the
+/// palm needs a palm and finger geometry that clears a cylinder in the pre-shape; not built yet).
 enum class GraspType {
   /// Index fingertip pad against the thumb tip, hand above the object, near its top.
   kPinch,
-  /// The hand turned palm-towards the object from the side; finger and thumb curl around it.
-  kWrap,
 };
-/// "pinch" / "wrap".
+/// "pinch".
 const char* ToString(GraspType grasp);
 
 /// The jaw fixture's single grip motor, driving both digits through the linkage. The digits close in
@@ -119,7 +118,8 @@ struct DigitMotorConfig {
   /// motor's stall torque is this times the pad's lever arm there, the thumb's likewise (so the two
   /// balance on the object). >= 15 N so the 10 N sensor range can be exceeded.
   double stall_pinch_force_n = 20.0;
-  /// No-load speed of each digit's driven joint [rad/s]: open to closed in about 1 s at effort 1.
+  /// No-load speed of the index MCP [rad/s]: open to closed in about 1 s at effort 1. The thumb's
+  /// motor is geared so that its tip closes as fast as the pad (both meet the object together).
   double no_load_speed_rad_s = 1.6;
   /// Reflected rotor + gearbox inertia on each driven joint [kg m^2].
   double armature_kg_m2 = 2e-4;

@@ -98,8 +98,7 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     drive.brake_equality = RequireId(m, mjOBJ_EQUALITY, brakes[k].c_str());
     drive.brake_joint_qpos = m->jnt_qposadr[m->eq_obj1id[drive.brake_equality]];
     drive.stall = place.stall_effort[k];
-    drive.no_load_speed = scene_.hand.model == HandModel::kJaw ? scene_.hand.motor.no_load_speed_m_s
-                                                               : scene_.hand.digit_motor.no_load_speed_rad_s;
+    drive.no_load_speed = place.no_load_speed[k];
     drive.lever_arm_m = place.lever_arm_m[k];
     grip_drives_.push_back(drive);
   }
