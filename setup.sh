@@ -1,18 +1,23 @@
 #!/usr/bin/env bash
-# Installs what graspbed needs from Debian bookworm (only what is missing), then configures and builds.
-# Idempotent: when everything is present it only runs an incremental build.
+# Installs what graspbed needs from Debian 12 "bookworm" (only what is missing), then configures and
+# builds. Enough on a bare bookworm (debootstrap --variant=minbase, nothing else installed): the
+# build, the tests and the main command need nothing beyond this list. Run as root, or as a user
+# with sudo. Idempotent: when everything is present it only runs an incremental build.
 #   ./setup.sh               release build in build/
 #   GRASPBED_SANITIZE=ON BUILD_DIR=build-asan ./setup.sh   ASan + UBSan build
 set -euo pipefail
 cd "$(dirname "$0")"
 
 packages=(
-  build-essential cmake ninja-build pkg-config git
-  libmujoco-dev libmujoco-samples libqhull-dev   # physics (C API 2.2.2) and its stock tools
+  build-essential cmake ninja-build pkg-config git ca-certificates  # (git over https needs the CAs)
+  libmujoco-dev libqhull-dev                     # physics (C API 2.2.2); mujoco::mujoco names qhull's headers
+  libgl-dev libopengl-dev libglx-dev             # mujocoConfig.cmake's find_dependency(OpenGL); libmujoco-dev
+                                                 # does not pull them in
+  libmujoco-samples                              # mujoco-compile, mujoco-testspeed: tests run the model in them
   libeigen3-dev libyaml-cpp-dev                  # linear algebra, configuration files
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   libcli11-dev nlohmann-json3-dev                # command line, JSON output
-  libcairo2-dev                                  # PNG plots
+  libcairo2-dev fonts-dejavu-core                # PNG plots; their labels need a font
   clang-14 libclang-rt-14-dev                    # libFuzzer target for the wire decoder
 )
 
@@ -21,11 +26,18 @@ for package in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
 done
 if ((${#missing[@]})); then
+  as_root=()
+  if [ "$(id -u)" -ne 0 ]; then
+    if ! command -v sudo > /dev/null; then
+      echo "setup: these Debian packages are missing and installing them needs root: ${missing[*]}" >&2
+      echo "setup: run ./setup.sh as root (there is no sudo here), or install them and run it again" >&2
+      exit 1
+    fi
+    as_root=(sudo)
+  fi
   echo "setup: installing ${missing[*]}"
-  sudo_cmd=""
-  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
-  $sudo_cmd apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  "${as_root[@]}" apt-get update -qq
+  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
 build_dir="${BUILD_DIR:-build}"

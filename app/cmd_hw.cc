@@ -101,7 +101,7 @@ class FrameLogger {
     if (!out_) throw std::invalid_argument("--log " + path_ + ": cannot write this file");
     out_ << "seq,device_time_s";
     for (int k = 0; k < unit_count_; ++k) {
-      // Column names as the issue gives them; units: r [Ohm], fn/ft [N], valid 0/1 (docs/hardware.md).
+      // Column names as docs/hardware.md gives them; units: r [Ohm], fn/ft [N], valid 0/1 (docs/hardware.md).
       out_ << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
     }
     out_ << '\n';
@@ -293,8 +293,9 @@ void RunHw(const HwOptions& options) {
   }
   const double run_s = SecondsSince(start);
   const bool connected_at_end = link.connected();  // before Stop() closes the port
-  // PROTOCOL.md's clean shutdown order: stream stop, motor off (both sent by the link's shutdown when
-  // the motor shares the port; a separate motor port is switched off just after), restore, close.
+  // The clean shutdown order of docs/protocol.md: stream stop, motor off (both sent by the link's
+  // shutdown when the motor shares the port; a separate motor port is switched off just after),
+  // restore, close.
   backend.Stop();
   actuator.Stop();
   if (logger) logger->Finish();
@@ -582,7 +583,7 @@ void AddHwCommands(CLI::App& root) {
       "hw", "Run a controller against the tactile readout and hand over a serial link (or the emulator)");
   hw->add_option("--port", hw_options->port, "Serial device, e.g. /dev/ttyACM0 or an emulator link");
   hw->add_option("--config", hw_options->config,
-                 "YAML with serial:, control:, controller:, readout:, inversion: sections")
+                 "YAML with serial:, controller:, readout:, inversion: sections (docs/hardware.md)")
       ->check(CLI::ExistingFile);
   hw->add_option("--layout", hw_options->layout, "Layout file (default: sensor/layouts/default_20.yaml)");
   hw->add_option("--calibration", hw_options->calibration, "Calibration file (default: paper values)");

@@ -17,9 +17,12 @@
 namespace graspbed::app {
 namespace {
 
-// Parses a command-line number; refuses text, NaN, infinities, negatives (and zero when
-// `positive`), naming the option and the value.
-double ParseQuantity(const std::string& option, const std::string& text, bool positive, const char* hint = "") {
+// What sign a command-line quantity may have.
+enum class Sign { kAny, kNonNegative, kPositive };
+
+// Parses a command-line number; refuses text, NaN, infinities, and values of the wrong sign,
+// naming the option and the value.
+double ParseQuantity(const std::string& option, const std::string& text, Sign sign, const char* hint = "") {
   const auto fail = [&](const std::string& reason) {
     throw std::invalid_argument(option + " = " + text + ": " + reason + hint);
   };
@@ -27,7 +30,8 @@ double ParseQuantity(const std::string& option, const std::string& text, bool po
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || end != text.c_str() + text.size()) fail("expected a number");
   if (!std::isfinite(value)) fail("must be a finite number");
-  if (positive ? !(value > 0.0) : value < 0.0) fail(positive ? "must be > 0" : "must be >= 0");
+  if (sign == Sign::kPositive && !(value > 0.0)) fail("must be > 0");
+  if (sign == Sign::kNonNegative && value < 0.0) fail("must be >= 0");
   return value;
 }
 
@@ -66,11 +70,21 @@ void WarnBeyondRange(const char* name, double force_n, double rated_n) {
 
 void RunForward(const ForwardOptions& options) {
   sensor::UnitConstants constants;
-  const double fn_n = ParseQuantity("--fn", options.fn, false);
-  const double ft_n = ParseQuantity("--ft", options.ft, false,
-                                    " (the paper's range is 0..10 N; shear the other way swaps R1 and R2)");
-  if (!options.r0.empty()) constants.r0_ohm = ParseQuantity("--r0", options.r0, true);
+  // Fn presses the mesa (the unit cannot pull it); Ft is shear along the beam either way: negative
+  // shear stretches R2's half and compresses R1's (paper eq. 3 with eps_t < 0), so R1 < R2.
+  const double fn_n = ParseQuantity("--fn", options.fn, Sign::kNonNegative);
+  const double ft_n = ParseQuantity("--ft", options.ft, Sign::kAny);
+  if (!options.r0.empty()) constants.r0_ohm = ParseQuantity("--r0", options.r0, Sign::kPositive);
   const sensor::GaugeResistances r = sensor::IdealGaugeResistances(constants, fn_n, ft_n);
+  // Far beyond the rated range the linear gauge model would give a resistance <= 0: no reading.
+  if (!(r.r1_ohm > 0.0) || !(r.r2_ohm > 0.0)) {
+    char message[200];
+    std::snprintf(message, sizeof(message),
+                  "--fn = %s, --ft = %s: the gauge model gives R1 = %.0f Ohm, R2 = %.0f Ohm (<= 0: far beyond "
+                  "the rated %g N)",
+                  options.fn.c_str(), options.ft.c_str(), r.r1_ohm, r.r2_ohm, constants.rated_force_n);
+    throw std::invalid_argument(message);
+  }
   const double dr1 = r.r1_ohm / constants.r0_ohm - 1.0;
   const double dr2 = r.r2_ohm / constants.r0_ohm - 1.0;
   if (options.json) {
@@ -92,10 +106,10 @@ void RunForward(const ForwardOptions& options) {
 
 void RunInvert(const InvertOptions& options) {
   const char* hint_short = " (0 Ohm reads as a short circuit)";
-  const double r1 = ParseQuantity("--r1", options.r1, true, hint_short);
-  const double r2 = ParseQuantity("--r2", options.r2, true, hint_short);
+  const double r1 = ParseQuantity("--r1", options.r1, Sign::kPositive, hint_short);
+  const double r2 = ParseQuantity("--r2", options.r2, Sign::kPositive, hint_short);
   sensor::UnitConstants constants;
-  if (!options.r0.empty()) constants.r0_ohm = ParseQuantity("--r0", options.r0, true);
+  if (!options.r0.empty()) constants.r0_ohm = ParseQuantity("--r0", options.r0, Sign::kPositive);
   const sensor::UnitCalibration calibration;  // paper constants
   const double dr1 = r1 / constants.r0_ohm - 1.0;
   const double dr2 = r2 / constants.r0_ohm - 1.0;
@@ -200,7 +214,9 @@ void AddSensorCommands(CLI::App& root) {
   CLI::App* forward_command = sensor->add_subcommand(
       "forward", "R1, R2 and dR/R of one unit (paper constants) for a normal and a shear force");
   forward_command->add_option("--fn", forward->fn, "normal force on the mesa [N], >= 0 (default 0)");
-  forward_command->add_option("--ft", forward->ft, "shear force along the beam [N], >= 0 (default 0)");
+  forward_command->add_option("--ft", forward->ft,
+                              "shear force along the beam [N], either sign: rated -10..10, negative gives R1 < R2 "
+                              "(default 0)");
   forward_command->add_option("--r0", forward->r0, "unstrained resistance of R1 and R2 [Ohm] (default 3400)");
   forward_command->add_flag("--json", forward->json, "print one JSON object: fn, ft [N], r0, r1, r2 [Ohm], dr1_rel, dr2_rel");
   forward_command->callback([forward] { RunForward(*forward); });

@@ -1,6 +1,6 @@
 #pragma once
 /// RawFrame: one sample of every unit's two gauge resistances, exactly what the readout electronics
-/// deliver (PROTOCOL.md TACTILE_FRAME). Simulated and hardware backends both produce it.
+/// deliver (docs/protocol.md, TACTILE_FRAME). Simulated and hardware backends both produce it.
 
 #include <array>
 #include <cstdint>
@@ -8,8 +8,8 @@
 
 namespace graspbed::sensor {
 
-/// Most units a frame can carry (PROTOCOL.md: unit count 1..64). Frames are fixed-size so the
-/// per-frame path never allocates.
+/// Most units a frame can carry (docs/protocol.md: the unit count field is 1..64). Frames are
+/// fixed-size so the per-frame path never allocates.
 inline constexpr int kMaxUnits = 64;
 
 /// Resistance value that means "open circuit, no reading" [Ohm].
@@ -17,7 +17,7 @@ inline constexpr double kOpenCircuitOhm = std::numeric_limits<double>::infinity(
 /// Resistance value that means "short circuit" [Ohm].
 inline constexpr double kShortCircuitOhm = 0.0;
 
-/// Frame-level flags (PROTOCOL.md TACTILE_FRAME byte 9).
+/// Frame-level flags (docs/protocol.md, TACTILE_FRAME byte 9).
 enum FrameFlag : uint8_t {
   kFrameAdcOverrun = 1u << 0,
   kFrameSupplyFault = 1u << 1,

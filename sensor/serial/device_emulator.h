@@ -1,6 +1,6 @@
 #pragma once
 /// DeviceEmulator: a tactile readout and hand electronics in software, behind a pseudo-terminal. It
-/// speaks PROTOCOL.md as the device does: HELLO on connect and every second, TACTILE_FRAMEs at the
+/// speaks docs/protocol.md as the device does: HELLO on connect and every second, TACTILE_FRAMEs at the
 /// nominal rate (from a frame-source callback) while streaming, MOTOR_COMMANDs to a motor-sink
 /// callback, the 100 ms motor watchdog, STREAM_CONTROL. The pty's slave is exposed at a symlink so a
 /// host opens it like a real port. Fault-injection knobs reproduce every fault the host must survive.

@@ -1,5 +1,5 @@
 #pragma once
-/// Byte-level framing of the wire protocol (PROTOCOL.md "Framing"): COBS encoding with a 0x00
+/// Byte-level framing of the wire protocol (docs/protocol.md, "Framing"): COBS encoding with a 0x00
 /// delimiter, and the CRC-16/CCITT-FALSE that guards every packet body.
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 #pragma once
-/// Packets of wire protocol version 1 (PROTOCOL.md): their fields as plain structs, and encoding to /
+/// Packets of wire protocol version 1 (docs/protocol.md): their fields as plain structs, and encoding to /
 /// decoding from wire bytes. Fixed-size storage throughout, so nothing here allocates.
 
 #include <array>
@@ -22,11 +22,11 @@ inline constexpr size_t kMaxWirePacketSize = CobsMaxEncodedSize(kMaxPacketSize) 
 inline constexpr size_t kHeaderSize = 4;
 /// CRC trailer length [bytes].
 inline constexpr size_t kCrcSize = 2;
-/// Largest unit count field PROTOCOL.md allows (1..64).
+/// Largest value of the unit count field (docs/protocol.md: 1..64).
 inline constexpr int kMaxFrameUnits = 64;
-/// Most units that fit the 512-byte packet limit: 10 + 8N + 2 <= 512 gives N <= 62. PROTOCOL.md allows
-/// the count field up to 64, but frames of 63 or 64 units would exceed the maximum packet size; they
-/// are refused by the encoder and arrive at the decoder as too-long packets.
+/// Most units that fit the 512-byte packet limit: 10 + 8N + 2 <= 512 gives N <= 62. The count field
+/// goes up to 64 (docs/protocol.md), but frames of 63 or 64 units would exceed the maximum packet
+/// size; they are refused by the encoder and arrive at the decoder as too-long packets.
 inline constexpr int kMaxUnitsOnWire = 62;
 /// Wire value of a channel that reads open circuit [milliohm].
 inline constexpr uint32_t kOpenCircuitMilliohm = 0xFFFFFFFFu;

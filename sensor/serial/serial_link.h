@@ -2,7 +2,7 @@
 /// SerialLink: one serial port and the I/O thread that owns it. It opens the port, waits for the
 /// device's HELLO, checks the unit count, starts the stream, decodes packets, keeps the counters,
 /// publishes the newest frame for the control loop, sends motor commands, and survives the faults of
-/// PROTOCOL.md ("What the host must survive"): corrupt bytes, gaps, reboots, a vanishing device.
+/// docs/protocol.md ("What the host must survive"): corrupt bytes, gaps, reboots, a vanishing device.
 /// HardwareBackend and HardwareActuator (hardware_backend.h) are thin faces on one or two links.
 
 #include <atomic>

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/yaml_map.h"
+#include "sim/scenario/schedule.h"
 
 namespace graspbed::scenario {
 
@@ -45,6 +46,8 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
   SuiteResult suite;
   suite.jobs = std::max(1, options.jobs);
   suite.runs.resize(configs.size());
+  // Longest expected run first, so that it does not start last and run alone.
+  const std::vector<size_t> order = LongestFirst(configs);
   std::atomic<size_t> next{0};
   std::mutex mutex;
   int finished = 0;
@@ -52,8 +55,9 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
   const auto worker = [&] {
     while (true) {
       if (options.stop != nullptr && options.stop->load()) return;
-      const size_t index = next.fetch_add(1);
-      if (index >= configs.size()) return;
+      const size_t position = next.fetch_add(1);
+      if (position >= order.size()) return;
+      const size_t index = order[position];
       SuiteRun run;
       run.started = true;
       run.result.config = configs[index];

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "common/yaml_map.h"
+#include "sim/scenario/schedule.h"
 
 namespace graspbed::scenario {
 namespace {
@@ -301,12 +302,15 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   outcome.runs = static_cast<int>(runs.size());
   std::vector<nlohmann::json> rows;
   std::mutex mutex;
+  // Longest expected run first (a sweep over duration_s or the time step has runs of any length).
+  const std::vector<size_t> order = LongestFirst(configs);
   std::atomic<size_t> next{0};
   const auto worker = [&] {
     while (true) {
       if (options.stop != nullptr && options.stop->load()) return;
-      const size_t i = next.fetch_add(1);
-      if (i >= runs.size()) return;
+      const size_t position = next.fetch_add(1);
+      if (position >= order.size()) return;
+      const size_t i = order[position];
       RunOptions run_options;
       run_options.stop = options.stop;
       RunResult result;

@@ -26,7 +26,7 @@ using graspbed::testing::TempDir;
 class FeaCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (CliBinary().empty()) GTEST_SKIP() << "GRASPBED_BINARY not set (run through ctest)";
+    if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI (run through ctest)";
   }
   /// Runs `graspbed fea <arguments>`.
   CliResult Run(const std::string& arguments) { return RunCli("fea " + arguments); }

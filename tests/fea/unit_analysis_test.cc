@@ -12,7 +12,7 @@ namespace graspbed::fea {
 namespace {
 
 constexpr double kSymmetryTol = 1e-9;        // relative to the peak strain: mirror-symmetric mesh
-constexpr double kSuperpositionTol = 0.01;   // the 1 %
+constexpr double kSuperpositionTol = 0.01;   // 1 %, the bound docs/fea.md states
 constexpr double kLinearityMinR2 = 0.9999;
 constexpr double kScalingTol = 1e-9;         // relative; strain scales exactly as 1/E and 1/width
 constexpr double kConvergenceTol = 0.01;     // change of k_n, k_t from h = 0.05 to 0.025 mm, per peak strain

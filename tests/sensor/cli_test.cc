@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "sensor/strain_model.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
@@ -48,6 +49,43 @@ TEST_F(SensorCliTest, ForwardPrintsPaperNumbers) {
   EXPECT_NEAR(nlohmann::json::parse(normal.out).at("r2").get<double>(), 5270, kOhmTol);
 }
 
+TEST_F(SensorCliTest, ForwardTakesShearEitherWay) {
+  // A unit measures shear both ways (rated -10..10 N). Paper eq. 3 with eps_t = kt Ft < 0:
+  // R1 = R0 (1 + G (kn Fn + kt Ft)), R2 = R0 (1 + G (kn Fn - kt Ft)).
+  const sensor::UnitConstants paper;
+  const auto r1 = [&](double fn, double ft) {
+    return paper.r0_ohm * (1.0 + paper.gauge_factor * (paper.kn_per_n * fn + paper.kt_per_n * ft));
+  };
+  const auto r2 = [&](double fn, double ft) { return r1(fn, -ft); };
+  const CliResult json = RunCli("sensor forward --fn 3.7 --ft -2.2 --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(json.err, "");  // inside the rated range: no note
+  const nlohmann::json parsed = nlohmann::json::parse(json.out);
+  EXPECT_EQ(parsed.at("ft").get<double>(), -2.2);
+  EXPECT_NEAR(parsed.at("r1").get<double>(), r1(3.7, -2.2), 1e-9);  // 3785.2 Ohm
+  EXPECT_NEAR(parsed.at("r2").get<double>(), r2(3.7, -2.2), 1e-9);  // 4398.6 Ohm
+  EXPECT_LT(parsed.at("r1").get<double>(), parsed.at("r2").get<double>());
+  // Reversing the shear swaps R1 and R2.
+  const nlohmann::json mirrored = nlohmann::json::parse(RunCli("sensor forward --fn 3.7 --ft 2.2 --json").out);
+  EXPECT_NEAR(mirrored.at("r1").get<double>(), parsed.at("r2").get<double>(), 1e-9);
+  EXPECT_NEAR(mirrored.at("r2").get<double>(), parsed.at("r1").get<double>(), 1e-9);
+  // And the inversion gives the force back, sign included.
+  const CliResult back = RunCli("sensor invert --json --r1 " + std::to_string(parsed.at("r1").get<double>()) +
+                                " --r2 " + std::to_string(parsed.at("r2").get<double>()));
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  EXPECT_NEAR(nlohmann::json::parse(back.out).at("fn").get<double>(), 3.7, 1e-5);
+  EXPECT_NEAR(nlohmann::json::parse(back.out).at("ft").get<double>(), -2.2, 1e-5);
+  // The whole rated range either way, the paper's worked numbers mirrored; beyond it, a note.
+  const CliResult rated = RunCli("sensor forward --ft -10");
+  EXPECT_EQ(rated.exit_code, 0) << rated.err;
+  EXPECT_THAT(rated.out, HasSubstr("R1 = 2006.0 Ohm"));
+  EXPECT_THAT(rated.out, HasSubstr("R2 = 4794.0 Ohm"));
+  EXPECT_EQ(rated.err, "");
+  const CliResult beyond = RunCli("sensor forward --ft -10.5");
+  EXPECT_EQ(beyond.exit_code, 0) << beyond.err;
+  EXPECT_THAT(beyond.err, HasSubstr("Ft = -10.5 N is beyond the rated 10 N range"));
+}
+
 TEST_F(SensorCliTest, InvertGivesTenAndTen) {
   const CliResult json = RunCli("sensor invert --r1 6664 --r2 3876 --json");
   ASSERT_EQ(json.exit_code, 0) << json.err;
@@ -72,7 +110,9 @@ TEST_F(SensorCliTest, BadInputExitsTwoWithAMessage) {
   } cases[] = {
       {"sensor forward --fn abc", "--fn = abc: expected a number"},
       {"sensor forward --fn -1", "--fn = -1: must be >= 0"},
-      {"sensor forward --fn 1 --ft=-2", "--ft = -2: must be >= 0"},
+      {"sensor forward --fn=-0.5 --ft 2", "--fn = -0.5: must be >= 0"},
+      {"sensor forward --ft=-30", "--ft = -30: the gauge model gives R1 = -782 Ohm, R2 = 7582 Ohm (<= 0: far beyond "
+                                  "the rated 10 N)"},
       {"sensor forward --fn nan", "--fn = nan: must be a finite number"},
       {"sensor forward --fn inf", "--fn = inf: must be a finite number"},
       {"sensor forward --fn 1e999", "--fn = 1e999: must be a finite number"},

@@ -1,5 +1,5 @@
-// Codec: CRC and COBS check values, packet round trips, and the streaming decoder's resync after
-// every kind of corruption PROTOCOL.md lists.
+// Codec: CRC and COBS check values, the packet examples of docs/protocol.md byte for byte, packet
+// round trips, and the streaming decoder's resync after every kind of corruption the protocol lists.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -54,6 +54,17 @@ TEST(Cobs, RoundTripsEdgeLengthsAndZeros) {
       EXPECT_EQ(decoded, input) << "length " << length << " zeros " << zeros;
     }
   }
+}
+
+// The two complete packets docs/protocol.md gives implementers ("Check values"), byte for byte.
+TEST(Protocol, DocumentedExamplePacketsOnTheWire) {
+  std::array<uint8_t, kMaxWirePacketSize> out{};
+  size_t size = EncodePacket(StreamControlPacket{.sequence = 0, .start = true}, out);
+  EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
+            (std::vector<uint8_t>{0x03, 0x82, 0x01, 0x01, 0x04, 0x01, 0xCA, 0x11, 0x00}));
+  size = EncodePacket(MotorCommandPacket{.sequence = 7, .effort = EffortToWire(0.5), .flags = kMotorEnable}, out);
+  EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
+            (std::vector<uint8_t>{0x04, 0x81, 0x01, 0x07, 0x01, 0x03, 0x40, 0x01, 0x03, 0xD0, 0xD5, 0x00}));
 }
 
 TactileFramePacket MakeFrame(uint16_t seq, int units) {

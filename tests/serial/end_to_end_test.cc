@@ -171,7 +171,7 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   ASSERT_EQ(emulator_code, std::optional<int>(0)) << emulator.err();
   const nlohmann::json device = ParseJson(emulator.out(), "emulate");
 
-  // The host's summary: the keys the issue names, a clean link.
+  // The host's summary: the keys docs/hardware.md lists, a clean link.
   for (const char* key : {"frames", "corrupt", "dropped", "reconnects", "unknown_packets", "stale_periods",
                           "sessions", "log_rows"}) {
     ASSERT_TRUE(hw.contains(key)) << key << " missing from " << hw.dump();
@@ -209,7 +209,7 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // What the host sensed through the wire agrees with the squeeze the simulation applied.
   EXPECT_NEAR(hw.at("peak_total_fn_n").get<double>(), hw_peak_n, kSensedVsTrueRelTol * hw_peak_n);
 
-  // The frame log: the header of the issue, one row per decoded frame, consecutive sequence numbers.
+  // The frame log: the header docs/hardware.md gives, one row per decoded frame, consecutive sequence numbers.
   std::ifstream csv(log);
   ASSERT_TRUE(csv.good()) << log;
   std::string header;

@@ -1,5 +1,5 @@
 // HardwareBackend / HardwareActuator against the DeviceEmulator over real pseudo-terminals: the
-// handshake, every fault of PROTOCOL.md "What the host must survive" with exact counters, the
+// handshake, every fault of docs/protocol.md "What the host must survive" with exact counters, the
 // watchdog, and clean shutdown.
 #include <gtest/gtest.h>
 

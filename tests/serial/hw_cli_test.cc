@@ -1,9 +1,11 @@
 // `graspbed hw` refuses bad controller settings before it touches a port: the config's controller
-// section (file, line, key, value) and --param, each with exit code 2.
+// section (file, line, key, value) and --param, each with exit code 2; its --help names exactly the
+// config sections the loader takes.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
@@ -84,6 +86,38 @@ TEST_F(HwCliTest, BadParamOnTheCommandLineIsRefusedBeforeThePortIsOpened) {
   EXPECT_THAT(result.err, HasSubstr("has no parameter 'no_such_gain'"));
   // Refused before the port: the missing device is not what the message is about.
   EXPECT_THAT(result.err, ::testing::Not(HasSubstr("does not exist")));
+}
+
+TEST_F(HwCliTest, EverySectionTheHelpNamesIsAccepted) {
+  // `hw --help` lists the sections of --config; each must load (the run then gets as far as the
+  // missing port), and a section it does not list is refused with file, line and key.
+  const CliResult help = RunCli("hw --help");
+  ASSERT_EQ(help.exit_code, 0) << help.err;
+  const std::string marker = "YAML with ";
+  const size_t start = help.out.find(marker);
+  ASSERT_NE(start, std::string::npos) << help.out;
+  const size_t begin = start + marker.size();
+  const std::string list = help.out.substr(begin, help.out.find(" sections", begin) - begin);
+  std::vector<std::string> sections;
+  for (size_t at = 0; (at = list.find_first_of("abcdefghijklmnopqrstuvwxyz", at)) != std::string::npos;) {
+    const size_t colon = list.find(':', at);
+    ASSERT_NE(colon, std::string::npos) << list;
+    sections.push_back(list.substr(at, colon - at));
+    at = colon + 1;
+  }
+  EXPECT_EQ(sections, (std::vector<std::string>{"serial", "controller", "readout", "inversion"})) << list;
+  std::string all;
+  for (const std::string& section : sections) all += section + ": {}\n";
+  const std::string config = dir_.Write("sections.yaml", all);
+  const CliResult loaded = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(loaded.exit_code, kExitBadInput);
+  EXPECT_THAT(loaded.err, HasSubstr("does not exist")) << "the config loaded; the port is what is missing";
+
+  const std::string unknown = dir_.Write("control.yaml", "serial: {}\ncontrol: {rate_hz: 500}\n");
+  const CliResult refused = RunCli("hw --config " + unknown + " --port " + dir_.Path("no-device"));
+  EXPECT_EQ(refused.exit_code, kExitBadInput);
+  EXPECT_THAT(refused.err, HasSubstr(unknown + ":2"));
+  EXPECT_THAT(refused.err, HasSubstr("control"));
 }
 
 }  // namespace
