@@ -38,7 +38,8 @@ bool SimRig::Step() {
 }
 
 void SimRig::AdvanceTo(double time_s) {
-  while (simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s()) Step();
+  // A fault ends the run; Simulation::Step() advances the clock regardless, so this always ends.
+  while (!simulation_.fault().occurred && simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s()) Step();
 }
 
 }  // namespace graspbed::sim

@@ -407,7 +407,11 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       break;
     }
     player.Update(rig->time_s(), *rig);
-    if (!rig->Step()) continue;
+    if (options.before_step) options.before_step(*rig);
+    const bool ticked = rig->Step();
+    // A physics fault ends the run at once; the state MuJoCo reset to is not recorded.
+    if (rig->simulation().fault().occurred) break;
+    if (!ticked) continue;
 
     const double t = rig->time_s();
     sim::Simulation& simulation = rig->simulation();
@@ -612,6 +616,11 @@ std::string SummaryTable(const RunResult& result) {
                 optional_text(m.fn_rmse_n, "%.3g N").c_str(), optional_text(m.ft_rmse_n, "%.3g N").c_str(),
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;
+  if (m.physics_fault) {
+    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n", m.physics_fault_time_s,
+                  m.physics_fault_cause.c_str());
+    out << line;
+  }
   for (const ExpectationOutcome& o : result.outcomes) {
     std::snprintf(line, sizeof(line), "  [%s] %-24s %-14s got %s%s%s\n", o.passed ? "pass" : "FAIL",
                   o.name.c_str(), o.limit.c_str(), o.value_text.c_str(), o.note.empty() ? "" : " -- ",
