@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "common/plot.h"
+#include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
@@ -367,19 +368,23 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   rig_config.seed = config.seed;
   rig_config.Validate();
 
-  if (!options.out_dir.empty()) {
-    PrepareOutputDir(options.out_dir);
-    WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
-  }
-
+  // The rig first: a scene it refuses (bodies that start inside each other) leaves no output behind.
   std::unique_ptr<sim::SimRig> rig;
   {
     std::lock_guard<std::mutex> lock(ConstructionMutex());
-    // The host inverts with the sensor's nominal constants, not with anything the simulation knows
-    // per unit (spread, drift): those show up as estimation error, as on hardware.
-    rig = std::make_unique<sim::SimRig>(layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units),
-                                        rig_config,
-                                        controller::MakeController(config.controller.name, config.controller.params));
+    try {
+      // The host inverts with the sensor's nominal constants, not with anything the simulation
+      // knows per unit (spread, drift): those show up as estimation error, as on hardware.
+      rig = std::make_unique<sim::SimRig>(
+          layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
+          controller::MakeController(config.controller.name, config.controller.params));
+    } catch (const std::invalid_argument& error) {
+      throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+    }
+  }
+  if (!options.out_dir.empty()) {
+    PrepareOutputDir(options.out_dir);
+    WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
   }
   ScriptPlayer player(config);
   player.Start(*rig);
