@@ -79,6 +79,11 @@ void RunCommand(const RunCommandOptions& options) {
               << " (marked INCOMPLETE)\n";
     ExitWith(kExitInterrupted);
   }
+  if (result.metrics.physics_fault) {
+    std::cerr << "graspbed: physics fault at t = " << result.metrics.physics_fault_time_s
+              << " s ended the run (" << result.metrics.physics_fault_cause << "); results up to it in "
+              << run.out_dir << "\n";
+  }
   ExitWith(result.passed ? kExitOk : kExitFailed);
 }
 

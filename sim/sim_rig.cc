@@ -5,6 +5,8 @@
 #include <string>
 #include <utility>
 
+#include "sim/scene_check.h"
+
 namespace graspbed::sim {
 
 void SimRigConfig::Validate() const {
@@ -24,7 +26,10 @@ SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibrat
       actuator_(simulation_),
       controller_(controller ? std::move(controller)
                              : throw std::invalid_argument("SimRig needs a controller")),
-      loop_(backend_, *controller_, actuator_, layout, calibration, config_.loop) {}
+      loop_(backend_, *controller_, actuator_, layout, calibration, config_.loop) {
+  // Bodies that start inside each other make a result out of bad input (a pinch of hundreds of N).
+  CheckInitialPenetration(simulation_);
+}
 
 bool SimRig::Step() {
   simulation_.Step();
@@ -38,7 +43,8 @@ bool SimRig::Step() {
 }
 
 void SimRig::AdvanceTo(double time_s) {
-  while (simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s()) Step();
+  // A fault ends the run; Simulation::Step() advances the clock regardless, so this always ends.
+  while (!simulation_.fault().occurred && simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s()) Step();
 }
 
 }  // namespace graspbed::sim

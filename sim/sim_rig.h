@@ -33,13 +33,16 @@ struct SimRigConfig {
 class SimRig {
  public:
   /// `controller` is taken over; `layout` and `calibration` are copied where needed and must match.
+  /// Throws std::invalid_argument for a bad config or a scene whose bodies start inside each other
+  /// (CheckInitialPenetration).
   SimRig(const sensor::Layout& layout, const sensor::Calibration& calibration, const SimRigConfig& config,
          std::unique_ptr<controller::GraspController> controller);
   SimRig(const SimRig&) = delete;
   SimRig& operator=(const SimRig&) = delete;
 
   /// Steps physics until time_s() >= `time_s` [s], polling the sensor after every step and ticking the
-  /// control loop at the control rate. Allocates nothing.
+  /// control loop at the control rate; returns early at a physics fault (simulation().fault()).
+  /// Allocates nothing.
   void AdvanceTo(double time_s);
   /// One physics step with the same bookkeeping; returns true when the control loop ticked.
   bool Step();

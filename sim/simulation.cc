@@ -219,16 +219,28 @@ void Simulation::ApplyControls() {
 }
 
 void Simulation::Step() {
+  step_start_time_s_ = data_->time;
+  // The clock advances by one step whatever happens, so no `while (time < end) Step()` loop can
+  // wait forever: after a fault the physics stays frozen (MuJoCo has reset the state) and only
+  // the clock moves; in the step that faults, MuJoCo's reset of the clock to 0 is undone.
+  const double next_time_s = step_start_time_s_ + model_->opt.timestep;
+  if (fault_.occurred) {
+    data_->time = next_time_s;
+    return;
+  }
   ApplyControls();
   tls_last_warning[0] = '\0';
-  step_start_time_s_ = data_->time;
   mj_step(model_, data_);
   CheckFault();
+  if (fault_.occurred || !(data_->time > step_start_time_s_)) {
+    if (!(next_time_s > step_start_time_s_)) RecordFault("simulation time does not advance");
+    data_->time = next_time_s;
+  }
 }
 
 void Simulation::StepUntil(double time_s) {
-  // Half a step of slack so floating-point time sums do not add a step.
-  while (data_->time < time_s - 0.5 * model_->opt.timestep) Step();
+  // Half a step of slack so floating-point time sums do not add a step. A fault ends the stepping.
+  while (!fault_.occurred && data_->time < time_s - 0.5 * model_->opt.timestep) Step();
 }
 
 void Simulation::RecordFault(const char* cause) {

@@ -25,7 +25,8 @@ struct mjData_;
 namespace graspbed::sim {
 
 /// A physics failure during a run: a value, not a crash. Once set, the simulation keeps the
-/// time and cause of the first fault; Step() still runs (MuJoCo resets bad states itself).
+/// time and cause of the first fault, and the physics stops: Step() then only advances the clock
+/// (MuJoCo has reset the state), so a run ends at the fault and no loop waits on time forever.
 struct PhysicsFault {
   bool occurred = false;
   double time_s = 0.0;                 ///< simulation time at the start of the faulty step [s]
@@ -98,9 +99,10 @@ class Simulation {
   Simulation& operator=(const Simulation&) = delete;
 
   /// One physics step (scene.physics.timestep_s). Checks for MuJoCo warnings and NaN afterwards and
-  /// records the first as fault(). Never throws, never allocates.
+  /// records the first as fault(). time_s() grows by one timestep on every call, fault or not;
+  /// after a fault nothing else changes. Never throws, never allocates.
   void Step();
-  /// Steps until time_s() >= `time_s` [s].
+  /// Steps until time_s() >= `time_s` [s], or until a physics fault.
   void StepUntil(double time_s);
   /// Simulation time [s].
   double time_s() const;

@@ -79,7 +79,8 @@ void MetricsTracker::OnControllerFlag(double time_s) {
 void MetricsTracker::Update(const TickSample& sample) {
   const sim::GroundTruth& truth = *sample.truth;
   const double t = sample.time_s;
-  const double dt = last_time_s_ < 0.0 ? 0.0 : t - last_time_s_;
+  // Time never runs backwards here (the run ends at a physics fault); if it did, nothing accrues.
+  const double dt = last_time_s_ < 0.0 ? 0.0 : std::max(0.0, t - last_time_s_);
   last_time_s_ = t;
 
   peak_grip_n_ = std::max(peak_grip_n_, truth.object_squeeze_n);

@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "common/plot.h"
+#include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
@@ -367,19 +368,23 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   rig_config.seed = config.seed;
   rig_config.Validate();
 
-  if (!options.out_dir.empty()) {
-    PrepareOutputDir(options.out_dir);
-    WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
-  }
-
+  // The rig first: a scene it refuses (bodies that start inside each other) leaves no output behind.
   std::unique_ptr<sim::SimRig> rig;
   {
     std::lock_guard<std::mutex> lock(ConstructionMutex());
-    // The host inverts with the sensor's nominal constants, not with anything the simulation knows
-    // per unit (spread, drift): those show up as estimation error, as on hardware.
-    rig = std::make_unique<sim::SimRig>(layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units),
-                                        rig_config,
-                                        controller::MakeController(config.controller.name, config.controller.params));
+    try {
+      // The host inverts with the sensor's nominal constants, not with anything the simulation
+      // knows per unit (spread, drift): those show up as estimation error, as on hardware.
+      rig = std::make_unique<sim::SimRig>(
+          layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
+          controller::MakeController(config.controller.name, config.controller.params));
+    } catch (const std::invalid_argument& error) {
+      throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+    }
+  }
+  if (!options.out_dir.empty()) {
+    PrepareOutputDir(options.out_dir);
+    WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
   }
   ScriptPlayer player(config);
   player.Start(*rig);
@@ -407,7 +412,11 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       break;
     }
     player.Update(rig->time_s(), *rig);
-    if (!rig->Step()) continue;
+    if (options.before_step) options.before_step(*rig);
+    const bool ticked = rig->Step();
+    // A physics fault ends the run at once; the state MuJoCo reset to is not recorded.
+    if (rig->simulation().fault().occurred) break;
+    if (!ticked) continue;
 
     const double t = rig->time_s();
     sim::Simulation& simulation = rig->simulation();
@@ -612,6 +621,11 @@ std::string SummaryTable(const RunResult& result) {
                 optional_text(m.fn_rmse_n, "%.3g N").c_str(), optional_text(m.ft_rmse_n, "%.3g N").c_str(),
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;
+  if (m.physics_fault) {
+    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n", m.physics_fault_time_s,
+                  m.physics_fault_cause.c_str());
+    out << line;
+  }
   for (const ExpectationOutcome& o : result.outcomes) {
     std::snprintf(line, sizeof(line), "  [%s] %-24s %-14s got %s%s%s\n", o.passed ? "pass" : "FAIL",
                   o.name.c_str(), o.limit.c_str(), o.value_text.c_str(), o.note.empty() ? "" : " -- ",

@@ -18,6 +18,10 @@
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
 
+namespace graspbed::sim {
+class SimRig;
+}  // namespace graspbed::sim
+
 namespace graspbed::scenario {
 
 /// How to run and what to write.
@@ -29,6 +33,9 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;
   /// Called about every 0.1 s of simulated time with (simulated time, duration) [s]; may be empty.
   std::function<void(double, double)> progress;
+  /// Called before every physics step with the rig, after the script's update for that instant;
+  /// tests inject faults through it (e.g. a NaN into the state). May be empty.
+  std::function<void(sim::SimRig&)> before_step;
 };
 
 /// The result of one run.
@@ -36,7 +43,9 @@ struct RunResult {
   ScenarioConfig config;
   Metrics metrics;
   std::vector<ExpectationOutcome> outcomes;
-  bool completed = false;  ///< ran to duration_s (false: stopped early)
+  /// Ran to its end: duration_s, or a physics fault, which ends a run at once (metrics say which);
+  /// false: stopped early by `RunOptions::stop`.
+  bool completed = false;
   bool passed = false;     ///< completed and every expectation held
   double real_time_factor = 0.0;  ///< simulated seconds per wall-clock second
   uint64_t frames = 0;            ///< sensor frames delivered
@@ -47,8 +56,11 @@ struct RunResult {
   std::string out_dir;            ///< where the outputs went ("" none)
 };
 
-/// Runs `config`. Throws std::invalid_argument for a configuration the rig refuses and
-/// std::runtime_error when outputs cannot be written; physics faults are results, not exceptions.
+/// Runs `config`. Throws std::invalid_argument (common::ConfigError naming the scenario file) for a
+/// configuration the rig refuses, e.g. a scene whose bodies start inside each other, before any
+/// output is written; std::runtime_error when outputs cannot be written. A physics fault (NaN, a
+/// MuJoCo warning) is a result, not an exception: it ends the run at once, the outputs so far are
+/// written, and the run fails (metrics.physics_fault with its cause and time).
 RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options = {});
 
 /// summary.json content for `result`.

@@ -1,5 +1,5 @@
-// Physics failures are values: a NaN or a MuJoCo warning is reported with time and cause, the run
-// goes on, nothing crashes.
+// Physics failures are values: a NaN or a MuJoCo warning is reported with time and cause, the
+// physics stops there, nothing crashes.
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
@@ -28,7 +28,8 @@ TEST_F(FaultTest, NanVelocityIsReportedWithTimeAndCause) {
   EXPECT_NE(cause.find("MuJoCo warning"), std::string::npos) << cause;
   EXPECT_NE(cause.find("QVEL"), std::string::npos) << cause;
   EXPECT_GE(simulation.fault().warning_count, 1u);
-  // MuJoCo reset the state; stepping goes on and the first fault is kept.
+  // MuJoCo reset the state; the physics stops at the fault (StepUntil returns at once) and the first
+  // fault is kept.
   simulation.StepUntil(0.1);
   EXPECT_TRUE(std::isfinite(simulation.truth().object_position_m[2]));
   EXPECT_NEAR(simulation.fault().time_s, fault_time, 2 * simulation.timestep_s());
