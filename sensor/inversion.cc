@@ -83,10 +83,16 @@ void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
   state->total_shear_axial_n = 0.0;
   state->total_shear_circumferential_n = 0.0;
   state->contact_count = 0;
+  state->noise_known = frame.noise_known;
   const double limit_n = config_.rated_force_n * (1.0 + config_.out_of_range_margin_fraction);
   // A frame for another unit count carries nothing usable for this layout.
   const bool size_ok = frame.unit_count == unit_count_;
   for (int unit = 0; unit < unit_count_; ++unit) {
+    const UnitCalibration& calibration = calibration_[unit];
+    state->r1_noise_ohm[unit] = frame.r1_noise_ohm[unit];
+    state->r2_noise_ohm[unit] = frame.r2_noise_ohm[unit];
+    state->fn_noise_n[unit] = frame.sum_noise_rel[unit] / (calibration.gauge_factor * calibration.kn_per_n);
+    state->ft_noise_n[unit] = frame.diff_noise_rel[unit] / (calibration.gauge_factor * calibration.kt_per_n);
     UnitValidity validity = size_ok ? frame.validity[unit] : UnitValidity::kImplausible;
     if (validity != UnitValidity::kValid && validity != UnitValidity::kOutOfRange) {
       state->fn_n[unit] = 0.0;
@@ -94,7 +100,7 @@ void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
       state->validity[unit] = validity;
       continue;
     }
-    const UnitForces forces = InvertUnit(calibration_[unit], frame.dr1_rel[unit], frame.dr2_rel[unit]);
+    const UnitForces forces = InvertUnit(calibration, frame.dr1_rel[unit], frame.dr2_rel[unit]);
     state->fn_n[unit] = forces.fn_n;
     state->ft_n[unit] = forces.ft_n;
     if (std::abs(forces.fn_n) > limit_n || std::abs(forces.ft_n) > limit_n) validity = UnitValidity::kOutOfRange;

@@ -54,22 +54,30 @@ void ReadoutConfig::Validate() const {
           "must be > 0");
   Require(adc_full_scale_ohm >= 0.0 && std::isfinite(adc_full_scale_ohm), "adc_full_scale_ohm",
           adc_full_scale_ohm, "must be >= 0 (0 = unknown)");
+  Require(adc_min_ohm >= 0.0 && std::isfinite(adc_min_ohm), "adc_min_ohm", adc_min_ohm, "must be >= 0 (0 = none)");
+  Require(adc_full_scale_ohm == 0.0 || adc_min_ohm < adc_full_scale_ohm, "adc_min_ohm", adc_min_ohm,
+          "must be < adc_full_scale_ohm");
 }
 
-ReadoutConfig LoadReadoutConfig(const common::YamlMap& map) {
-  ReadoutConfig config;
-  config.baseline_frames = map.GetInt("baseline_frames", config.baseline_frames, 1, 1000000);
-  config.short_circuit_ohm = map.GetNumber("short_circuit_ohm", config.short_circuit_ohm, NumberRule::NonNegative());
-  config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", config.open_circuit_ohm, NumberRule::Positive());
+ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig& defaults) {
+  ReadoutConfig config = defaults;
+  const ReadoutConfig& d = defaults;
+  config.baseline_frames = map.GetInt("baseline_frames", d.baseline_frames, 1, 1000000);
+  config.short_circuit_ohm = map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::NonNegative());
+  config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", d.open_circuit_ohm, NumberRule::Positive());
   config.min_plausible_fraction =
-      map.GetNumber("min_plausible_fraction", config.min_plausible_fraction, NumberRule::Between(0.0, 0.999));
-  config.max_plausible_fraction = map.GetNumber("max_plausible_fraction", config.max_plausible_fraction,
+      map.GetNumber("min_plausible_fraction", d.min_plausible_fraction, NumberRule::Between(0.0, 0.999));
+  config.max_plausible_fraction = map.GetNumber("max_plausible_fraction", d.max_plausible_fraction,
                                                 {1.0, std::numeric_limits<double>::infinity(), true});
   config.max_baseline_deviation_fraction = map.GetNumber(
-      "max_baseline_deviation_fraction", config.max_baseline_deviation_fraction, NumberRule::Positive());
-  config.min_mean_dr_rel = map.GetNumber("min_mean_dr_rel", config.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
-  config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", config.max_abs_dr_rel, NumberRule::Positive());
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", config.adc_full_scale_ohm, NumberRule::NonNegative());
+      "max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, NumberRule::Positive());
+  config.min_mean_dr_rel = map.GetNumber("min_mean_dr_rel", d.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
+  config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", d.max_abs_dr_rel, NumberRule::Positive());
+  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::NonNegative());
+  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::NonNegative());
+  if (config.adc_full_scale_ohm > 0.0 && !(config.adc_min_ohm < config.adc_full_scale_ohm)) {
+    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm", "needs adc_min_ohm < adc_full_scale_ohm");
+  }
   map.RejectUnknownKeys();
   if (!(config.open_circuit_ohm > config.short_circuit_ohm)) {
     map.Fail("open_circuit_ohm", "must be > short_circuit_ohm");
@@ -99,6 +107,7 @@ void Readout::Reset() {
   baseline_r1_.fill(nominal_r0_ohm_);
   baseline_r2_.fill(nominal_r0_ohm_);
   baseline_ok_.fill(false);
+  noise_sums_.fill(NoiseSums{});
 }
 
 void Readout::SetBaseline(std::span<const double> r1_ohm, std::span<const double> r2_ohm) {
@@ -119,6 +128,12 @@ void Readout::SetBaseline(std::span<const double> r1_ohm, std::span<const double
     baseline_ok_[unit] = std::abs(r1_ohm[unit] - nominal_r0_ohm_) <= limit_ohm &&
                          std::abs(r2_ohm[unit] - nominal_r0_ohm_) <= limit_ohm;
   }
+  // A stored baseline says nothing about this session's noise.
+  noise_known_ = false;
+  r1_noise_ohm_.fill(0.0);
+  r2_noise_ohm_.fill(0.0);
+  sum_noise_rel_.fill(0.0);
+  diff_noise_rel_.fill(0.0);
   tared_ = true;
 }
 
@@ -133,6 +148,7 @@ UnitValidity Readout::ChannelValidity(double resistance_ohm) const {
   if (config_.adc_full_scale_ohm > 0.0 && resistance_ohm >= config_.adc_full_scale_ohm) {
     return UnitValidity::kOutOfRange;
   }
+  if (config_.adc_min_ohm > 0.0 && resistance_ohm <= config_.adc_min_ohm) return UnitValidity::kOutOfRange;
   return UnitValidity::kValid;
 }
 
@@ -146,14 +162,46 @@ void Readout::FinishBaseline() {
     baseline_r2_[unit] = enough ? sum_r2_[unit] / count_r2_[unit] : nominal_r0_ohm_;
     baseline_ok_[unit] = enough && std::abs(baseline_r1_[unit] - nominal_r0_ohm_) <= limit_ohm &&
                          std::abs(baseline_r2_[unit] - nominal_r0_ohm_) <= limit_ohm;
+    FinishNoise(unit);
   }
+  noise_known_ = true;
   tared_ = true;
+}
+
+void Readout::FinishNoise(int unit) {
+  const NoiseSums& n = noise_sums_[unit];
+  r1_noise_ohm_[unit] = r2_noise_ohm_[unit] = sum_noise_rel_[unit] = diff_noise_rel_[unit] = 0.0;
+  // A line through the window takes two degrees of freedom; fewer than three points say nothing.
+  if (n.count < 3) return;
+  const double count = n.count;
+  const double skk = n.kk - n.k * n.k / count;
+  const double sxx = n.xx - n.x * n.x / count, syy = n.yy - n.y * n.y / count;
+  const double sxk = n.xk - n.x * n.k / count, syk = n.yk - n.y * n.k / count;
+  const double sxy = n.xy - n.x * n.y / count;
+  // Residuals about the least-squares line in k (variance and covariance).
+  const double dof = count - 2.0;
+  const double var_x = std::max(0.0, (sxx - (skk > 0.0 ? sxk * sxk / skk : 0.0)) / dof);
+  const double var_y = std::max(0.0, (syy - (skk > 0.0 ? syk * syk / skk : 0.0)) / dof);
+  const double cov_xy = (sxy - (skk > 0.0 ? sxk * syk / skk : 0.0)) / dof;
+  r1_noise_ohm_[unit] = std::sqrt(var_x);
+  r2_noise_ohm_[unit] = std::sqrt(var_y);
+  // s = (R1/b1 + R2/b2) / 2 - 1 and d = (R1/b1 - R2/b2) / 2 with the baselines b1, b2.
+  const double b1 = baseline_r1_[unit], b2 = baseline_r2_[unit];
+  const double a = var_x / (b1 * b1), b = var_y / (b2 * b2), c = 2.0 * cov_xy / (b1 * b2);
+  sum_noise_rel_[unit] = 0.5 * std::sqrt(std::max(0.0, a + b + c));
+  diff_noise_rel_[unit] = 0.5 * std::sqrt(std::max(0.0, a + b - c));
 }
 
 void Readout::Process(const RawFrame& frame, ReadoutFrame* out) {
   out->sequence = frame.sequence;
   out->time_s = frame.time_s;
   out->unit_count = unit_count_;
+  out->noise_known = noise_known_;
+  const auto units = static_cast<size_t>(unit_count_);
+  std::copy_n(r1_noise_ohm_.begin(), units, out->r1_noise_ohm.begin());
+  std::copy_n(r2_noise_ohm_.begin(), units, out->r2_noise_ohm.begin());
+  std::copy_n(sum_noise_rel_.begin(), units, out->sum_noise_rel.begin());
+  std::copy_n(diff_noise_rel_.begin(), units, out->diff_noise_rel.begin());
   if (frame.unit_count != unit_count_) {
     for (int unit = 0; unit < unit_count_; ++unit) {
       out->dr1_rel[unit] = 0.0;
@@ -175,6 +223,24 @@ void Readout::Process(const RawFrame& frame, ReadoutFrame* out) {
       if (v2 == UnitValidity::kValid) {
         sum_r2_[unit] += r2;
         ++count_r2_[unit];
+      }
+      if (v1 == UnitValidity::kValid && v2 == UnitValidity::kValid) {
+        NoiseSums& n = noise_sums_[unit];
+        if (n.count == 0) {
+          n.first_r1 = r1;
+          n.first_r2 = r2;
+        }
+        const double k = frames_seen_, x = r1 - n.first_r1, y = r2 - n.first_r2;
+        ++n.count;
+        n.k += k;
+        n.kk += k * k;
+        n.x += x;
+        n.xx += x * x;
+        n.xk += x * k;
+        n.y += y;
+        n.yy += y * y;
+        n.yk += y * k;
+        n.xy += x * y;
       }
       const UnitValidity worst = Worse(v1, v2);
       out->validity[unit] = worst == UnitValidity::kOpen || worst == UnitValidity::kShort

@@ -20,6 +20,15 @@ struct ReadoutFrame {
   std::array<double, kMaxUnits> dr1_rel{};  ///< (R1 - R1_baseline) / R1_baseline
   std::array<double, kMaxUnits> dr2_rel{};  ///< (R2 - R2_baseline) / R2_baseline
   std::array<UnitValidity, kMaxUnits> validity{};
+  /// Noise measured during the last tare (Readout::noise_known() and the arrays below); copied into
+  /// every frame so the inversion can report it in N.
+  bool noise_known = false;
+  std::array<double, kMaxUnits> r1_noise_ohm{};  ///< standard deviation of R1 over the tare [Ohm]
+  std::array<double, kMaxUnits> r2_noise_ohm{};  ///< standard deviation of R2 over the tare [Ohm]
+  /// Standard deviation of s = (dR1/R1 + dR2/R2) / 2 and d = (dR1/R1 - dR2/R2) / 2 over the tare,
+  /// with the R1-R2 covariance (the inversion's Fn and Ft are s / (G kn) and d / (G kt)) [-].
+  std::array<double, kMaxUnits> sum_noise_rel{};
+  std::array<double, kMaxUnits> diff_noise_rel{};
 };
 
 /// Readout settings. Resistance bounds are fractions of the nominal R0 so they follow the gauge.
@@ -43,15 +52,25 @@ struct ReadoutConfig {
   /// ADC full scale of the source [Ohm]; a channel at or above it is clipped and marked out of
   /// range. 0 = unknown (no check).
   double adc_full_scale_ohm = 0.0;
+  /// Bottom of the source's ADC window [Ohm]; a channel at or below it is clipped and marked out of
+  /// range. 0 = none (a divider reads down to 0 Ohm, which is a short).
+  double adc_min_ohm = 0.0;
 
   /// Throws std::invalid_argument naming the offending field and value.
   void Validate() const;
 };
 
 /// Reads a ReadoutConfig from its own YAML section (field names as keys; unknown keys refused).
-ReadoutConfig LoadReadoutConfig(const common::YamlMap& map);
+/// Keys absent from `map` keep their value in `defaults`.
+ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig& defaults = {});
 
-/// Tare + dR/R + per-unit validity. Holds the baseline; Process() allocates nothing.
+/// Tare + dR/R + per-unit validity + channel noise. Holds the baseline; Process() allocates nothing.
+///
+/// Noise estimate: over the tare window each channel's readings are fitted with a straight line
+/// (a slow drift, e.g. temperature, is not noise) and the residual standard deviation of R1, R2
+/// and of the inversion's sum s and difference d is kept (sample statistics, n - 2 degrees of
+/// freedom). It assumes the unit is unloaded and still during the tare, as the baseline does.
+/// A quantised, noiseless channel honestly reports 0: a threshold built on it needs a floor.
 class Readout {
  public:
   /// Throws std::invalid_argument for an invalid config, unit_count outside 1..kMaxUnits or a
@@ -77,11 +96,20 @@ class Readout {
   const std::array<double, kMaxUnits>& baseline_r2_ohm() const { return baseline_r2_; }
   /// Frames averaged so far in the current tare window.
   int baseline_frames_seen() const { return frames_seen_; }
+  /// True once a tare window of >= 3 frames produced a noise estimate (not after SetBaseline()).
+  bool noise_known() const { return noise_known_; }
+  /// Residual standard deviation of each channel over the last tare window [Ohm].
+  const std::array<double, kMaxUnits>& r1_noise_ohm() const { return r1_noise_ohm_; }
+  const std::array<double, kMaxUnits>& r2_noise_ohm() const { return r2_noise_ohm_; }
+  /// Standard deviation of (dR1/R1 + dR2/R2) / 2 and (dR1/R1 - dR2/R2) / 2 over the tare [-].
+  const std::array<double, kMaxUnits>& sum_noise_rel() const { return sum_noise_rel_; }
+  const std::array<double, kMaxUnits>& diff_noise_rel() const { return diff_noise_rel_; }
 
  private:
   // Validity of one channel value before any baseline is involved.
   UnitValidity ChannelValidity(double resistance_ohm) const;
   void FinishBaseline();
+  void FinishNoise(int unit);
 
   ReadoutConfig config_;
   int unit_count_ = 0;
@@ -92,6 +120,20 @@ class Readout {
   std::array<int, kMaxUnits> count_r1_{}, count_r2_{};
   std::array<double, kMaxUnits> baseline_r1_{}, baseline_r2_{};
   std::array<bool, kMaxUnits> baseline_ok_{};
+  // Tare-window statistics for the noise estimate: readings relative to the channel's first good
+  // reading (no cancellation against R0^2), against the frame index k, over frames where both
+  // channels were good.
+  struct NoiseSums {
+    int count = 0;
+    double first_r1 = 0.0, first_r2 = 0.0;
+    double k = 0.0, kk = 0.0;
+    double x = 0.0, xx = 0.0, xk = 0.0;  // x = R1 - first_r1
+    double y = 0.0, yy = 0.0, yk = 0.0;  // y = R2 - first_r2
+    double xy = 0.0;
+  };
+  std::array<NoiseSums, kMaxUnits> noise_sums_{};
+  bool noise_known_ = false;
+  std::array<double, kMaxUnits> r1_noise_ohm_{}, r2_noise_ohm_{}, sum_noise_rel_{}, diff_noise_rel_{};
 };
 
 }  // namespace graspbed::sensor

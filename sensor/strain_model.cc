@@ -53,6 +53,8 @@ void StrainModelConfig::Validate() const {
   Require(adc_bits >= 0 && adc_bits <= 32, "adc_bits", adc_bits, "must be in [0, 32]");
   Require(adc_full_scale_ohm > 0.0 && std::isfinite(adc_full_scale_ohm), "adc_full_scale_ohm",
           adc_full_scale_ohm, "must be > 0");
+  Require(adc_min_ohm >= 0.0 && adc_min_ohm < adc_full_scale_ohm, "adc_min_ohm", adc_min_ohm,
+          "must be >= 0 and < adc_full_scale_ohm");
   Require(std::isfinite(temperature_coefficient_per_k) && std::abs(temperature_coefficient_per_k) < 0.1,
           "temperature_coefficient_per_k", temperature_coefficient_per_k, "must be in (-0.1, 0.1)");
   Require(std::isfinite(temperature_offset_k), "temperature_offset_k", temperature_offset_k, "must be finite");
@@ -72,27 +74,37 @@ void StrainModelConfig::Validate() const {
   }
 }
 
-StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count) {
-  StrainModelConfig config;
+StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count,
+                                        const StrainModelConfig& defaults) {
+  StrainModelConfig config = defaults;
+  const StrainModelConfig& d = defaults;
   UnitConstants& nominal = config.nominal;
-  nominal.r0_ohm = map.GetNumber("r0_ohm", nominal.r0_ohm, NumberRule::Positive());
-  nominal.gauge_factor = map.GetNumber("gauge_factor", nominal.gauge_factor, NumberRule::Positive());
-  nominal.kn_per_n = map.GetNumber("kn_per_n", nominal.kn_per_n, NumberRule::Positive());
-  nominal.kt_per_n = map.GetNumber("kt_per_n", nominal.kt_per_n, NumberRule::Positive());
-  nominal.rated_force_n = map.GetNumber("rated_force_n", nominal.rated_force_n, NumberRule::Positive());
-  config.r0_spread_fraction = map.GetNumber("r0_spread_fraction", 0.0, NumberRule::Between(0.0, 0.3));
+  nominal.r0_ohm = map.GetNumber("r0_ohm", d.nominal.r0_ohm, NumberRule::Positive());
+  nominal.gauge_factor = map.GetNumber("gauge_factor", d.nominal.gauge_factor, NumberRule::Positive());
+  nominal.kn_per_n = map.GetNumber("kn_per_n", d.nominal.kn_per_n, NumberRule::Positive());
+  nominal.kt_per_n = map.GetNumber("kt_per_n", d.nominal.kt_per_n, NumberRule::Positive());
+  nominal.rated_force_n = map.GetNumber("rated_force_n", d.nominal.rated_force_n, NumberRule::Positive());
+  config.r0_spread_fraction = map.GetNumber("r0_spread_fraction", d.r0_spread_fraction, NumberRule::Between(0.0, 0.3));
   config.sensitivity_spread_fraction =
-      map.GetNumber("sensitivity_spread_fraction", 0.0, NumberRule::Between(0.0, 0.3));
-  config.noise_ohm = map.GetNumber("noise_ohm", 0.0, NumberRule::NonNegative());
-  config.adc_bits = map.GetInt("adc_bits", 0, 0, 32);
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", config.adc_full_scale_ohm, NumberRule::Positive());
+      map.GetNumber("sensitivity_spread_fraction", d.sensitivity_spread_fraction, NumberRule::Between(0.0, 0.3));
+  config.noise_ohm = map.GetNumber("noise_ohm", d.noise_ohm, NumberRule::NonNegative());
+  config.adc_bits = map.GetInt("adc_bits", d.adc_bits, 0, 32);
+  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Positive());
+  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::NonNegative());
+  if (!(config.adc_min_ohm < config.adc_full_scale_ohm)) {
+    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm",
+             "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" + std::to_string(config.adc_min_ohm) +
+                 " vs " + std::to_string(config.adc_full_scale_ohm) + ")");
+  }
   config.temperature_coefficient_per_k =
-      map.GetNumber("temperature_coefficient_per_k", 0.0, NumberRule::Between(-0.0999, 0.0999));
-  config.temperature_offset_k = map.GetNumber("temperature_offset_k", 0.0);
-  config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", 0.0);
-  config.saturation_force_n = map.GetNumber("saturation_force_n", 0.0, NumberRule::NonNegative());
-  config.cross_talk_shear_fraction = map.GetNumber("cross_talk_shear_fraction", 0.0, NumberRule::Between(-1, 1));
-  config.cross_talk_offset_per_mm = map.GetNumber("cross_talk_offset_per_mm", 0.0, NumberRule::Between(-10, 10));
+      map.GetNumber("temperature_coefficient_per_k", d.temperature_coefficient_per_k, NumberRule::Between(-0.0999, 0.0999));
+  config.temperature_offset_k = map.GetNumber("temperature_offset_k", d.temperature_offset_k);
+  config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", d.temperature_ramp_k_per_s);
+  config.saturation_force_n = map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::NonNegative());
+  config.cross_talk_shear_fraction =
+      map.GetNumber("cross_talk_shear_fraction", d.cross_talk_shear_fraction, NumberRule::Between(-1, 1));
+  config.cross_talk_offset_per_mm =
+      map.GetNumber("cross_talk_offset_per_mm", d.cross_talk_offset_per_mm, NumberRule::Between(-10, 10));
   const auto read_units = [&](const char* key) {
     std::vector<int> units;
     for (double value : map.GetNumberList(key, {}, 0, NumberRule::Between(0, unit_count - 1))) {
@@ -105,8 +117,8 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
     }
     return units;
   };
-  config.dead_units = read_units("dead_units");
-  config.shorted_units = read_units("shorted_units");
+  if (map.Has("dead_units")) config.dead_units = read_units("dead_units");
+  if (map.Has("shorted_units")) config.shorted_units = read_units("shorted_units");
   for (int unit : config.shorted_units) {
     if (std::find(config.dead_units.begin(), config.dead_units.end(), unit) != config.dead_units.end()) {
       map.Fail("shorted_units", "unit " + std::to_string(unit) + " is also in dead_units");
@@ -123,9 +135,9 @@ StrainModel::StrainModel(const Layout& layout, const StrainModelConfig& config, 
     throw std::invalid_argument("strain model: layout has " + std::to_string(unit_count_) +
                                 " units; expected 1.." + std::to_string(kMaxUnits));
   }
-  // Codes 0 .. 2^bits - 1 span 0 .. full scale; the top code also means "at or above full scale".
+  // Codes 0 .. 2^bits - 1 span min .. full scale; the top code also means "at or above full scale".
   adc_max_code_ = std::ldexp(1.0, config_.adc_bits) - 1.0;
-  adc_lsb_ohm_ = config_.adc_bits > 0 ? config_.adc_full_scale_ohm / adc_max_code_ : 0.0;
+  adc_lsb_ohm_ = config_.adc_bits > 0 ? (config_.adc_full_scale_ohm - config_.adc_min_ohm) / adc_max_code_ : 0.0;
   const size_t count = static_cast<size_t>(unit_count_);
   r0_r1_.resize(count);
   r0_r2_.resize(count);
@@ -186,8 +198,9 @@ double StrainModel::TemperatureOffsetK(double time_s) const {
 
 double StrainModel::Quantise(double resistance_ohm) const {
   if (config_.adc_bits == 0) return resistance_ohm;
-  const double code = std::clamp(std::nearbyint(resistance_ohm / adc_lsb_ohm_), 0.0, adc_max_code_);
-  return code * adc_lsb_ohm_;
+  const double code =
+      std::clamp(std::nearbyint((resistance_ohm - config_.adc_min_ohm) / adc_lsb_ohm_), 0.0, adc_max_code_);
+  return config_.adc_min_ohm + code * adc_lsb_ohm_;
 }
 
 void StrainModel::Sample(std::span<const UnitLoad> loads, double time_s, RawFrame* frame) {

@@ -59,9 +59,13 @@ struct StrainModelConfig {
   double noise_ohm = 0.0;
   /// ADC resolution [bits]; 0 = ideal (no quantisation, no full-scale clipping).
   int adc_bits = 0;
-  /// ADC input range 0..full scale [Ohm]; readings at or above it report full scale (the readout
+  /// Top of the ADC input window [Ohm]; readings at or above it report full scale (the readout
   /// marks that channel out of range). Used only when adc_bits > 0.
   double adc_full_scale_ohm = 10000.0;
+  /// Bottom of the ADC input window [Ohm]: codes 0 .. 2^bits - 1 span adc_min_ohm ..
+  /// adc_full_scale_ohm (a bridge and amplifier read a window around R0, a divider 0 .. full
+  /// scale); readings at or below it report the bottom code. Used only when adc_bits > 0.
+  double adc_min_ohm = 0.0;
   /// Temperature coefficient of R0 [1/K]: R0(T) = R0 (1 + alpha dT); 0 = off.
   double temperature_coefficient_per_k = 0.0;
   /// Temperature offset from the calibration temperature at t = 0 [K].
@@ -88,7 +92,9 @@ struct StrainModelConfig {
 
 /// Reads a StrainModelConfig from its own YAML section (unknown keys are refused); errors are
 /// common::ConfigError naming file, line, key and value. `unit_count` bounds dead/shorted units.
-StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count = kMaxUnits);
+/// Keys absent from `map` keep their value in `defaults` (a sensor profile, sensor_profile.h).
+StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count = kMaxUnits,
+                                        const StrainModelConfig& defaults = {});
 
 /// Per-unit loads -> RawFrame. Mutable per-run state (RNG, faults, biases) lives here; the layout
 /// is only read at construction. Sample() allocates nothing and never throws for valid sizes.
@@ -135,7 +141,7 @@ class StrainModel {
   std::vector<double> bias_r1_, bias_r2_;
   std::vector<UnitFault> faults_;
   double adc_max_code_ = 0.0;  // 2^bits - 1
-  double adc_lsb_ohm_ = 0.0;   // full scale / max code
+  double adc_lsb_ohm_ = 0.0;   // (full scale - min) / max code
   double noise_scale_ = 1.0;
   double extra_temperature_k_ = 0.0;
   uint32_t sequence_ = 0;

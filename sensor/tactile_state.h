@@ -38,6 +38,19 @@ struct TactileState {
   double total_shear_circumferential_n = 0.0;
   /// Units with fn above the inversion's contact threshold.
   int contact_count = 0;
+
+  /// Channel noise measured by the readout during its last tare (unit unloaded and still), so a
+  /// controller can scale its thresholds to the signal it actually has. False until a tare has
+  /// finished (and after a stored baseline, which carries no noise figure).
+  bool noise_known = false;
+  /// Standard deviation of R1 and R2 per unit over the tare, a straight-line drift removed [Ohm].
+  std::array<double, kMaxUnits> r1_noise_ohm{};
+  std::array<double, kMaxUnits> r2_noise_ohm{};
+  /// The same noise through the inversion (paper eq. 4 with this unit's calibration): standard
+  /// deviation of fn and ft at rest [N]. 0 for a channel the ADC resolves without flicker: use a
+  /// floor (e.g. one ADC step through the inversion) before dividing by it.
+  std::array<double, kMaxUnits> fn_noise_n{};
+  std::array<double, kMaxUnits> ft_noise_n{};
 };
 
 }  // namespace graspbed::sensor

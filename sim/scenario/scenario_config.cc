@@ -13,6 +13,7 @@
 #include "sensor/fea/fea_config.h"
 #include "sensor/fea/unit_analysis.h"
 #include "sensor/layout.h"
+#include "sensor/sensor_profile.h"
 
 namespace graspbed::scenario {
 namespace {
@@ -254,6 +255,8 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   s.sample_rate_hz = map.GetNumber("sample_rate_hz", s.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
   s.latency_s = map.GetNumber("latency_s", s.latency_s, NumberRule::Between(0.0, 1.0));
   s.drop_probability = map.GetNumber("drop_probability", s.drop_probability, NumberRule::Between(0.0, 1.0));
+  // Nominal constants first (explicit keys, then the FEA's kn and kt), then the profile resolved
+  // against them, then every explicit key again on top of the profile.
   if (auto sub = map.GetMap("strain_model")) {
     s.strain_model = sensor::LoadStrainModelConfig(*sub, *unit_count);
   }
@@ -285,7 +288,27 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     s.strain_model.nominal.kn_per_n = analysed.kn_per_n;
     s.strain_model.nominal.kt_per_n = analysed.kt_per_n;
   }
-  if (auto sub = map.GetMap("readout")) s.readout = sensor::LoadReadoutConfig(*sub);
+  s.profile = map.GetString("profile", s.profile, sensor::SensorProfileNames());
+  const sensor::SensorProfile& profile = sensor::FindSensorProfile(s.profile);
+  sensor::ReadoutConfig readout_defaults;
+  if (!profile.ideal) {
+    const sensor::StrainModelConfig profiled = sensor::ProfileStrainModel(profile, s.strain_model.nominal);
+    s.strain_model = profiled;
+    if (auto sub = map.GetMap("strain_model")) {
+      s.strain_model = sensor::LoadStrainModelConfig(*sub, *unit_count, profiled);
+      s.strain_model.nominal.kn_per_n = profiled.nominal.kn_per_n;
+      s.strain_model.nominal.kt_per_n = profiled.nominal.kt_per_n;
+    }
+    // The readout is told the ADC window the strain model ends up with (a profile's or the
+    // scenario's own), so a clipped channel reads out of range.
+    readout_defaults.adc_full_scale_ohm = s.strain_model.adc_bits > 0 ? s.strain_model.adc_full_scale_ohm : 0.0;
+    readout_defaults.adc_min_ohm = s.strain_model.adc_bits > 0 ? s.strain_model.adc_min_ohm : 0.0;
+  }
+  if (auto sub = map.GetMap("readout")) {
+    s.readout = sensor::LoadReadoutConfig(*sub, readout_defaults);
+  } else {
+    s.readout = readout_defaults;
+  }
   if (auto sub = map.GetMap("inversion")) s.inversion = sensor::LoadInversionConfig(*sub);
   map.RejectUnknownKeys();
   return s;
@@ -562,6 +585,7 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   EmitNumber(out, "latency_s", s.latency_s);
   EmitNumber(out, "drop_probability", s.drop_probability);
   out << YAML::Key << "sensitivities" << YAML::Value << s.sensitivities;
+  out << YAML::Key << "profile" << YAML::Value << s.profile;
   if (!s.fea_config.empty()) out << YAML::Key << "fea_config" << YAML::Value << s.fea_config;
   const sensor::StrainModelConfig& m = s.strain_model;
   out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
@@ -581,6 +605,7 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   EmitNumber(out, "noise_ohm", m.noise_ohm);
   out << YAML::Key << "adc_bits" << YAML::Value << m.adc_bits;
   EmitNumber(out, "adc_full_scale_ohm", m.adc_full_scale_ohm);
+  EmitNumber(out, "adc_min_ohm", m.adc_min_ohm);
   EmitNumber(out, "temperature_coefficient_per_k", m.temperature_coefficient_per_k);
   EmitNumber(out, "temperature_offset_k", m.temperature_offset_k);
   EmitNumber(out, "temperature_ramp_k_per_s", m.temperature_ramp_k_per_s);
@@ -601,6 +626,7 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   EmitNumber(out, "min_mean_dr_rel", r.min_mean_dr_rel);
   EmitNumber(out, "max_abs_dr_rel", r.max_abs_dr_rel);
   EmitNumber(out, "adc_full_scale_ohm", r.adc_full_scale_ohm);
+  EmitNumber(out, "adc_min_ohm", r.adc_min_ohm);
   out << YAML::EndMap;
   const sensor::InversionConfig& i = s.inversion;
   out << YAML::Key << "inversion" << YAML::Value << YAML::BeginMap;

@@ -142,6 +142,10 @@ struct SensorOptions {
   /// FEA config for sensitivities "fea" (relative to the scenario file); empty = the shipped
   /// sensor/fea/unit_fea.yaml.
   std::string fea_config;
+  /// Sensor profile (sensor/sensor_profile.h): "ideal" or a realistic readout chain, resolved
+  /// against the sensitivities above; it sets strain_model and readout values, and keys given
+  /// explicitly in those sections override it.
+  std::string profile = "ideal";
   sensor::StrainModelConfig strain_model;
   sensor::ReadoutConfig readout;
   sensor::InversionConfig inversion;

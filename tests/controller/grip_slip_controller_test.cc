@@ -28,6 +28,7 @@ constexpr double kGripTolN = 0.25;           // force-loop tracking tolerance in
 constexpr double kCeilingTolN = 0.3;         // ceiling overshoot allowed (noise + loop transient)
 constexpr double kSlowSlideLatencyLimitS = 0.100;  // slide seen only by centroid travel, light grip
 constexpr double kAddedMassSlipLimitM = 5e-3;  // slide allowed after a load step of 2x the friction limit
+constexpr double kLowFrictionSlipLimitM = 10e-3;  // slide allowed while a 2x friction overestimate is learned
 
 /// Controller + plant + sensor at 1 kHz, with the tangential load given as a function of time.
 class ClosedLoop {
@@ -228,55 +229,101 @@ TEST(GripSlipControllerTest, DetectsSlipFromAddedMassWithinLatencyAndStopsIt) {
   EXPECT_LT(loop.plant.slip_distance_m(), kAddedMassSlipLimitM);
 }
 
-/// Low friction: the object is slipperier than the estimate. The slip cues catch it and the estimate
-/// is learned from the ratio at slip, after which the grasp holds with no further slips.
+/// Low friction: the object is slipperier than the estimate (0.25 against 0.5). Neither the ratio
+/// cue (it compares against the wrong estimate) nor the vibration cue (the plant's 30 % stick-slip
+/// is below the noise at 1.5 N of grip) can see the slide; the contact's travel reveals it, the
+/// estimate is learned from the ratio at slip, and the grasp then holds with no further slips.
+/// The lift takes 0.5 s; a 0.2 s lift outruns the slip response (next test).
 TEST(GripSlipControllerTest, LearnsLowFrictionFromSlipAndThenHolds) {
   HandPlant::Options plant;
   plant.friction = 0.25;
   const GripSlipConfig config = DefaultConfig();
   ClosedLoop loop(config, plant, {});
-  // Grasp with no load (object resting), then lift: load ramps to the weight share in 0.2 s.
+  // Grasp with no load (object resting), then lift: load ramps to 1.2 N in 0.5 s.
   loop.Grasp(0.0, 0.5);
-  const auto load = [](double t) { return std::clamp((t - 0.5) / 0.2, 0.0, 1.0) * 1.2; };
-  loop.RunUntil(1.5, load);
-  ASSERT_GT(loop.plant.slip_onset_s(), 0.0);
+  const auto load = [](double t) { return std::clamp((t - 0.5) / 0.5, 0.0, 1.0) * 1.2; };
+  double max_slid_m = 0.0;
+  const auto watch = [&](double) { max_slid_m = std::max(max_slid_m, loop.plant.slip_distance_m()); };
+  loop.RunUntil(1.5, load, watch);
+  ASSERT_GT(loop.plant.slip_onset_s(), 0.0) << "the lift did not make the object slip";
+  ASSERT_GT(loop.first_slip_s, 0.0) << "the slide was never flagged";
+  ASSERT_FALSE(loop.plant.dropped()) << "the object slid out of the grasp";
   const double latency_s = loop.first_slip_s - loop.plant.slip_onset_s();
   const int events_after_learning = loop.controller.telemetry().slip_events;
-  std::printf("[ measure  ] low friction 0.25 (estimate %.2f): detected %.1f ms after onset, friction learned %.3f, "
-              "%d slip events, slid %.2f mm\n",
-              config.friction_initial, latency_s * 1e3, loop.controller.telemetry().friction_estimate,
-              events_after_learning, loop.plant.slip_distance_m() * 1e3);
-  // Only the contact's travel reveals this slide (its stick-slip is below the noise at 1.5 N of
-  // grip), so it is caught later than the signatures above.
+  std::printf("[ measure  ] low friction %.2f (estimate %.2f), 0.5 s lift: detected %.1f ms after onset (%s), "
+              "friction learned %.3f, %d slip events, slid %.2f mm, grip %.2f N for %.2f N needed\n",
+              plant.friction, config.friction_initial, latency_s * 1e3, loop.Cues().c_str(),
+              loop.controller.telemetry().friction_estimate, events_after_learning, max_slid_m * 1e3,
+              loop.plant.grip_n(), 1.2 / plant.friction);
+  EXPECT_GE(latency_s, 0.0);
   EXPECT_LT(latency_s, kSlowSlideLatencyLimitS);
   EXPECT_LE(loop.controller.telemetry().friction_estimate, plant.friction + 0.05) << "estimate not lowered";
   EXPECT_FALSE(loop.plant.sliding());
-  loop.RunUntil(10.0, load);
+  loop.RunUntil(10.0, load, watch);
   EXPECT_EQ(loop.controller.telemetry().slip_events, events_after_learning) << "slips after the estimate was learned";
   EXPECT_FALSE(loop.plant.sliding());
+  EXPECT_FALSE(loop.plant.dropped());
+  EXPECT_LT(max_slid_m, kLowFrictionSlipLimitM);
+  EXPECT_GT(loop.plant.grip_n(), 1.2 / plant.friction) << "holding without the grip the load needs";
 }
 
+/// The limit of the previous case: the same object lifted in 0.2 s accelerates out of the grasp
+/// (20 mm in about 130 ms) before the contact's travel is flagged and the grip catches up. Pinned
+/// so a controller that holds it shows up here (issue 12: slip cues that see this slide sooner).
+TEST(GripSlipControllerTest, FastLiftOfAnObjectWithHalfTheEstimatedFrictionIsDroppedToday) {
+  HandPlant::Options plant;
+  plant.friction = 0.25;
+  ClosedLoop loop(DefaultConfig(), plant, {});
+  loop.Grasp(0.0, 0.5);
+  double dropped_at_s = -1.0;
+  loop.RunUntil(1.5, [](double t) { return std::clamp((t - 0.5) / 0.2, 0.0, 1.0) * 1.2; }, [&](double t) {
+    if (dropped_at_s < 0.0 && loop.plant.dropped()) dropped_at_s = t;
+  });
+  ASSERT_GT(loop.first_slip_s, 0.0) << "the slide was never flagged";
+  std::printf("[ measure  ] low friction 0.25, 0.2 s lift: flagged %.1f ms after onset, dropped %.1f ms after onset\n",
+              (loop.first_slip_s - loop.plant.slip_onset_s()) * 1e3, (dropped_at_s - loop.plant.slip_onset_s()) * 1e3);
+  EXPECT_TRUE(loop.plant.dropped());
+}
+
+/// A task ceiling below what a pull needs: while the pull lasts the object slides through the
+/// fingers (a long object: the plant's drop distance is 300 mm) with the grip pressed against the
+/// ceiling and never beyond it; after the pull the object is held again.
 TEST(GripSlipControllerTest, CeilingHonouredEvenWhileSlipping) {
   HandPlant::Options plant;
   plant.friction = 0.3;
+  plant.drop_distance_m = 0.3;
+  // A motor 20 % stronger than the controller's feed-forward assumes (20 N): the effort cap alone
+  // would allow 3.6 N, so the force loop has to keep the grip at the ceiling.
+  plant.stall_force_n = 24.0;
   ClosedLoop loop(DefaultConfig(), plant, {});
   constexpr double kCeilingN = 3.0;
   loop.controller.SetGripCeiling(kCeilingN);
   loop.Grasp(0.2, 1.0);
   double max_target_n = 0.0;
-  // The load needs 2 N / 0.3 = 6.7 N of grip: more than the fragile object may take.
-  loop.RunUntil(3.0, [](double t) { return t < 1.2 ? 0.2 : 2.0; }, [&](double) {
+  double max_grip_during_pull_n = 0.0;
+  // The 0.3 s pull of 1.0 N needs 1.0 / 0.3 = 3.3 N of grip: more than the fragile object may take.
+  const auto load = [](double t) { return t < 1.2 ? 0.2 : (t < 1.5 ? 1.0 : 0.5); };
+  loop.RunUntil(3.0, load, [&](double t) {
     max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n);
+    if (t >= 1.2 && t < 1.5) max_grip_during_pull_n = std::max(max_grip_during_pull_n, loop.plant.grip_n());
   });
-  std::printf("[ measure  ] ceiling %.1f N: peak grip %.2f N, peak target %.2f N, %d slip events\n", kCeilingN,
-              loop.max_grip_n, max_target_n, loop.controller.telemetry().slip_events);
+  std::printf("[ measure  ] ceiling %.1f N: peak grip %.2f N (pull %.2f N), peak target %.2f N, %d slip events, "
+              "slid %.1f mm, held %d, grip at end %.2f N\n",
+              kCeilingN, loop.max_grip_n, max_grip_during_pull_n, max_target_n, loop.controller.telemetry().slip_events,
+              loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(), loop.plant.grip_n());
+  ASSERT_FALSE(loop.plant.dropped()) << "the ceiling check needs the object in the hand";
   EXPECT_GT(loop.controller.telemetry().slip_events, 0);
-  EXPECT_GT(loop.plant.slip_distance_m(), 0.0) << "the load should have exceeded what the ceiling can hold";
+  EXPECT_GT(loop.plant.slip_distance_m(), 1e-3) << "the pull should exceed what the ceiling can hold";
+  EXPECT_FALSE(loop.plant.sliding()) << "held again after the pull";
   EXPECT_LE(max_target_n, kCeilingN + 1e-9);
   EXPECT_LE(loop.max_grip_n, kCeilingN + kCeilingTolN);
+  // The grip did press against the ceiling, so the check above could fail.
+  EXPECT_GE(max_grip_during_pull_n, kCeilingN - kCeilingTolN);
   EXPECT_GE(loop.command.grip_effort, 0.0);
 }
 
+/// max_grip_n caps the grip even when the task allows more. The load (0.65 N at friction 0.2) needs
+/// 3.25 N, the coupled target with its margin 4.55 N: the cap of 4 N binds, and the object is held.
 TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
   GripSlipConfig config = DefaultConfig();
   config.max_grip_n = 4.0;
@@ -285,8 +332,17 @@ TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
   ClosedLoop loop(config, plant, {});
   loop.controller.SetGripCeiling(8.0);  // the task allows more; the overall ceiling wins
   loop.Grasp(0.2, 1.0);
-  loop.RunUntil(3.0, [](double t) { return t < 1.2 ? 0.2 : 2.0; });
+  double max_target_n = 0.0;
+  loop.RunUntil(4.0, [](double t) { return t < 1.2 ? 0.2 : 0.2 + 0.45 * std::clamp((t - 1.2) / 0.5, 0.0, 1.0); },
+                [&](double) { max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n); });
+  std::printf("[ measure  ] max_grip 4 N: peak grip %.2f N, peak target %.2f N, slid %.2f mm, held %d, grip at end %.2f N\n",
+              loop.max_grip_n, max_target_n, loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(),
+              loop.plant.grip_n());
   EXPECT_DOUBLE_EQ(loop.controller.diagnostics().ceiling_n, 4.0);
+  EXPECT_FALSE(loop.plant.dropped());
+  EXPECT_FALSE(loop.plant.sliding());
+  EXPECT_LE(max_target_n, 4.0 + 1e-9);
+  EXPECT_GE(max_target_n, 4.0 - 1e-9) << "the cap never bound, so the check above could not fail";
   EXPECT_LE(loop.max_grip_n, 4.0 + kCeilingTolN);
 }
 

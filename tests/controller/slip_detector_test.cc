@@ -24,7 +24,12 @@ constexpr double kSlipLatencyLimitS = 0.030;
 constexpr double kFriction = 0.5;
 constexpr double kGripN = 3.0;
 constexpr double kHoldLoadN = 0.9;
-constexpr double kStickSlipPeakToPeakN = 1.2;  // asserted within the latency limit  // ratio 0.3, well inside the friction cone of 0.5
+/// Stick-slip the vibration cue must see within the latency limit at the default noise, as a
+/// fraction of the friction force [-]; HandPlant's own stick-slip is kPlantStickSlipFraction.
+constexpr double kStickSlipMustSeeFraction = 0.8;
+constexpr double kPlantStickSlipFraction = 0.3;
+/// The same at 5 mN of shear noise with the default 0.03 N floor of the threshold [-].
+constexpr double kStickSlipMustSeeAtLowNoiseFraction = 0.53;
 
 /// Feeds a detector 1 kHz frames from `contact(t)`; returns the first time a cue fired, or -1.
 struct Stream {
@@ -79,26 +84,74 @@ TEST(SlipDetectorTest, StaticHoldWithNoiseRaisesNothingAndLearnsTheNoise) {
   EXPECT_NEAR(signals.centroid_column, 1.5, 0.1);
 }
 
-TEST(SlipDetectorTest, StickSlipVibrationDetectedWithinLatency) {
-  // Sliding at the friction limit with a 120 Hz sawtooth over the whole contact; swept in amplitude
-  // to show where the cue starts to see it at the default noise (0.04 N per unit on the shear).
-  double latency_at_limit_s = -1.0;
-  for (const double peak_to_peak_n : {0.4, 0.6, 0.8, 1.0, kStickSlipPeakToPeakN}) {
-    Stream stream(OnlyCue(false, true, false));
-    ASSERT_LT(stream.Run(0.0, 2.0, Hold), 0.0);
-    constexpr double kOnsetS = 2.0;
-    const double first_s = stream.Run(kOnsetS, 2.5, [&](double t) {
-      SyntheticContact contact = Hold(t);
-      contact.load_axial_n = kFriction * kGripN;
-      contact.vibration_n = peak_to_peak_n * (std::fmod(t * 120.0, 1.0) - 0.5);
-      return contact;
-    });
-    std::printf("[ measure  ] vibration cue alone: 120 Hz stick-slip %.1f N p-p on a 3 N grip: %s %.1f ms\n",
-                peak_to_peak_n, first_s > 0.0 ? "detected after" : "not detected in", 
-                first_s > 0.0 ? (first_s - kOnsetS) * 1e3 : 500.0);
-    if (peak_to_peak_n == kStickSlipPeakToPeakN) latency_at_limit_s = first_s > 0.0 ? first_s - kOnsetS : 1.0;
+/// First detection by the vibration cue alone of a 120 Hz sawtooth stick-slip of `peak_to_peak_n`
+/// while sliding at the friction limit of a 3 N grip, after 2 s of quiet hold; -1 if not within 0.5 s.
+double VibrationLatencyS(double peak_to_peak_n, const SyntheticTactile::Options& sensor,
+                         double min_rms_n = SlipDetectorConfig{}.vibration_min_rms_n) {
+  SlipDetectorConfig config = OnlyCue(false, true, false);
+  config.vibration_min_rms_n = min_rms_n;
+  Stream stream(config, sensor);
+  // The load sits at the friction limit before and after the onset, so only the vibration changes.
+  const auto at_limit = [](double t) {
+    SyntheticContact contact = Hold(t);
+    contact.load_axial_n = kFriction * kGripN;
+    return contact;
+  };
+  if (stream.Run(0.0, 2.0, at_limit) >= 0.0) return -2.0;  // a false flag in the quiet hold
+  constexpr double kOnsetS = 2.0;
+  const double first_s = stream.Run(kOnsetS, 2.5, [&](double t) {
+    SyntheticContact contact = at_limit(t);
+    contact.vibration_n = peak_to_peak_n * (std::fmod(t * 120.0, 1.0) - 0.5);
+    return contact;
+  });
+  return first_s < 0.0 ? -1.0 : first_s - kOnsetS;
+}
+
+TEST(SlipDetectorTest, StickSlipVibrationSweptInAmplitudeAtTwoNoiseLevels) {
+  // Sliding at the friction limit (1.5 N of shear on a 3 N grip) with a 120 Hz sawtooth over the
+  // whole contact, swept in amplitude as a fraction of the friction force. HandPlant's stick-slip is
+  // 30 % (0.45 N peak to peak here). Two noise levels: this file's default (0.04 N per unit on the
+  // shear, 3x the divider_12bit profile with the paper's sensitivities) and a realistic amplified
+  // chain (inamp_16bit with the FEA's sensitivities: about 5 mN on the shear, 1 mN on the normal;
+  // tests/sensor/sensor_profile_test.cc).
+  SyntheticTactile::Options realistic;
+  realistic.noise_fn_n = 0.001;
+  realistic.noise_ft_n = 0.005;
+  const double friction_force_n = kFriction * kGripN;
+  // Third: the realistic noise with the threshold's absolute floor (vibration_min_rms_n, 0.03 N by
+  // default, there for noise-free signals) lowered to 2x the noise, so the threshold follows the noise.
+  double smallest_within_limit[3] = {-1.0, -1.0, -1.0};
+  for (int level = 0; level < 3; ++level) {
+    const SyntheticTactile::Options sensor = level == 0 ? SyntheticTactile::Options{} : realistic;
+    const double min_rms_n = level == 2 ? 2.0 * realistic.noise_ft_n : SlipDetectorConfig{}.vibration_min_rms_n;
+    bool seen_smaller = false;
+    for (const double fraction : {0.8, 0.67, 0.53, 0.4, 0.3, 0.2, 0.1, 0.05}) {
+      const double latency_s = VibrationLatencyS(fraction * friction_force_n, sensor, min_rms_n);
+      ASSERT_NE(latency_s, -2.0) << "false flag in the quiet hold";
+      std::printf("[ measure  ] vibration cue alone, shear noise %.3f N/unit, floor %.3f N: stick-slip %2.0f %% "
+                  "(%.2f N p-p): %s %.0f ms\n",
+                  sensor.noise_ft_n, min_rms_n, 100 * fraction, fraction * friction_force_n,
+                  latency_s >= 0.0 ? "detected after" : "not detected in", latency_s >= 0.0 ? latency_s * 1e3 : 500.0);
+      const bool within = latency_s >= 0.0 && latency_s < kSlipLatencyLimitS;
+      // Larger amplitudes come first: once one is missed, smaller ones are not seen in time either.
+      if (within && !seen_smaller) smallest_within_limit[level] = fraction;
+      if (!within) seen_smaller = true;
+    }
   }
-  EXPECT_LT(latency_at_limit_s, kSlipLatencyLimitS);
+  std::printf("[ measure  ] smallest stick-slip seen within %.0f ms: %.0f %% at 0.04 N noise, %.0f %% at 0.005 N "
+              "(0.03 N floor), %.0f %% at 0.005 N (0.01 N floor)\n",
+              kSlipLatencyLimitS * 1e3, 100 * smallest_within_limit[0], 100 * smallest_within_limit[1],
+              100 * smallest_within_limit[2]);
+  // What the cue must see within the latency limit. At the default noise 80 % of the friction force,
+  // not the plant's 30 % (the plant's slides are caught by the contact's travel instead, see
+  // LearnsLowFrictionFromSlipAndThenHolds). At a realistic chain's noise the fixed 0.03 N floor, not
+  // the noise, limits it to 53 %; with the floor at 2x the noise it sees the plant's 30 % and less.
+  EXPECT_GT(smallest_within_limit[0], 0.0) << "not even 80 % seen at the default noise";
+  EXPECT_LE(smallest_within_limit[0], kStickSlipMustSeeFraction);
+  EXPECT_GT(smallest_within_limit[1], 0.0);
+  EXPECT_LE(smallest_within_limit[1], kStickSlipMustSeeAtLowNoiseFraction);
+  EXPECT_GT(smallest_within_limit[2], 0.0);
+  EXPECT_LE(smallest_within_limit[2], kPlantStickSlipFraction);
 }
 
 TEST(SlipDetectorTest, ContactMovingAcrossUnitsDetectedWithinLatency) {
