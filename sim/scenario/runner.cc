@@ -208,9 +208,13 @@ plot::Series Line(const SignalLog& log, const std::vector<double>& time, const s
   return series;
 }
 
-std::vector<plot::Marker> ScriptMarkers(const ScenarioConfig& config) {
+// One marker per action that fired, at the time it fired (an event action's time is the run's).
+std::vector<plot::Marker> ScriptMarkers(const RunResult& result) {
   std::vector<plot::Marker> markers;
-  for (const Action& action : config.script) markers.push_back({action.at_s, ActionName(action.kind)});
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
+    if (fired_s >= 0.0) markers.push_back({fired_s, ActionName(result.config.script[i].kind)});
+  }
   return markers;
 }
 
@@ -232,7 +236,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
   totals.series.push_back(Line(log, time, "true_sensed_fn_n", "true, on the mesas", 1.0, true));
   totals.series.push_back(Line(log, time, "true_squeeze_n", "true squeeze on the object", 1.0, true));
-  totals.markers = ScriptMarkers(result.config);
+  totals.markers = ScriptMarkers(result);
   totals.include_zero_y = true;
   forces.panels = {per_unit, totals};
   plot::WritePng(forces, dir + "/forces.png");
@@ -268,7 +272,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   grip.title = title + ": grip";
   plot::Chart effort = MakeChart("Grip motor command", "time [s]", "effort [-]");
   effort.series = {Line(log, time, "grip_effort", "effort")};
-  effort.markers = ScriptMarkers(result.config);
+  effort.markers = ScriptMarkers(result);
   effort.include_zero_y = true;
   plot::Chart force = MakeChart("Grip force", "time [s]", "force [N]");
   force.series = {Line(log, time, "grip_target_n", "controller target"),
@@ -304,7 +308,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   plot::Chart z = MakeChart("Object and wrist height", "time [s]", "height [mm]");
   z.series = {Line(log, time, "object_height_m", "object above table", 1e3),
               Line(log, time, "wrist_z_m", "wrist z", 1e3, true)};
-  z.markers = ScriptMarkers(result.config);
+  z.markers = ScriptMarkers(result);
   height.panels = {z};
   plot::WritePng(height, dir + "/height.png");
 }
@@ -426,6 +430,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     sample.true_loads = true_loads;
     sample.controller_slip = telemetry.slip_detected;
     tracker.Update(sample);
+    player.Observe(t, state, telemetry.slip_detected);
 
     const char** text = nullptr;
     double* row = log.AppendRow(&text);
@@ -496,6 +501,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.metrics.physics_fault_cause = fault.occurred ? fault.cause_text() : "";
   result.metrics.physics_fault_time_s = fault.time_s;
   result.outcomes = EvaluateExpectations(config.expectations, result.metrics);
+  // An event action that never ran fails the run like an expectation.
+  for (ExpectationOutcome& outcome : player.EventOutcomes(sim_s)) result.outcomes.push_back(std::move(outcome));
+  result.script_timings = player.timings();
   result.passed = result.completed && std::all_of(result.outcomes.begin(), result.outcomes.end(),
                                                   [](const ExpectationOutcome& o) { return o.passed; });
   result.real_time_factor = wall_s > 0.0 ? sim_s / wall_s : 0.0;
@@ -560,6 +568,26 @@ nlohmann::json SummaryJson(const RunResult& result) {
                       {"detected", e.detected},
                       {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
   }
+  // When each script action fired; for event actions also when it was armed and saw its event.
+  const auto time_or_null = [](double time_s) { return time_s >= 0.0 ? nlohmann::json(time_s) : nlohmann::json(nullptr); };
+  nlohmann::json script = nlohmann::json::array();
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const Action& action = result.config.script[i];
+    const ActionTiming timing = i < result.script_timings.size() ? result.script_timings[i] : ActionTiming{};
+    nlohmann::json entry = {{"action", ActionName(action.kind)}, {"line", action.line}};
+    if (action.after == ScriptEvent::kNone) {
+      entry["at_s"] = action.at_s;
+    } else {
+      entry["after"] = EventName(action.after);
+      entry["delay_s"] = action.delay_s;
+      entry["timeout_s"] = action.timeout_s;
+      entry["armed_s"] = time_or_null(timing.armed_s);
+      entry["event_s"] = time_or_null(timing.event_s);
+      entry["timed_out"] = timing.timed_out_s >= 0.0;
+    }
+    entry["fired_s"] = time_or_null(timing.fired_s);
+    script.push_back(entry);
+  }
   return {
       {"scenario", result.config.name},
       {"source_file", result.config.source_file},
@@ -570,6 +598,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"metrics", metrics},
       {"expectations", expectations},
       {"slip_events", events},
+      {"script", script},
       {"physics_fault",
        {{"occurred", m.physics_fault}, {"cause", m.physics_fault_cause}, {"time_s", m.physics_fault_time_s}}},
       {"counters",

@@ -17,6 +17,7 @@
 
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
+#include "sim/scenario/script_player.h"
 
 namespace graspbed::scenario {
 
@@ -35,7 +36,8 @@ struct RunOptions {
 struct RunResult {
   ScenarioConfig config;
   Metrics metrics;
-  std::vector<ExpectationOutcome> outcomes;
+  std::vector<ExpectationOutcome> outcomes;  ///< expectations, then one per event action of the script
+  std::vector<ActionTiming> script_timings;  ///< per script action (config.script order)
   bool completed = false;  ///< ran to duration_s (false: stopped early)
   bool passed = false;     ///< completed and every expectation held
   double real_time_factor = 0.0;  ///< simulated seconds per wall-clock second
