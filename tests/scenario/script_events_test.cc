@@ -13,6 +13,7 @@
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/script_events.h"
 #include "tests/scenario/scenario_test_util.h"
+#include "tests/support/cli_runner.h"
 #include "tests/support/error_of.h"
 #include "tests/support/temp_dir.h"
 
@@ -268,6 +269,20 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
   EXPECT_NE(SummaryTable(run.result).find("[FAIL] script: lift after slip_flagged (line 8)"),
             std::string::npos)
       << SummaryTable(run.result);
+}
+
+TEST(ScriptEventRunTest, TheCliExitsOneWhenAnEventTimesOutAndNamesActionEventAndTimeout) {
+  if (graspbed::testing::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
+  const TempDir dir("script_events_test");
+  const std::string file = dir.Write(
+      "wait.yaml", testing::HeldBoxScenario(0.5, "  - {after: released, timeout_s: 0.2, action: open}\n"));
+  const graspbed::testing::CliResult result =
+      graspbed::testing::RunCli("run " + file + " --no-plots --out " + dir.Path("out"));
+  EXPECT_EQ(result.exit_code, 1) << result.out << result.err;
+  EXPECT_NE(result.out.find("[FAIL] script: open after released (line 8)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("released within 0.200 s"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("timed out: no released within 0.200 s of arming at 0.150 s"), std::string::npos)
+      << result.out;
 }
 
 }  // namespace
