@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -30,7 +31,10 @@ namespace fs = std::filesystem;
 constexpr const char* kIncompleteMarker = "INCOMPLETE";
 // Files a run writes; removed at the start so an old result never sits next to a new run.
 constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
-                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png"};
+                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png",
+                                        "taxels_fn.png",         "taxels_ft.png"};
+// Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
+constexpr double kTaxelScaleFloorN = 0.5;
 // Simulated time between progress callbacks [s].
 constexpr double kProgressPeriodS = 0.1;
 
@@ -218,7 +222,51 @@ std::vector<plot::Marker> ScriptMarkers(const RunResult& result) {
   return markers;
 }
 
-void WritePlots(const RunResult& result, const SignalLog& log, const std::string& dir) {
+// Units x time colour maps of the estimated Fn and Ft ("which units were loaded when"): one row per
+// unit in layout order, labelled with its index, row and column and beam axis; an invalid estimate
+// (dead, shorted, saturated, not yet tared) is grey.
+void WriteTaxelMaps(const RunResult& result, const SignalLog& log, const sensor::Layout& layout,
+                    const std::vector<double>& time, const std::string& title, const std::string& dir) {
+  plot::Heatmap fn;
+  fn.x_label = "time [s]";
+  fn.row_label = "unit (row, column, beam axis)";
+  fn.x = time;
+  fn.markers = ScriptMarkers(result);
+  plot::Heatmap ft = fn;
+  double fn_max = kTaxelScaleFloorN;
+  double ft_max = kTaxelScaleFloorN;
+  for (int u = 0; u < layout.unit_count(); ++u) {
+    const sensor::UnitPose& pose = layout.units[static_cast<size_t>(u)];
+    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" + std::to_string(pose.column) +
+                              (pose.orientation == sensor::BeamOrientation::kAxial ? ", ax)" : ", circ)");
+    fn.row_labels.push_back(label);
+    ft.row_labels.push_back(label);
+    std::vector<double> fn_row = log.ColumnValues("fn_est_n_" + std::to_string(u));
+    std::vector<double> ft_row = log.ColumnValues("ft_est_n_" + std::to_string(u));
+    const std::vector<double> validity = log.ColumnValues("validity_" + std::to_string(u));
+    for (size_t i = 0; i < validity.size(); ++i) {
+      if (validity[i] != static_cast<double>(sensor::UnitValidity::kValid)) {
+        fn_row[i] = ft_row[i] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      if (std::isfinite(fn_row[i])) fn_max = std::max(fn_max, fn_row[i]);
+      if (std::isfinite(ft_row[i])) ft_max = std::max(ft_max, std::abs(ft_row[i]));
+    }
+    fn.values.push_back(std::move(fn_row));
+    ft.values.push_back(std::move(ft_row));
+  }
+  fn.title = title + ": estimated Fn per unit";
+  fn.value_label = "Fn [N], estimated";
+  fn.value_max = fn_max;
+  ft.title = title + ": estimated Ft per unit (along its beam)";
+  ft.value_label = "Ft [N], estimated";
+  ft.signed_scale = true;
+  ft.value_max = ft_max;
+  plot::WritePng(fn, dir + "/taxels_fn.png");
+  plot::WritePng(ft, dir + "/taxels_ft.png");
+}
+
+void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Layout& layout, const std::string& dir) {
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
   const int units = static_cast<int>((log.numeric_column_count() - kFixedCount) / kPerUnit);
@@ -311,6 +359,8 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   z.markers = ScriptMarkers(result);
   height.panels = {z};
   plot::WritePng(height, dir + "/height.png");
+
+  WriteTaxelMaps(result, log, layout, time, title, dir);
 }
 
 nlohmann::json Optional(const std::optional<double>& value) {
@@ -516,7 +566,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
   if (!options.out_dir.empty()) {
     WriteCsvAtomic(log, options.out_dir + "/signals.csv");
-    if (options.write_plots) WritePlots(result, log, options.out_dir);
+    if (options.write_plots) WritePlots(result, log, layout, options.out_dir);
     WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
     if (result.completed) fs::remove(fs::path(options.out_dir) / kIncompleteMarker);
   }
