@@ -10,9 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "controller/grasp_controller.h"
+#include "sensor/calibration.h"
+#include "sensor/layout.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/script_events.h"
+#include "sim/scenario/script_player.h"
+#include "sim/sim_rig.h"
 #include "tests/scenario/scenario_test_util.h"
+#include "tests/support/allocation_counter.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/error_of.h"
 #include "tests/support/temp_dir.h"
@@ -269,6 +275,40 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
   EXPECT_NE(SummaryTable(run.result).find("[FAIL] script: lift after slip_flagged (line 8)"),
             std::string::npos)
       << SummaryTable(run.result);
+}
+
+TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
+  // The runner's loop without its logging: a script with fixed and event actions of every kind of
+  // wait, on a rig built as RunScenario builds it.
+  const ScenarioConfig config = LoadScenarioFromString(testing::HeldBoxScenario(0.8, R"(  - {after: grasped, timeout_s: 0.5, action: add_mass, mass_kg: 0.01, ramp_s: 0.1}
+  - {after: stable, delay_s: 0.05, timeout_s: 0.5, action: shake, frequency_hz: 5, amplitude_m: 0.001, duration_s: 0.1}
+  - {after: slip_flagged, timeout_s: 0.1, action: pull, force_n: [0, 0, -1]}
+  - {at_s: 0.6, action: open}
+  - {after: released, timeout_s: 0.15, action: idle}
+  - {at_s: 0.5, action: drop_frames, duration_s: 0.05, probability: 0.5}
+)"),
+                                                       "alloc.yaml");
+  const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
+  sim::SimRigConfig rig_config;
+  rig_config.scene = config.scene;
+  rig_config.control_rate_hz = config.controller.rate_hz;
+  sim::SimRig rig(layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, layout.unit_count()),
+                  rig_config, controller::MakeController(config.controller.name, config.controller.params));
+  ScriptPlayer player(config);
+  player.Start(rig);
+  const long before = graspbed::testing::AllocationCount();
+  while (rig.time_s() < config.duration_s - 1e-9) {
+    player.Update(rig.time_s(), rig);
+    if (rig.Step()) player.Observe(rig.time_s(), rig.loop().state(), rig.controller().telemetry().slip_detected);
+  }
+  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
+  // The waits were exercised: grasped, stable and released fired, slip_flagged timed out.
+  const std::vector<ActionTiming>& t = player.timings();
+  ASSERT_EQ(t.size(), 8u);
+  EXPECT_GE(t[2].fired_s, 0.0);
+  EXPECT_GE(t[3].fired_s, 0.0);
+  EXPECT_GE(t[4].timed_out_s, 0.0);
+  EXPECT_GE(t[7].fired_s, 0.0);
 }
 
 TEST(ScriptEventRunTest, TheCliExitsOneWhenAnEventTimesOutAndNamesActionEventAndTimeout) {
