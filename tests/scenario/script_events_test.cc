@@ -1,8 +1,9 @@
 // Script actions that wait for an event (after: grasped | stable | slip_flagged | released): the
 // schema and its load-time messages, and runs on the real simulation that show the event gates the
-// action -- a lift after `grasped` holds the object where the same lift at a fixed early time leaves it
-// on the table, each action fires at its event's tick plus its delay, and a missing event fails the
-// run naming the action, the event and the timeout.
+// action -- on a slowed motor a lift after `grasped` holds the object where the same lift at a fixed
+// time leaves it on the table, each action fires at its event's tick plus its delay, and a missing
+// event fails the run naming the action, the event and the timeout. The machinery tests run on the
+// jaw fixture (as tests/scenario does), the slowed-motor one on the prosthetic hand.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -133,41 +134,54 @@ TEST(ScriptEventSchemaTest, BadEventActionsAreRefusedAtLoadWithFileLineAndKey) {
 
 // ---- runs --------------------------------------------------------------------------------------------
 
-// A 100 g box 50 mm wide with the hand at its default pre-shape, so the digits have a long way to close:
-// the grasp comes well after the close. `lift` is the lift's script line.
-std::string WidePreShapeScenario(const std::string& lift, const std::string& extra = "") {
+// The prosthetic hand opened to a 90 mm pre-shape around a 100 g box 50 mm wide, its digit motors at
+// `speed_rad_s` (default 1.6 rad/s), the open-loop controller; `lift` is the lift's script entry.
+std::string WidePreShapeScenario(double speed_rad_s, const std::string& lift) {
   return R"(duration_s: 1.6
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
+hand: {open_gap_m: 0.09, digit_motor: {no_load_speed_rad_s: )" +
+         std::to_string(speed_rad_s) + R"(}}
 controller: {name: open_loop}
 script:
   - {at_s: 0.04, action: close}
-)" + lift + extra;
+)" + lift;
 }
 
-TEST(ScriptEventRunTest, LiftAfterGraspedHoldsTheObjectWhereTheSameLiftAtAFixedEarlyTimeDoesNot) {
+TEST(ScriptEventRunTest, LiftAfterGraspedHoldsOnASlowedMotorWhereTheSameLiftAtAFixedTimeDoesNot) {
   const TempDir dir("script_events_test");
+  constexpr double kNormalSpeedRadS = 1.6;  // hand.digit_motor default
+  constexpr double kSlowedSpeedRadS = 0.6;
+  constexpr double kFixedLiftS = 0.45;
   const std::string lift = "action: lift, height_m: 0.05, duration_s: 0.3}\n";
-  const ScenarioRun fixed = RunScenarioText(dir, "fixed", WidePreShapeScenario("  - {at_s: 0.15, " + lift));
-  const ScenarioRun gated =
-      RunScenarioText(dir, "gated", WidePreShapeScenario("  - {after: grasped, delay_s: 0.1, timeout_s: 1.0, " + lift));
+  const std::string fixed_lift = "  - {at_s: 0.45, " + lift;
+  const std::string gated_lift = "  - {after: grasped, delay_s: 0.1, timeout_s: 1.0, " + lift;
+  const ScenarioRun normal_fixed = RunScenarioText(dir, "normal_fixed", WidePreShapeScenario(kNormalSpeedRadS, fixed_lift));
+  const ScenarioRun slowed_fixed = RunScenarioText(dir, "slowed_fixed", WidePreShapeScenario(kSlowedSpeedRadS, fixed_lift));
+  const ScenarioRun slowed_gated = RunScenarioText(dir, "slowed_gated", WidePreShapeScenario(kSlowedSpeedRadS, gated_lift));
 
-  // Fixed: the wrist goes up before the digits reach the box, which stays on the table.
-  const double fixed_grasp_s = FirstGraspedTime(fixed.signals, 0.0);
-  EXPECT_TRUE(fixed_grasp_s < 0.0 || fixed_grasp_s > 0.15) << "the fixed lift must come before the grasp";
-  EXPECT_LT(fixed.signals.AtTime("object_height_m", 1.6), 0.2 * kLiftHeightM);
+  // The fixed time suits the hand's own motor: grasped before it, the box goes up.
+  const double normal_grasp_s = FirstGraspedTime(normal_fixed.signals, 0.0);
+  ASSERT_GT(normal_grasp_s, 0.0);
+  EXPECT_LT(normal_grasp_s, kFixedLiftS);
+  EXPECT_NEAR(normal_fixed.signals.AtTime("object_height_m", 1.6), kLiftHeightM, 0.2 * kLiftHeightM);
 
-  // Gated: the lift waits for the grasp and takes the box up.
-  const std::vector<ActionTiming>& timings = gated.result.script_timings;
+  // On the slowed motor the wrist goes up before the digits reach the box, which stays on the table.
+  const double slowed_grasp_s = FirstGraspedTime(slowed_fixed.signals, 0.0);
+  EXPECT_TRUE(slowed_grasp_s < 0.0 || slowed_grasp_s > kFixedLiftS) << slowed_grasp_s;
+  EXPECT_LT(slowed_fixed.signals.AtTime("object_height_m", 1.6), 0.2 * kLiftHeightM);
+
+  // After `grasped` the same lift waits for the slowed grasp and takes the box up.
+  const std::vector<ActionTiming>& timings = slowed_gated.result.script_timings;
   ASSERT_EQ(timings.size(), 2u);
-  const double grasp_s = FirstGraspedTime(gated.signals, 0.04);
-  ASSERT_GT(grasp_s, 0.15) << "the hand must be slower to grasp than the fixed lift";
+  const double grasp_s = FirstGraspedTime(slowed_gated.signals, 0.04);
+  ASSERT_GT(grasp_s, kFixedLiftS) << "the slowed hand must grasp after the fixed lift time";
   EXPECT_NEAR(timings[1].event_s, grasp_s, 1e-9);
-  EXPECT_NEAR(gated.signals.AtTime("object_height_m", 1.6), kLiftHeightM, 0.2 * kLiftHeightM);
-  EXPECT_FALSE(gated.result.metrics.dropped);
-  const ExpectationOutcome* outcome = FindOutcome(gated.result, "script: lift after grasped");
+  EXPECT_NEAR(slowed_gated.signals.AtTime("object_height_m", 1.6), kLiftHeightM, 0.2 * kLiftHeightM);
+  EXPECT_FALSE(slowed_gated.result.metrics.dropped);
+  const ExpectationOutcome* outcome = FindOutcome(slowed_gated.result, "script: lift after grasped");
   ASSERT_NE(outcome, nullptr);
   EXPECT_TRUE(outcome->passed) << outcome->note;
-  EXPECT_TRUE(gated.result.passed);
+  EXPECT_TRUE(slowed_gated.result.passed) << SummaryTable(slowed_gated.result);
 }
 
 TEST(ScriptEventRunTest, EventActionsFireAtTheirEventTickPlusTheirDelayAndChainInFileOrder) {
@@ -175,7 +189,7 @@ TEST(ScriptEventRunTest, EventActionsFireAtTheirEventTickPlusTheirDelayAndChainI
   // Held box: grasped, then (chained) stable, then a fixed open, then released.
   const ScenarioRun run = RunScenarioText(dir, "chain", R"(duration_s: 1.2
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 controller: {name: open_loop}
 script:
   - {at_s: 0.04, action: close}
@@ -221,7 +235,7 @@ TEST(ScriptEventRunTest, SlipFlaggedIsTheControllersFirstSlipFlagAfterArming) {
   // The reference controller flags the slip an 8 N pull causes; the action after it removes the pull.
   const ScenarioRun run = RunScenarioText(dir, "slip", R"(duration_s: 1.1
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7}
-hand: {open_gap_m: 0.055}
+hand: {model: jaw, open_gap_m: 0.055}
 controller: {name: grip_slip}
 script:
   - {at_s: 0.04, action: close}
