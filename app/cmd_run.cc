@@ -71,7 +71,7 @@ void RunCommand(const RunCommandOptions& options) {
   } else {
     std::cout << scenario::SummaryTable(result);
     std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
-              << (options.no_plots ? "" : ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png")
+              << (options.no_plots ? "" : ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, taxels_fn.png, taxels_ft.png")
               << ")\n";
   }
   if (!result.completed) {

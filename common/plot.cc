@@ -320,7 +320,248 @@ void Render(int width_px, int height_px, const std::string& path, DrawFn draw) {
   }
 }
 
+// ---- heat maps ------------------------------------------------------------------------------------
+
+constexpr double kHeatmapMarginLeft = 150.0;   // row labels and the rotated row title
+constexpr double kHeatmapMarginRight = 110.0;  // colour bar, its ticks and label
+constexpr double kHeatmapMarginTop = 52.0;     // title and marker labels
+constexpr double kHeatmapMarginBottom = 55.0;
+constexpr double kColourBarWidth = 18.0;
+constexpr Rgb kMissingColour{0.75, 0.75, 0.75};
+
+struct HeatmapGeometry {
+  double left, right, top, bottom;
+  double x_lo, x_hi;
+  int rows;
+  double row_height() const { return (bottom - top) / std::max(1, rows); }
+  double ToPxX(double x) const { return left + (x - x_lo) / (x_hi - x_lo) * (right - left); }
+};
+
+HeatmapGeometry GeometryOf(const Heatmap& heatmap) {
+  HeatmapGeometry g;
+  g.left = kHeatmapMarginLeft;
+  g.right = heatmap.width_px - kHeatmapMarginRight;
+  g.top = kHeatmapMarginTop;
+  g.bottom = heatmap.height_px - kHeatmapMarginBottom;
+  Range range;
+  for (double x : heatmap.x) range.Add(x);
+  range = Padded(range);
+  g.x_lo = range.lo;
+  g.x_hi = range.hi;
+  g.rows = static_cast<int>(heatmap.values.size());
+  return g;
+}
+
+void ValidateHeatmap(const Heatmap& heatmap, const std::string& path) {
+  if (heatmap.width_px <= kHeatmapMarginLeft + kHeatmapMarginRight + 10 ||
+      heatmap.height_px <= kHeatmapMarginTop + kHeatmapMarginBottom + 10) {
+    throw std::invalid_argument("plot: heat map size " + std::to_string(heatmap.width_px) + "x" +
+                                std::to_string(heatmap.height_px) + " for " + path + ": too small for its margins");
+  }
+  if (heatmap.row_labels.size() != heatmap.values.size()) {
+    throw std::invalid_argument("plot: heat map for " + path + " has " + std::to_string(heatmap.values.size()) +
+                                " rows but " + std::to_string(heatmap.row_labels.size()) + " row labels");
+  }
+  for (size_t row = 0; row < heatmap.values.size(); ++row) {
+    if (heatmap.values[row].size() != heatmap.x.size()) {
+      throw std::invalid_argument("plot: heat map row '" + heatmap.row_labels[row] + "' has " +
+                                  std::to_string(heatmap.values[row].size()) + " values but there are " +
+                                  std::to_string(heatmap.x.size()) + " x values");
+    }
+  }
+  for (size_t i = 1; i < heatmap.x.size(); ++i) {
+    if (!(heatmap.x[i] >= heatmap.x[i - 1])) {
+      throw std::invalid_argument("plot: heat map x values for " + path + " must be increasing");
+    }
+  }
+}
+
+Rgb Interpolate(const Rgb* stops, size_t count, double t) {
+  t = std::clamp(t, 0.0, 1.0) * static_cast<double>(count - 1);
+  const size_t i = std::min(static_cast<size_t>(t), count - 2);
+  const double f = t - static_cast<double>(i);
+  return {stops[i].r + f * (stops[i + 1].r - stops[i].r), stops[i].g + f * (stops[i + 1].g - stops[i].g),
+          stops[i].b + f * (stops[i + 1].b - stops[i].b)};
+}
+
+// White to dark red (ColorBrewer YlOrRd-like) for 0..1; blue-white-red (RdBu-like) for -1..1.
+Rgb ColourOf(double value, double value_max, bool signed_scale) {
+  static constexpr Rgb kSequential[] = {
+      {1.00, 1.00, 1.00}, {1.00, 0.93, 0.63}, {0.99, 0.70, 0.30}, {0.94, 0.23, 0.13}, {0.50, 0.00, 0.15}};
+  static constexpr Rgb kDiverging[] = {
+      {0.02, 0.19, 0.38}, {0.26, 0.58, 0.76}, {1.00, 1.00, 1.00}, {0.84, 0.38, 0.30}, {0.40, 0.00, 0.12}};
+  if (!std::isfinite(value)) return kMissingColour;
+  if (signed_scale) return Interpolate(kDiverging, std::size(kDiverging), 0.5 + 0.5 * value / value_max);
+  return Interpolate(kSequential, std::size(kSequential), value / value_max);
+}
+
+double ScaleOf(const Heatmap& heatmap) {
+  if (heatmap.value_max > 0.0 && std::isfinite(heatmap.value_max)) return heatmap.value_max;
+  double largest = 0.0;
+  for (const std::vector<double>& row : heatmap.values) {
+    for (double value : row) {
+      if (std::isfinite(value)) largest = std::max(largest, heatmap.signed_scale ? std::abs(value) : value);
+    }
+  }
+  return largest > 0.0 ? largest : 1.0;
+}
+
+void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
+  const HeatmapGeometry g = GeometryOf(heatmap);
+  const double scale = ScaleOf(heatmap);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+
+  // Cells: one image pixel per (row, pixel column), scaled up without smoothing.
+  const int columns = std::max(1, static_cast<int>(std::lround(g.right - g.left)));
+  const int rows = std::max(1, g.rows);
+  std::unique_ptr<cairo_surface_t, void (*)(cairo_surface_t*)> cells(
+      cairo_image_surface_create(CAIRO_FORMAT_RGB24, columns, rows), cairo_surface_destroy);
+  cairo_surface_flush(cells.get());
+  unsigned char* data = cairo_image_surface_get_data(cells.get());
+  const int stride = cairo_image_surface_get_stride(cells.get());
+  const std::vector<double>& x = heatmap.x;
+  for (int row = 0; row < g.rows; ++row) {
+    const std::vector<double>& values = heatmap.values[static_cast<size_t>(row)];
+    size_t first = 0;
+    for (int column = 0; column < columns; ++column) {
+      const double bin_hi = g.x_lo + (g.x_hi - g.x_lo) * (column + 1) / columns;
+      size_t end = first;
+      while (end < x.size() && (x[end] < bin_hi || column == columns - 1)) ++end;
+      double sum = 0.0;
+      int count = 0;
+      bool missing = false;
+      for (size_t i = first; i < end; ++i) {
+        if (std::isfinite(values[i])) {
+          sum += values[i];
+          ++count;
+        } else {
+          missing = true;
+        }
+      }
+      double value = std::numeric_limits<double>::quiet_NaN();
+      if (count > 0) {
+        value = sum / count;
+      } else if (!missing && !x.empty()) {
+        // No sample in this pixel column (sparse data): the nearest one.
+        const double centre = g.x_lo + (g.x_hi - g.x_lo) * (column + 0.5) / columns;
+        const size_t after = std::min(first, x.size() - 1);
+        const size_t before = after > 0 ? after - 1 : 0;
+        value = values[std::abs(x[before] - centre) <= std::abs(x[after] - centre) ? before : after];
+      }
+      const Rgb colour = ColourOf(value, scale, heatmap.signed_scale);
+      const auto channel = [](double c) { return static_cast<uint32_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0)); };
+      *reinterpret_cast<uint32_t*>(data + row * stride + 4 * column) =
+          (channel(colour.r) << 16) | (channel(colour.g) << 8) | channel(colour.b);
+      first = end;
+    }
+  }
+  cairo_surface_mark_dirty(cells.get());
+  cairo_save(cr);
+  cairo_translate(cr, g.left, g.top);
+  cairo_scale(cr, (g.right - g.left) / columns, (g.bottom - g.top) / rows);
+  cairo_set_source_surface(cr, cells.get(), 0, 0);
+  cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
+  cairo_rectangle(cr, 0, 0, columns, rows);
+  cairo_fill(cr);
+  cairo_restore(cr);
+
+  // Thin separators between rows, so neighbouring units stay apart.
+  cairo_set_line_width(cr, 1.0);
+  cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
+  for (int row = 1; row < g.rows; ++row) {
+    const double y = std::round(g.top + row * g.row_height()) + 0.5;
+    cairo_move_to(cr, g.left, y);
+    cairo_line_to(cr, g.right, y);
+    cairo_stroke(cr);
+  }
+
+  // Frame, x ticks, row labels (every k-th when rows are thin).
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, g.left, g.top, g.right - g.left, g.bottom - g.top);
+  cairo_stroke(cr);
+  cairo_set_font_size(cr, kFontSize);
+  const std::vector<double> x_ticks = NiceTicks(g.x_lo, g.x_hi);
+  const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0;
+  for (double tick : x_ticks) {
+    const double px = g.ToPxX(tick);
+    cairo_move_to(cr, px, g.bottom);
+    cairo_line_to(cr, px, g.bottom + 5);
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, x_step), px, g.bottom + 8, 0.5, 0.0);
+  }
+  ShowText(cr, heatmap.x_label, 0.5 * (g.left + g.right), heatmap.height_px - 6, 0.5, 1.0);
+  const double label_size = std::clamp(g.row_height() * 0.8, 7.0, kFontSize);
+  cairo_set_font_size(cr, label_size);
+  const int label_every = std::max(1, static_cast<int>(std::ceil((label_size + 2.0) / g.row_height())));
+  for (int row = 0; row < g.rows; row += label_every) {
+    ShowText(cr, heatmap.row_labels[static_cast<size_t>(row)], g.left - 6, g.top + (row + 0.5) * g.row_height(),
+             1.0, 0.5);
+  }
+  cairo_set_font_size(cr, kFontSize);
+  cairo_save(cr);
+  cairo_translate(cr, 14, 0.5 * (g.top + g.bottom));
+  cairo_rotate(cr, -M_PI / 2);
+  ShowText(cr, heatmap.row_label, 0.0, 0.0, 0.5, 0.5);
+  cairo_restore(cr);
+
+  // Markers: dashed lines over the cells, labels above them.
+  for (const Marker& marker : heatmap.markers) {
+    if (!(marker.x >= g.x_lo && marker.x <= g.x_hi)) continue;
+    const double px = g.ToPxX(marker.x);
+    const double dash[] = {4.0, 3.0};
+    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+    cairo_set_dash(cr, dash, 2, 0);
+    cairo_move_to(cr, px, g.top);
+    cairo_line_to(cr, px, g.bottom);
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0);
+    if (!marker.label.empty()) ShowText(cr, marker.label, px, g.top - 3, 0.0, 1.0);
+  }
+
+  // Colour bar with its scale.
+  const double bar_left = g.right + 16;
+  const double value_lo = heatmap.signed_scale ? -scale : 0.0;
+  const auto bar_y = [&](double value) { return g.bottom - (value - value_lo) / (scale - value_lo) * (g.bottom - g.top); };
+  for (int py = static_cast<int>(g.top); py < static_cast<int>(g.bottom); ++py) {
+    const double value = value_lo + (g.bottom - (py + 0.5)) / (g.bottom - g.top) * (scale - value_lo);
+    const Rgb colour = ColourOf(value, scale, heatmap.signed_scale);
+    cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
+    cairo_rectangle(cr, bar_left, py, kColourBarWidth, 1.0);
+    cairo_fill(cr);
+  }
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, bar_left, g.top, kColourBarWidth, g.bottom - g.top);
+  cairo_stroke(cr);
+  const std::vector<double> value_ticks = NiceTicks(value_lo, scale, 5);
+  const double value_step = value_ticks.size() > 1 ? value_ticks[1] - value_ticks[0] : 1.0;
+  for (double tick : value_ticks) {
+    const double py = bar_y(tick);
+    cairo_move_to(cr, bar_left + kColourBarWidth, py);
+    cairo_line_to(cr, bar_left + kColourBarWidth + 4, py);
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, value_step), bar_left + kColourBarWidth + 6, py, 0.0, 0.5);
+  }
+  cairo_save(cr);
+  cairo_translate(cr, heatmap.width_px - 12, 0.5 * (g.top + g.bottom));
+  cairo_rotate(cr, -M_PI / 2);
+  ShowText(cr, heatmap.value_label, 0.0, 0.0, 0.5, 0.5);
+  cairo_restore(cr);
+
+  cairo_set_font_size(cr, kTitleFontSize);
+  ShowText(cr, heatmap.title, 0.5 * heatmap.width_px, 8.0, 0.5, 0.0);
+}
+
 }  // namespace
+
+void WritePng(const Heatmap& heatmap, const std::string& path) {
+  ValidateHeatmap(heatmap, path);
+  Render(heatmap.width_px, heatmap.height_px, path, [&](cairo_t* cr) { DrawHeatmap(cr, heatmap); });
+}
+
+std::pair<double, double> HeatmapCellCenterPx(const Heatmap& heatmap, int row, double x) {
+  const HeatmapGeometry g = GeometryOf(heatmap);
+  return {g.ToPxX(x), g.top + (row + 0.5) * g.row_height()};
+}
 
 std::vector<double> NiceTicks(double lo, double hi, int target_count) {
   if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};

@@ -1,9 +1,11 @@
 #pragma once
 /// Small PNG line-chart writer (cairo): named series, axes with ticks and labels, a title, a legend,
-/// optional vertical markers and shaded x-bands; several charts can share one image as panels.
+/// optional vertical markers and shaded x-bands; several charts can share one image as panels. Also
+/// heat maps (rows x time colour maps with a colour bar).
 /// Files are written atomically (temporary file + rename), so a reader never sees half a PNG.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace graspbed::plot {
@@ -49,6 +51,35 @@ struct Figure {
   int panel_width_px = 800;   ///< size of one panel [px]
   int panel_height_px = 500;  ///< size of one panel [px]
 };
+
+/// A rows x x colour map ("heat map"): one row per channel (e.g. a sensing unit, top to bottom), the
+/// colour of a cell the channel's value there, a colour bar with its scale, optional markers.
+struct Heatmap {
+  std::string title;
+  std::string x_label;      ///< with its unit, e.g. "time [s]"
+  std::string row_label;    ///< what the rows are, e.g. "unit (row, column)"
+  std::string value_label;  ///< colour bar label with its unit, e.g. "Fn [N]"
+  std::vector<std::string> row_labels;      ///< one per row, top to bottom
+  std::vector<double> x;                    ///< sample abscissae shared by all rows, increasing
+  std::vector<std::vector<double>> values;  ///< values[row][sample]; non-finite cells are grey
+  /// false: sequential scale from white at 0 to dark red at value_max (values below 0 as 0);
+  /// true: signed scale, blue at -value_max, white at 0, red at +value_max.
+  bool signed_scale = false;
+  double value_max = 0.0;  ///< end of the colour scale; <= 0: the largest |value| in the data
+  std::vector<Marker> markers;
+  int width_px = 1000;  ///< image size [px]
+  int height_px = 600;
+};
+
+/// Writes `heatmap` as a PNG at `path` (temp file + rename). Each pixel column shows the mean of the
+/// samples that fall in it (the nearest sample when none does). Throws std::invalid_argument for a
+/// row count that does not match the labels, a row whose length differs from x, decreasing x or a
+/// non-positive size; std::runtime_error when the file cannot be written (naming the path).
+void WritePng(const Heatmap& heatmap, const std::string& path);
+
+/// Centre of the cell of row `row` at abscissa `x` in the image WritePng(heatmap) draws [px]
+/// (first: column from the left, second: row from the top). For tests that read the image back.
+std::pair<double, double> HeatmapCellCenterPx(const Heatmap& heatmap, int row, double x);
 
 /// Writes `chart` as a width x height PNG at `path` (temp file + rename). Throws std::invalid_argument
 /// for mismatched series lengths or a non-positive size, std::runtime_error when the file cannot be

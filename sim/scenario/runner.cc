@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -31,7 +32,10 @@ namespace fs = std::filesystem;
 constexpr const char* kIncompleteMarker = "INCOMPLETE";
 // Files a run writes; removed at the start so an old result never sits next to a new run.
 constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
-                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png"};
+                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png",
+                                        "taxels_fn.png",         "taxels_ft.png"};
+// Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
+constexpr double kTaxelScaleFloorN = 0.5;
 // Simulated time between progress callbacks [s].
 constexpr double kProgressPeriodS = 0.1;
 
@@ -209,13 +213,61 @@ plot::Series Line(const SignalLog& log, const std::vector<double>& time, const s
   return series;
 }
 
-std::vector<plot::Marker> ScriptMarkers(const ScenarioConfig& config) {
+// One marker per action that fired, at the time it fired (an event action's time is the run's).
+std::vector<plot::Marker> ScriptMarkers(const RunResult& result) {
   std::vector<plot::Marker> markers;
-  for (const Action& action : config.script) markers.push_back({action.at_s, ActionName(action.kind)});
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
+    if (fired_s >= 0.0) markers.push_back({fired_s, ActionName(result.config.script[i].kind)});
+  }
   return markers;
 }
 
-void WritePlots(const RunResult& result, const SignalLog& log, const std::string& dir) {
+// Units x time colour maps of the estimated Fn and Ft ("which units were loaded when"): one row per
+// unit in layout order, labelled with its index, row and column and beam axis; an invalid estimate
+// (dead, shorted, saturated, not yet tared) is grey.
+void WriteTaxelMaps(const RunResult& result, const SignalLog& log, const sensor::Layout& layout,
+                    const std::vector<double>& time, const std::string& title, const std::string& dir) {
+  plot::Heatmap fn;
+  fn.x_label = "time [s]";
+  fn.row_label = "unit (row, column, beam axis)";
+  fn.x = time;
+  fn.markers = ScriptMarkers(result);
+  plot::Heatmap ft = fn;
+  double fn_max = kTaxelScaleFloorN;
+  double ft_max = kTaxelScaleFloorN;
+  for (int u = 0; u < layout.unit_count(); ++u) {
+    const sensor::UnitPose& pose = layout.units[static_cast<size_t>(u)];
+    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" + std::to_string(pose.column) +
+                              (pose.orientation == sensor::BeamOrientation::kAxial ? ", ax)" : ", circ)");
+    fn.row_labels.push_back(label);
+    ft.row_labels.push_back(label);
+    std::vector<double> fn_row = log.ColumnValues("fn_est_n_" + std::to_string(u));
+    std::vector<double> ft_row = log.ColumnValues("ft_est_n_" + std::to_string(u));
+    const std::vector<double> validity = log.ColumnValues("validity_" + std::to_string(u));
+    for (size_t i = 0; i < validity.size(); ++i) {
+      if (validity[i] != static_cast<double>(sensor::UnitValidity::kValid)) {
+        fn_row[i] = ft_row[i] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      if (std::isfinite(fn_row[i])) fn_max = std::max(fn_max, fn_row[i]);
+      if (std::isfinite(ft_row[i])) ft_max = std::max(ft_max, std::abs(ft_row[i]));
+    }
+    fn.values.push_back(std::move(fn_row));
+    ft.values.push_back(std::move(ft_row));
+  }
+  fn.title = title + ": estimated Fn per unit";
+  fn.value_label = "Fn [N], estimated";
+  fn.value_max = fn_max;
+  ft.title = title + ": estimated Ft per unit (along its beam)";
+  ft.value_label = "Ft [N], estimated";
+  ft.signed_scale = true;
+  ft.value_max = ft_max;
+  plot::WritePng(fn, dir + "/taxels_fn.png");
+  plot::WritePng(ft, dir + "/taxels_ft.png");
+}
+
+void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Layout& layout, const std::string& dir) {
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
   const int units = static_cast<int>((log.numeric_column_count() - kFixedCount) / kPerUnit);
@@ -233,7 +285,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
   totals.series.push_back(Line(log, time, "true_sensed_fn_n", "true, on the mesas", 1.0, true));
   totals.series.push_back(Line(log, time, "true_squeeze_n", "true squeeze on the object", 1.0, true));
-  totals.markers = ScriptMarkers(result.config);
+  totals.markers = ScriptMarkers(result);
   totals.include_zero_y = true;
   forces.panels = {per_unit, totals};
   plot::WritePng(forces, dir + "/forces.png");
@@ -269,7 +321,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   grip.title = title + ": grip";
   plot::Chart effort = MakeChart("Grip motor command", "time [s]", "effort [-]");
   effort.series = {Line(log, time, "grip_effort", "effort")};
-  effort.markers = ScriptMarkers(result.config);
+  effort.markers = ScriptMarkers(result);
   effort.include_zero_y = true;
   plot::Chart force = MakeChart("Grip force", "time [s]", "force [N]");
   force.series = {Line(log, time, "grip_target_n", "controller target"),
@@ -305,9 +357,11 @@ void WritePlots(const RunResult& result, const SignalLog& log, const std::string
   plot::Chart z = MakeChart("Object and wrist height", "time [s]", "height [mm]");
   z.series = {Line(log, time, "object_height_m", "object above table", 1e3),
               Line(log, time, "wrist_z_m", "wrist z", 1e3, true)};
-  z.markers = ScriptMarkers(result.config);
+  z.markers = ScriptMarkers(result);
   height.panels = {z};
   plot::WritePng(height, dir + "/height.png");
+
+  WriteTaxelMaps(result, log, layout, time, title, dir);
 }
 
 nlohmann::json Optional(const std::optional<double>& value) {
@@ -435,6 +489,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     sample.true_loads = true_loads;
     sample.controller_slip = telemetry.slip_detected;
     tracker.Update(sample);
+    player.Observe(t, state, telemetry.slip_detected);
 
     const char** text = nullptr;
     double* row = log.AppendRow(&text);
@@ -505,6 +560,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.metrics.physics_fault_cause = fault.occurred ? fault.cause_text() : "";
   result.metrics.physics_fault_time_s = fault.time_s;
   result.outcomes = EvaluateExpectations(config.expectations, result.metrics);
+  // An event action that never ran fails the run like an expectation.
+  for (ExpectationOutcome& outcome : player.EventOutcomes(sim_s)) result.outcomes.push_back(std::move(outcome));
+  result.script_timings = player.timings();
   result.passed = result.completed && std::all_of(result.outcomes.begin(), result.outcomes.end(),
                                                   [](const ExpectationOutcome& o) { return o.passed; });
   result.real_time_factor = wall_s > 0.0 ? sim_s / wall_s : 0.0;
@@ -517,7 +575,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
   if (!options.out_dir.empty()) {
     WriteCsvAtomic(log, options.out_dir + "/signals.csv");
-    if (options.write_plots) WritePlots(result, log, options.out_dir);
+    if (options.write_plots) WritePlots(result, log, layout, options.out_dir);
     WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
     if (result.completed) fs::remove(fs::path(options.out_dir) / kIncompleteMarker);
   }
@@ -569,6 +627,26 @@ nlohmann::json SummaryJson(const RunResult& result) {
                       {"detected", e.detected},
                       {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
   }
+  // When each script action fired; for event actions also when it was armed and saw its event.
+  const auto time_or_null = [](double time_s) { return time_s >= 0.0 ? nlohmann::json(time_s) : nlohmann::json(nullptr); };
+  nlohmann::json script = nlohmann::json::array();
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const Action& action = result.config.script[i];
+    const ActionTiming timing = i < result.script_timings.size() ? result.script_timings[i] : ActionTiming{};
+    nlohmann::json entry = {{"action", ActionName(action.kind)}, {"line", action.line}};
+    if (action.after == ScriptEvent::kNone) {
+      entry["at_s"] = action.at_s;
+    } else {
+      entry["after"] = EventName(action.after);
+      entry["delay_s"] = action.delay_s;
+      entry["timeout_s"] = action.timeout_s;
+      entry["armed_s"] = time_or_null(timing.armed_s);
+      entry["event_s"] = time_or_null(timing.event_s);
+      entry["timed_out"] = timing.timed_out_s >= 0.0;
+    }
+    entry["fired_s"] = time_or_null(timing.fired_s);
+    script.push_back(entry);
+  }
   return {
       {"scenario", result.config.name},
       {"source_file", result.config.source_file},
@@ -579,6 +657,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"metrics", metrics},
       {"expectations", expectations},
       {"slip_events", events},
+      {"script", script},
       {"physics_fault",
        {{"occurred", m.physics_fault}, {"cause", m.physics_fault_cause}, {"time_s", m.physics_fault_time_s}}},
       {"counters",

@@ -17,6 +17,7 @@
 
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
+#include "sim/scenario/script_player.h"
 
 namespace graspbed::sim {
 class SimRig;
@@ -42,7 +43,8 @@ struct RunOptions {
 struct RunResult {
   ScenarioConfig config;
   Metrics metrics;
-  std::vector<ExpectationOutcome> outcomes;
+  std::vector<ExpectationOutcome> outcomes;  ///< expectations, then one per event action of the script
+  std::vector<ActionTiming> script_timings;  ///< per script action (config.script order)
   /// Ran to its end: duration_s, or a physics fault, which ends a run at once (metrics say which);
   /// false: stopped early by `RunOptions::stop`.
   bool completed = false;

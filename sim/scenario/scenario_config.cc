@@ -41,6 +41,25 @@ constexpr ActionEntry kActions[] = {
     {ActionKind::kDropFrames, "drop_frames"}, {ActionKind::kAddLatency, "add_latency"},
 };
 
+struct EventEntry {
+  ScriptEvent event;
+  const char* name;
+};
+
+constexpr EventEntry kEvents[] = {
+    {ScriptEvent::kGrasped, "grasped"},
+    {ScriptEvent::kStable, "stable"},
+    {ScriptEvent::kSlipFlagged, "slip_flagged"},
+    {ScriptEvent::kReleased, "released"},
+};
+
+ScriptEvent EventFromName(const std::string& name) {
+  for (const EventEntry& entry : kEvents) {
+    if (name == entry.name) return entry.event;
+  }
+  throw std::logic_error("unvalidated event name " + name);
+}
+
 std::string FileStem(const std::string& path) {
   std::filesystem::path p(path);
   return p.stem().string();
@@ -78,7 +97,25 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
   action.line = map.line();
   const std::string name = map.RequireString("action", ActionNames());
   action.kind = ActionFromName(name);
-  action.at_s = map.RequireNumber("at_s", NumberRule::Between(0.0, config.duration_s));
+  // When: a fixed time or an event (docs/scenarios.md, "Waiting for the grasp").
+  if (map.Has("at_s") && map.Has("after")) {
+    map.Fail("after", "give either at_s (a fixed time) or after (an event), not both");
+  }
+  if (map.Has("after")) {
+    action.after = EventFromName(map.RequireString("after", EventNames()));
+    action.delay_s = map.GetNumber("delay_s", 0.0, NumberRule::Between(0.0, config.duration_s));
+    if (!map.Has("timeout_s")) {
+      map.Fail("timeout_s", "missing required key: an action after an event needs timeout_s > 0, the longest "
+                            "wait for the event [s]");
+    }
+    action.timeout_s = map.RequireNumber("timeout_s", NumberRule::Positive());
+  } else {
+    for (const char* key : {"delay_s", "timeout_s"}) {
+      if (map.Has(key)) map.Fail(key, "only with after: <event>; a fixed-time action fires at at_s");
+    }
+    if (!map.Has("at_s")) map.Fail("at_s", "missing required key: give at_s [s] or after: <event>");
+    action.at_s = map.RequireNumber("at_s", NumberRule::Between(0.0, config.duration_s));
+  }
   const auto unit_index = [&] { return map.RequireInt("unit", 0, unit_count - 1); };
   switch (action.kind) {
     case ActionKind::kClose:
@@ -390,11 +427,16 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
     YAML::Node empty(YAML::NodeType::Map);
     config.controller = LoadControllerOptions(YamlMap(empty, file, "controller"));
   }
+  // Sorted by time; an event action takes the sort time of the action before it in the file, so
+  // it stays right behind that action (equal keys keep file order).
+  std::vector<std::pair<double, Action>> keyed;
   for (const YamlMap& action_map : map.GetMapList("script")) {
-    config.script.push_back(LoadAction(action_map, config, unit_count));
+    const Action action = LoadAction(action_map, config, unit_count);
+    const double key = action.after != ScriptEvent::kNone ? (keyed.empty() ? 0.0 : keyed.back().first) : action.at_s;
+    keyed.emplace_back(key, action);
   }
-  std::stable_sort(config.script.begin(), config.script.end(),
-                   [](const Action& a, const Action& b) { return a.at_s < b.at_s; });
+  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [key, action] : keyed) config.script.push_back(action);
   if (auto metrics_map = map.GetMap("metrics")) config.metrics = LoadMetricsConfig(*metrics_map);
   if (auto expectations_map = map.GetMap("expectations")) {
     config.expectations = LoadExpectations(*expectations_map, config);
@@ -639,7 +681,13 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
 
 void EmitAction(YAML::Emitter& out, const Action& a) {
   out << YAML::BeginMap;
-  EmitNumber(out, "at_s", a.at_s);
+  if (a.after != ScriptEvent::kNone) {
+    out << YAML::Key << "after" << YAML::Value << EventName(a.after);
+    EmitNumber(out, "delay_s", a.delay_s);
+    EmitNumber(out, "timeout_s", a.timeout_s);
+  } else {
+    EmitNumber(out, "at_s", a.at_s);
+  }
   out << YAML::Key << "action" << YAML::Value << ActionName(a.kind);
   const auto profile = [&] { out << YAML::Key << "profile" << YAML::Value << ToString(a.profile); };
   switch (a.kind) {
@@ -719,6 +767,19 @@ std::vector<std::string> ActionNames() {
   return names;
 }
 
+const char* EventName(ScriptEvent event) {
+  for (const EventEntry& entry : kEvents) {
+    if (entry.event == event) return entry.name;
+  }
+  return "";
+}
+
+std::vector<std::string> EventNames() {
+  std::vector<std::string> names;
+  for (const EventEntry& entry : kEvents) names.emplace_back(entry.name);
+  return names;
+}
+
 const char* ToString(Profile profile) { return profile == Profile::kLinear ? "linear" : "minimum_jerk"; }
 
 bool Expectations::empty() const {
@@ -740,6 +801,18 @@ void ScenarioConfig::Validate() const {
                                 FormatDouble(1.0 / sensor.sample_rate_hz) + " s)");
   }
   for (const Action& action : script) {
+    if (action.after != ScriptEvent::kNone) {
+      // Built in code: the loader's checks again.
+      if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s)) {
+        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' delay_s = " +
+                                    FormatDouble(action.delay_s) + ": must be >= 0");
+      }
+      if (!(action.timeout_s > 0.0) || !std::isfinite(action.timeout_s)) {
+        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' timeout_s = " +
+                                    FormatDouble(action.timeout_s) + ": must be > 0");
+      }
+      continue;
+    }
     if (action.at_s > duration_s) {
       throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' at_s = " +
                                   FormatDouble(action.at_s) + ": after duration_s");

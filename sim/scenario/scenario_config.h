@@ -50,6 +50,30 @@ const char* ActionName(ActionKind kind);
 /// Every action name, in declaration order (for error messages and docs).
 std::vector<std::string> ActionNames();
 
+/// What a script action can wait for instead of a fixed time (`after:` in files, names:
+/// EventName()). Each is decided once per control tick from what the run knows without ground truth:
+/// the script's own intent, the sensor estimate (TactileState) and the controller's slip flag. The
+/// thresholds are the metrics' (MetricsConfig) applied to the estimate; docs/scenarios.md, "Waiting
+/// for the grasp".
+enum class ScriptEvent {
+  kNone,         ///< no event: the action fires at its at_s
+  kGrasped,      ///< intent close, and the estimate carries >= grasp_force_n on >= 1 contact unit
+                 ///< for kEventConfirmS without a break (fresh data only)
+  kStable,       ///< grasped for stable_window_s, the estimated total Fn within +-stable_force_band
+                 ///< of its mean over that window, and no controller slip flag in it
+  kSlipFlagged,  ///< the controller raises its slip flag at this tick
+  kReleased,     ///< intent open, and the estimate shows no contact unit and < grasp_force_n in
+                 ///< total for kEventConfirmS without a break (fresh data, >= 1 valid unit)
+};
+
+/// How long the grasped/released condition must hold without a break before the event counts [s].
+inline constexpr double kEventConfirmS = 0.02;
+
+/// Name of an event in scenario files ("grasped", "stable", "slip_flagged", "released"; "" for kNone).
+const char* EventName(ScriptEvent event);
+/// Every event name (kNone excluded), in declaration order.
+std::vector<std::string> EventNames();
+
 /// Velocity profile of wrist moves and ramps.
 enum class Profile {
   kMinimumJerk,  ///< 10 s^3 - 15 s^4 + 6 s^5: zero velocity and acceleration at both ends
@@ -57,12 +81,21 @@ enum class Profile {
 };
 const char* ToString(Profile profile);
 
-/// One timed script action. Which fields matter depends on the kind (docs/scenarios.md); the rest
-/// keep their defaults and are not written to config.yaml.
+/// One script action, at a fixed time or after an event. Which fields matter depends on the kind
+/// (docs/scenarios.md); the rest keep their defaults and are not written to config.yaml.
+///
+/// Ordering: fixed-time actions fire at at_s whatever happens. An action with `after` set is armed
+/// when the action before it in the script has fired (at time 0 when it is the first); it fires
+/// delay_s after the first control tick at or after arming at which its event holds. No such tick
+/// within timeout_s of arming (or before the run ends) fails the run, and the action, and every
+/// event action after it in the script that waits on it, does not run.
 struct Action {
-  double at_s = 0.0;  ///< start time [s], simulation clock
+  double at_s = 0.0;  ///< start time [s], simulation clock; unused (0) when `after` is set
   ActionKind kind = ActionKind::kClose;
   int line = 0;       ///< line in the scenario file (for messages), 0 when built in code
+  ScriptEvent after = ScriptEvent::kNone;  ///< the event this action waits for (kNone: at at_s)
+  double delay_s = 0.0;    ///< after an event: fire this long after it [s] (>= 0)
+  double timeout_s = 0.0;  ///< after an event: longest wait for it from arming [s] (> 0)
 
   /// move: target position [m], world frame (absolute) or offset (relative = true).
   /// pull: force [N], world frame. shake: axis (normalised on load).
@@ -178,7 +211,9 @@ struct ScenarioConfig {
   sim::SceneConfig scene;
   SensorOptions sensor;
   ControllerOptions controller;
-  std::vector<Action> script;  ///< sorted by at_s (stable)
+  /// Fixed-time actions sorted by at_s (stable); an event action right after the action it follows
+  /// in the file (so "the action before it" is the same in the file and here).
+  std::vector<Action> script;
   Expectations expectations;
   MetricsConfig metrics;
 

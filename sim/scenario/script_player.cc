@@ -2,13 +2,30 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <string>
 
 namespace graspbed::scenario {
 namespace {
 
 // Distinct stream for frame drops so that adding a drop action does not shift the sensor noise.
 constexpr uint64_t kDropStreamSalt = 0x5ce7a110d20f5ull;
+// Times are sums of physics steps; this absorbs their rounding when comparing them [s].
+constexpr double kTickEpsS = 1e-9;
+
+std::string FormatSeconds(double value_s) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3f s", value_s);
+  return text;
+}
+
+// "lift after grasped (line 12)": how a message names an event action.
+std::string EventActionName(const Action& action) {
+  std::string name = std::string(ActionName(action.kind)) + " after " + EventName(action.after);
+  if (action.line > 0) name += " (line " + std::to_string(action.line) + ")";
+  return name;
+}
 
 }  // namespace
 
@@ -28,7 +45,16 @@ ScriptPlayer::ScriptPlayer(const ScenarioConfig& config)
     : script_(config.script),
       sensor_(config.sensor),
       grip_ceiling_n_(config.controller.grip_ceiling_n),
-      drop_rng_(config.seed ^ kDropStreamSalt) {}
+      timings_(config.script.size()),
+      monitor_(config.metrics, config.controller.rate_hz),
+      drop_rng_(config.seed ^ kDropStreamSalt) {
+  for (size_t i = 0; i < script_.size(); ++i) {
+    (script_[i].after == ScriptEvent::kNone ? fixed_actions_ : event_actions_).push_back(i);
+  }
+  // ScenarioConfig keeps them so; a script built in code may not.
+  std::stable_sort(fixed_actions_.begin(), fixed_actions_.end(),
+                   [&](size_t a, size_t b) { return script_[a].at_s < script_[b].at_s; });
+}
 
 void ScriptPlayer::Start(sim::SimRig& rig) {
   base_target_ = rig.simulation().wrist_target();
@@ -120,11 +146,47 @@ void ScriptPlayer::Fire(const Action& action, double time_s, sim::SimRig& rig) {
   }
 }
 
-void ScriptPlayer::Update(double time_s, sim::SimRig& rig) {
-  while (next_ < script_.size() && script_[next_].at_s <= time_s) {
-    Fire(script_[next_], time_s, rig);
-    ++next_;
+void ScriptPlayer::Observe(double time_s, const sensor::TactileState& state, bool slip_flag) {
+  tick_events_ = monitor_.Update(time_s, intent_, state, slip_flag);
+  tick_time_s_ = time_s;
+}
+
+void ScriptPlayer::UpdateEventActions(double time_s, sim::SimRig& rig) {
+  for (const size_t i : event_actions_) {
+    const Action& action = script_[i];
+    ActionTiming& timing = timings_[i];
+    if (timing.fired_s >= 0.0 || timing.timed_out_s >= 0.0) continue;
+    if (timing.armed_s < 0.0) {
+      const double before_fired_s = i == 0 ? 0.0 : timings_[i - 1].fired_s;
+      if (before_fired_s < 0.0) continue;
+      timing.armed_s = before_fired_s;
+    }
+    if (timing.event_s < 0.0) {
+      // The latest tick counts when it is not older than the arming (a chain fires in one call).
+      if (tick_time_s_ >= timing.armed_s - kTickEpsS && (tick_events_ & EventBit(action.after)) != 0) {
+        timing.event_s = tick_time_s_;
+      } else {
+        if (time_s >= timing.armed_s + action.timeout_s - kTickEpsS) timing.timed_out_s = time_s;
+        continue;
+      }
+    }
+    if (time_s >= timing.event_s + action.delay_s - kTickEpsS) {
+      Fire(action, time_s, rig);
+      timing.fired_s = time_s;
+      ++fired_count_;
+    }
   }
+}
+
+void ScriptPlayer::Update(double time_s, sim::SimRig& rig) {
+  while (next_fixed_ < fixed_actions_.size() && script_[fixed_actions_[next_fixed_]].at_s <= time_s) {
+    const size_t i = fixed_actions_[next_fixed_];
+    Fire(script_[i], time_s, rig);
+    timings_[i].fired_s = time_s;
+    ++fired_count_;
+    ++next_fixed_;
+  }
+  if (!event_actions_.empty()) UpdateEventActions(time_s, rig);
 
   // Wrist: trajectory plus shake.
   if (moving_) {
@@ -182,6 +244,42 @@ void ScriptPlayer::Update(double time_s, sim::SimRig& rig) {
       ++next_drop_sample_;
     }
   }
+}
+
+std::vector<ExpectationOutcome> ScriptPlayer::EventOutcomes(double end_s) const {
+  std::vector<ExpectationOutcome> outcomes;
+  for (const size_t i : event_actions_) {
+    const Action& action = script_[i];
+    const ActionTiming& timing = timings_[i];
+    ExpectationOutcome outcome;
+    outcome.name = "script: " + EventActionName(action);
+    outcome.limit = std::string(EventName(action.after)) + " within " + FormatSeconds(action.timeout_s);
+    if (timing.event_s >= 0.0) outcome.value = timing.event_s - timing.armed_s;
+    if (timing.fired_s >= 0.0) {
+      outcome.passed = true;
+      outcome.value_text = "after " + FormatSeconds(timing.event_s - timing.armed_s);
+      outcome.note = "armed at " + FormatSeconds(timing.armed_s) + ", event at " + FormatSeconds(timing.event_s) +
+                     ", fired at " + FormatSeconds(timing.fired_s);
+    } else if (timing.timed_out_s >= 0.0) {
+      outcome.value_text = "none by " + FormatSeconds(timing.timed_out_s);
+      outcome.note = "timed out: no " + std::string(EventName(action.after)) + " within " +
+                     FormatSeconds(action.timeout_s) + " of arming at " + FormatSeconds(timing.armed_s) +
+                     "; the action did not run";
+    } else if (timing.armed_s < 0.0) {
+      outcome.value_text = "not armed";
+      outcome.note = "the action before it in the script never ran, so this one did not either";
+    } else if (timing.event_s < 0.0) {
+      outcome.value_text = "none by " + FormatSeconds(end_s);
+      outcome.note = "the run ended " + FormatSeconds(end_s - timing.armed_s) + " after arming at " +
+                     FormatSeconds(timing.armed_s) + ", before the event; the action did not run";
+    } else {
+      outcome.value_text = "after " + FormatSeconds(timing.event_s - timing.armed_s);
+      outcome.note = "event at " + FormatSeconds(timing.event_s) + ", but the run ended before its delay of " +
+                     FormatSeconds(action.delay_s) + " passed; the action did not run";
+    }
+    outcomes.push_back(outcome);
+  }
+  return outcomes;
 }
 
 }  // namespace graspbed::scenario

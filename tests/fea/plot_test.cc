@@ -4,6 +4,7 @@
 #include <cairo.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -126,6 +127,81 @@ TEST(NonFiniteTest, NaNPointsBreakTheLineWithoutFailing) {
   const fs::path path = dir.path() / "graspbed_plot_nan_test.png";
   EXPECT_NO_THROW(WritePng(chart, path.string(), 200, 150));
   fs::remove(path);
+}
+
+// {r, g, b} 0..255 of pixel (x, y) of the PNG at `path`.
+std::array<int, 3> PixelAt(const std::string& path, double x, double y) {
+  cairo_surface_t* image = cairo_image_surface_create_from_png(path.c_str());
+  EXPECT_EQ(cairo_surface_status(image), CAIRO_STATUS_SUCCESS) << path;
+  const uint32_t pixel = *reinterpret_cast<const uint32_t*>(cairo_image_surface_get_data(image) +
+                                                             static_cast<int>(y) * cairo_image_surface_get_stride(image) +
+                                                             4 * static_cast<int>(x));
+  cairo_surface_destroy(image);
+  return {static_cast<int>((pixel >> 16) & 0xff), static_cast<int>((pixel >> 8) & 0xff), static_cast<int>(pixel & 0xff)};
+}
+
+// Three rows over 0..10: zero, a step from 0 to 2 at x = 5, and -2 / NaN halves.
+Heatmap StepHeatmap(bool signed_scale) {
+  Heatmap heatmap;
+  heatmap.title = "step";
+  heatmap.x_label = "time [s]";
+  heatmap.row_label = "unit";
+  heatmap.value_label = "F [N]";
+  heatmap.row_labels = {"0", "1", "2"};
+  heatmap.values.resize(3);
+  for (int i = 0; i <= 1000; ++i) {
+    const double x = i * 0.01;
+    heatmap.x.push_back(x);
+    heatmap.values[0].push_back(0.0);
+    heatmap.values[1].push_back(x < 5.0 ? 0.0 : 2.0);
+    heatmap.values[2].push_back(x < 5.0 ? -2.0 : NAN);
+  }
+  heatmap.signed_scale = signed_scale;
+  heatmap.width_px = 700;
+  heatmap.height_px = 300;
+  return heatmap;
+}
+
+TEST_F(PlotTest, HeatmapColoursEachCellByItsValueOnTheChosenScale) {
+  const std::string sequential = (dir_ / "sequential.png").string();
+  const std::string diverging = (dir_ / "diverging.png").string();
+  const Heatmap heatmap = StepHeatmap(false);
+  WritePng(heatmap, sequential);
+  WritePng(StepHeatmap(true), diverging);
+  int width = 0, height = 0;
+  CountFirstSeriesPixels(sequential, &width, &height);
+  EXPECT_EQ(width, 700);
+  EXPECT_EQ(height, 300);
+  const auto at = [&](const std::string& path, int row, double x) {
+    const auto [px, py] = HeatmapCellCenterPx(heatmap, row, x);
+    return PixelAt(path, px, py);
+  };
+  const std::array<int, 3> white{255, 255, 255};
+  const std::array<int, 3> grey{191, 191, 191};
+  // Sequential: 0 white, the maximum dark red, negatives as 0, NaN grey.
+  EXPECT_EQ(at(sequential, 0, 7.0), white);
+  EXPECT_EQ(at(sequential, 1, 2.0), white);
+  const std::array<int, 3> loaded = at(sequential, 1, 7.0);
+  EXPECT_GT(loaded[0], 100);
+  EXPECT_LT(loaded[1], 30);
+  EXPECT_EQ(at(sequential, 2, 2.0), white);
+  EXPECT_EQ(at(sequential, 2, 7.0), grey);
+  // Signed: 0 white, + red, - blue.
+  EXPECT_EQ(at(diverging, 0, 7.0), white);
+  const std::array<int, 3> positive = at(diverging, 1, 7.0);
+  const std::array<int, 3> negative = at(diverging, 2, 2.0);
+  EXPECT_GT(positive[0], positive[2]);
+  EXPECT_GT(negative[2], negative[0]);
+}
+
+TEST_F(PlotTest, HeatmapWithMismatchedRowsIsRefused) {
+  Heatmap heatmap = StepHeatmap(false);
+  heatmap.values[1].pop_back();
+  EXPECT_THROW(WritePng(heatmap, (dir_ / "bad.png").string()), std::invalid_argument);
+  heatmap = StepHeatmap(false);
+  heatmap.row_labels.pop_back();
+  EXPECT_THROW(WritePng(heatmap, (dir_ / "bad.png").string()), std::invalid_argument);
+  EXPECT_TRUE(fs::is_empty(dir_));
 }
 
 }  // namespace

@@ -102,7 +102,8 @@ TEST_F(CliTest, RunExitsZeroWhenEveryExpectationHoldsAndWritesEveryOutput) {
   // Off a terminal there is no progress line: stderr stays empty.
   EXPECT_EQ(result.err, "");
   const std::set<std::string> expected = {"config.yaml", "signals.csv", "summary.json", "forces.png",
-                                          "estimate_vs_truth.png", "grip.png", "slip.png", "height.png"};
+                                          "estimate_vs_truth.png", "grip.png", "slip.png", "height.png",
+                                          "taxels_fn.png", "taxels_ft.png"};
   EXPECT_EQ(FilesUnder(out), expected);
   const nlohmann::json summary = ReadJson(out + "/summary.json");
   EXPECT_EQ(summary.at("passed"), true);
