@@ -18,6 +18,10 @@
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
 
+namespace graspbed::sim {
+class SimRig;
+}  // namespace graspbed::sim
+
 namespace graspbed::scenario {
 
 /// How to run and what to write.
@@ -29,6 +33,14 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;
   /// Called about every 0.1 s of simulated time with (simulated time, duration) [s]; may be empty.
   std::function<void(double, double)> progress;
+  /// Instants [s], ascending, at which `at_instant` is called with (instant, rig): at the first
+  /// control tick at or after each instant, after that tick's row is logged, so the rig shows the
+  /// state, estimate and command of that tick. Used to render stills; the callback may allocate
+  /// and do I/O (it runs inside the simulated-time loop, so keep it rare).
+  std::vector<double> instants_s;
+  std::function<void(double instant_s, sim::SimRig& rig)> at_instant;
+  /// End the run once every instant was served (the run then counts as stopped: completed = false).
+  bool stop_after_instants = false;
 };
 
 /// The result of one run.
