@@ -70,11 +70,11 @@ void AddRenderCommand(CLI::App& root) {
       "render",
       "Render stills of a scenario offscreen (no display or GPU needed: EGL, Mesa llvmpipe): runs it with its "
       "controller and script up to each --at instant and writes OUT/<scenario>_t<time>s.png. Units are coloured by "
-      "their estimated Fn: grey unloaded to red at the rated 10 N, magenta saturated, black unusable (open, short, "
+      "their estimated Fn: grey unloaded to red at the rated 10 N (square-root scale: 2.5 N is half way), magenta saturated, black unusable (open, short, "
       "implausible, not yet tared). The object is drawn see-through so the units it covers show. "
       "Exit 0 written, 1 rendering failed, 2 bad input, 130 interrupted");
   command->footer(
-      "Cameras: 'grasp' (default) frames hand and object from 60 deg beside the units' outward normal, from "
+      "Cameras: 'grasp' (default) frames hand and object from 45 deg beside the units' outward normal, from "
       "above; 'fingertip' is a close-up of the units; any other NAME is a <camera> of the model. --view places "
       "MuJoCo's orbit camera: azimuth 0 looks along +x, 90 along +y; elevation < 0 looks down; world frame, z up, "
       "table top at z = 0.\n"

@@ -24,7 +24,7 @@ constexpr double kPatchLiftM = 0.06e-3;
 // Units glow a little, so their colour reads the same on the lit and the shaded side of the holder.
 constexpr float kUnitEmission = 0.5f;
 // Built-in cameras: view direction relative to the units' mean outward normal.
-constexpr double kGraspSideAngleDeg = 60.0;
+constexpr double kGraspSideAngleDeg = 45.0;
 constexpr double kGraspElevationDeg = -25.0;
 constexpr double kFingertipSideAngleDeg = 30.0;
 constexpr double kFingertipElevationDeg = -20.0;
@@ -297,6 +297,7 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
       if (unit >= 0) {
         SetRgba(geom.rgba, colors[unit]);
         geom.emission = kUnitEmission;
+        geom.specular = 0.0f;
       }
       if (object_body_ >= 0 && m->geom_bodyid[geom.objid] == object_body_) {
         if (leave_out_object) continue;
@@ -319,6 +320,7 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
     mjv_initGeom(patch, mjGEOM_BOX, size, pos, frame, colors[i].data());
     patch->category = mjCAT_DECOR;
     patch->emission = kUnitEmission;
+    patch->specular = 0.0f;
     ++s.scene.ngeom;
   }
 

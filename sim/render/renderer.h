@@ -38,7 +38,7 @@ FreeView ParseFreeView(const std::string& text);
 /// The camera a picture is taken with.
 struct CameraSpec {
   enum class Kind {
-    kGrasp,      ///< built in: hand and object, from 60 deg beside the units' outward normal, from above
+    kGrasp,      ///< built in: hand and object, from 45 deg beside the units' outward normal, from above
     kFingertip,  ///< built in: close-up of the units, from 30 deg beside their outward normal; no object
     kModel,      ///< a <camera> of the model, by name
     kFree,       ///< `free`
@@ -60,7 +60,7 @@ struct RenderOptions {
   bool contact_forces = false;
   double force_arrow_m_per_n = 0.01;  ///< arrow length per newton of contact force [m/N], > 0
   /// Opacity of the object [0, 1]: below 1 the units it covers show through; 0 leaves it out.
-  double object_alpha = 0.4;
+  double object_alpha = 0.3;
   double rated_force_n = 10.0;  ///< estimated Fn drawn full red [N], > 0 (the paper's range)
   /// Throws std::invalid_argument naming the field and value.
   void Validate() const;
