@@ -168,6 +168,8 @@ Renderer::Renderer(OffscreenGlContext& gl, const Simulation& simulation, const R
   mjv_defaultOption(&s.option);
   mjr_defaultContext(&s.context);
   s.option.flags[mjVIS_CONTACTFORCE] = options_.contact_forces ? 1 : 0;
+  // Sites are markers for code (e.g. finger_pad), not part of the hand: left out of pictures.
+  for (int group = 0; group < mjNGROUP; ++group) s.option.sitegroup[group] = 0;
   gl_.MakeCurrent();
   mjv_makeScene(m, &s.scene, m->ngeom + kExtraSceneGeoms);
   try {

@@ -3,7 +3,8 @@
 /// (OffscreenGlContext: EGL, no display, no GPU needed). The sensing units are drawn coloured by their
 /// estimated normal force -- each mesa (geom unit_i) and a patch the size of the unit's footprint on the
 /// holder surface under it -- from a TactileState: grey unloaded, red at the rated force. Optional
-/// contact-force arrows, an optionally see-through object (the units face it), a text label.
+/// contact-force arrows, an optionally see-through object (the units face it), a text label. Sites
+/// (markers for code) are not drawn.
 ///
 /// The renderer draws from its own copy of the model (visual settings only), so the simulation's
 /// mjModel is never touched. Nothing is hard-coded about the hand's bodies: the units are found as
