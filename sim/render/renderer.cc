@@ -266,10 +266,11 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
       for (int k = 0; k < 3; ++k) cam.lookat[k] = centroid[k];
       cam.distance = kFingertipDistanceM;
       if (grasp) {
-        // Halfway between the fingertip and the object, far enough to show the hand around it.
+        // Between the fingertip and the object (nearer the fingertip, the hand is above it), far
+        // enough to show the hand around it.
         double object_size_m = 0.0;
         if (object_body_ >= 0) {
-          for (int k = 0; k < 3; ++k) cam.lookat[k] = 0.5 * (centroid[k] + d->xipos[3 * object_body_ + k]);
+          for (int k = 0; k < 3; ++k) cam.lookat[k] = 0.7 * centroid[k] + 0.3 * d->xipos[3 * object_body_ + k];
           for (int g = 0; g < m->ngeom; ++g) {
             if (m->geom_bodyid[g] == object_body_) object_size_m = std::max(object_size_m, m->geom_rbound[g]);
           }
