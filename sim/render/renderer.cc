@@ -194,7 +194,11 @@ Renderer::Renderer(OffscreenGlContext& gl, const Simulation& simulation, const R
 }
 
 Renderer::~Renderer() {
-  gl_.MakeCurrent();
+  try {
+    gl_.MakeCurrent();
+  } catch (const std::exception&) {
+    // The context is gone with its GL objects; freeing MuJoCo's host-side state is all that is left.
+  }
   mjr_freeContext(&scene_->context);
   mjv_freeScene(&scene_->scene);
 }
