@@ -18,6 +18,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   libcli11-dev nlohmann-json3-dev                # command line, JSON output
   libcairo2-dev fonts-dejavu-core                # PNG plots; their labels need a font
+  libegl-dev libegl-mesa0 libgl1-mesa-dri        # offscreen rendering: EGL, Mesa llvmpipe (no display/GPU)
   clang-14 libclang-rt-14-dev                    # libFuzzer target for the wire decoder
 )
 

@@ -458,6 +458,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   TruthRing truth_ring(ring_capacity, units, config.controller.rate_hz);
 
   double next_progress_s = 0.0;
+  size_t next_instant = 0;
   bool stopped = false;
   // The simulated-time loop: no allocation, no I/O (the progress callback excepted, 10 Hz).
   while (rig->time_s() < config.duration_s - 1e-9) {
@@ -548,6 +549,15 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     if (options.progress && t >= next_progress_s) {
       options.progress(t, config.duration_s);
       next_progress_s = t + kProgressPeriodS;
+    }
+    // Same slack as the rig's control clock, so an instant on a tick is served at that tick.
+    while (next_instant < options.instants_s.size() && t >= options.instants_s[next_instant] - 1e-9) {
+      if (options.at_instant) options.at_instant(options.instants_s[next_instant], *rig);
+      ++next_instant;
+    }
+    if (options.stop_after_instants && next_instant == options.instants_s.size()) {
+      stopped = true;
+      break;
     }
   }
   const double sim_s = rig->time_s();

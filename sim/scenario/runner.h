@@ -23,6 +23,10 @@ namespace graspbed::sim {
 class SimRig;
 }  // namespace graspbed::sim
 
+namespace graspbed::sim {
+class SimRig;
+}  // namespace graspbed::sim
+
 namespace graspbed::scenario {
 
 /// How to run and what to write.
@@ -37,6 +41,14 @@ struct RunOptions {
   /// Called before every physics step with the rig, after the script's update for that instant;
   /// tests inject faults through it (e.g. a NaN into the state). May be empty.
   std::function<void(sim::SimRig&)> before_step;
+  /// Instants [s], ascending, at which `at_instant` is called with (instant, rig): at the first
+  /// control tick at or after each instant, after that tick's row is logged, so the rig shows the
+  /// state, estimate and command of that tick. Used to render stills; the callback may allocate
+  /// and do I/O (it runs inside the simulated-time loop, so keep it rare).
+  std::vector<double> instants_s;
+  std::function<void(double instant_s, sim::SimRig& rig)> at_instant;
+  /// End the run once every instant was served (the run then counts as stopped: completed = false).
+  bool stop_after_instants = false;
 };
 
 /// The result of one run.

@@ -1,0 +1,385 @@
+#include "sim/render/renderer.h"
+
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace graspbed::sim {
+namespace {
+
+constexpr int kMinSizePx = 16;
+constexpr int kMaxSizePx = 4096;
+// Room in the scene for the model's geoms, one footprint patch per unit and contact arrows.
+constexpr int kExtraSceneGeoms = 1500;
+constexpr float kUnloadedGrey[3] = {0.62f, 0.62f, 0.62f};
+constexpr float kLoadedRed[3] = {0.95f, 0.05f, 0.05f};
+// Footprint patches: thin boxes lying on the holder surface, a hair above it so they win the depth test.
+constexpr double kPatchHalfThicknessM = 0.05e-3;
+constexpr double kPatchLiftM = 0.06e-3;
+// Units glow a little, so their colour reads the same on the lit and the shaded side of the holder.
+constexpr float kUnitEmission = 0.5f;
+// Built-in cameras: view direction relative to the units' mean outward normal.
+constexpr double kGraspSideAngleDeg = 45.0;
+constexpr double kGraspElevationDeg = -25.0;
+constexpr double kFingertipSideAngleDeg = 30.0;
+constexpr double kFingertipElevationDeg = -20.0;
+constexpr double kFingertipDistanceM = 0.05;
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+struct ModelDeleter {
+  void operator()(mjModel* model) const { mj_deleteModel(model); }
+};
+
+double ParseNumber(const std::string& field, const std::string& whole, const char* what) {
+  size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(field, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  while (used < field.size() && field[used] == ' ') ++used;
+  if (field.empty() || used != field.size() || !std::isfinite(value)) {
+    throw std::invalid_argument("--view " + whole + ": " + what + " '" + field + "' is not a number");
+  }
+  return value;
+}
+
+void SetRgba(float rgba[4], const std::array<float, 4>& color) {
+  for (int k = 0; k < 4; ++k) rgba[k] = color[k];
+}
+
+}  // namespace
+
+struct Renderer::Scene {
+  std::unique_ptr<mjModel, ModelDeleter> model;
+  mjvScene scene;
+  mjvOption option;
+  mjrContext context;
+  mjvGLCamera camera;  // of the last picture (both eyes averaged)
+};
+
+FreeView ParseFreeView(const std::string& text) {
+  std::vector<std::string> fields;
+  std::stringstream stream(text);
+  for (std::string field; std::getline(stream, field, ',');) fields.push_back(field);
+  if (!text.empty() && text.back() == ',') fields.push_back("");
+  if (fields.size() != 6) {
+    throw std::invalid_argument("--view " + text + ": expected 6 numbers azimuth,elevation,distance,x,y,z " +
+                                "(deg, deg, m, m, m, m), got " + std::to_string(fields.size()));
+  }
+  FreeView view;
+  view.azimuth_deg = ParseNumber(fields[0], text, "azimuth");
+  view.elevation_deg = ParseNumber(fields[1], text, "elevation");
+  view.distance_m = ParseNumber(fields[2], text, "distance");
+  for (int k = 0; k < 3; ++k) view.lookat_m[k] = ParseNumber(fields[3 + k], text, "lookat");
+  if (!(view.elevation_deg > -90.0 && view.elevation_deg < 90.0)) {
+    throw std::invalid_argument("--view " + text + ": elevation " + fields[1] + " must be in (-90, 90) deg");
+  }
+  if (!(view.distance_m > 0.0)) {
+    throw std::invalid_argument("--view " + text + ": distance " + fields[2] + " must be > 0 m");
+  }
+  return view;
+}
+
+CameraSpec CameraByName(const std::string& name) {
+  CameraSpec spec;
+  if (name.empty() || name == "grasp") {
+    spec.kind = CameraSpec::Kind::kGrasp;
+  } else if (name == "fingertip") {
+    spec.kind = CameraSpec::Kind::kFingertip;
+  } else {
+    spec.kind = CameraSpec::Kind::kModel;
+    spec.model_camera = name;
+  }
+  return spec;
+}
+
+void RenderOptions::Validate() const {
+  for (const auto& [name, value] : {std::pair{"width_px", width_px}, std::pair{"height_px", height_px}}) {
+    if (value < kMinSizePx || value > kMaxSizePx) {
+      throw std::invalid_argument(std::string(name) + " = " + std::to_string(value) + ": must be in " +
+                                  std::to_string(kMinSizePx) + ".." + std::to_string(kMaxSizePx));
+    }
+  }
+  if (!(force_arrow_m_per_n > 0.0) || !std::isfinite(force_arrow_m_per_n)) {
+    throw std::invalid_argument("force_arrow_m_per_n = " + std::to_string(force_arrow_m_per_n) + ": must be > 0");
+  }
+  if (!(object_alpha >= 0.0 && object_alpha <= 1.0)) {
+    throw std::invalid_argument("object_alpha = " + std::to_string(object_alpha) + ": must be in [0, 1]");
+  }
+  if (!(rated_force_n > 0.0) || !std::isfinite(rated_force_n)) {
+    throw std::invalid_argument("rated_force_n = " + std::to_string(rated_force_n) + ": must be > 0");
+  }
+}
+
+std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, double rated_force_n) {
+  switch (validity) {
+    case sensor::UnitValidity::kValid: {
+      // Square-root scale: a light touch (0.2 .. 1 N of a 10 N range) already shows.
+      const float s = static_cast<float>(std::sqrt(std::clamp(fn_n / rated_force_n, 0.0, 1.0)));
+      return {kUnloadedGrey[0] + s * (kLoadedRed[0] - kUnloadedGrey[0]),
+              kUnloadedGrey[1] + s * (kLoadedRed[1] - kUnloadedGrey[1]),
+              kUnloadedGrey[2] + s * (kLoadedRed[2] - kUnloadedGrey[2]), 1.0f};
+    }
+    case sensor::UnitValidity::kOutOfRange:
+      return {0.9f, 0.1f, 0.9f, 1.0f};
+    default:
+      return {0.05f, 0.05f, 0.05f, 1.0f};
+  }
+}
+
+Renderer::Renderer(OffscreenGlContext& gl, const Simulation& simulation, const RenderOptions& options)
+    : gl_(gl), options_((options.Validate(), options)), scene_(std::make_unique<Scene>()) {
+  const mjModel* source = simulation.model();
+  const sensor::Layout& layout = simulation.layout();
+  mesa_height_m_ = layout.unit.mesa_height_m;
+  unit_footprint_m_ = {layout.unit.beam_length_m, layout.unit.beam_width_m};
+  for (int i = 0; i < layout.unit_count(); ++i) {
+    const std::string name = "unit_" + std::to_string(i);
+    const int geom = mj_name2id(source, mjOBJ_GEOM, name.c_str());
+    if (geom < 0) throw std::runtime_error("render: the model has no geom '" + name + "'");
+    unit_geoms_.push_back(geom);
+  }
+  unit_of_geom_.assign(source->ngeom, -1);
+  for (int i = 0; i < layout.unit_count(); ++i) unit_of_geom_[unit_geoms_[i]] = i;
+  object_body_ = mj_name2id(source, mjOBJ_BODY, "object");
+  if (object_body_ < 0) {
+    const int object_geom = mj_name2id(source, mjOBJ_GEOM, "object_geom");
+    if (object_geom >= 0) object_body_ = source->geom_bodyid[object_geom];
+  }
+
+  Scene& s = *scene_;
+  s.model.reset(mj_copyModel(nullptr, source));
+  if (!s.model) throw std::runtime_error("render: cannot copy the model");
+  mjModel* m = s.model.get();
+  m->vis.global.offwidth = options_.width_px;
+  m->vis.global.offheight = options_.height_px;
+  // Arrow length = force * map.force / meanmass; width = forcewidth * meansize.
+  m->vis.map.force = static_cast<float>(options_.force_arrow_m_per_n * m->stat.meanmass);
+  m->vis.scale.forcewidth = static_cast<float>(0.6e-3 / m->stat.meansize);
+
+  mjv_defaultScene(&s.scene);
+  mjv_defaultOption(&s.option);
+  mjr_defaultContext(&s.context);
+  s.option.flags[mjVIS_CONTACTFORCE] = options_.contact_forces ? 1 : 0;
+  // Sites are markers for code (e.g. finger_pad), not part of the hand: left out of pictures.
+  for (int group = 0; group < mjNGROUP; ++group) s.option.sitegroup[group] = 0;
+  gl_.MakeCurrent();
+  mjv_makeScene(m, &s.scene, m->ngeom + kExtraSceneGeoms);
+  try {
+    mjr_makeContext(m, &s.context, mjFONTSCALE_100);
+    mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
+  } catch (...) {
+    mjr_freeContext(&s.context);
+    mjv_freeScene(&s.scene);
+    throw;
+  }
+  if (s.context.offWidth < options_.width_px || s.context.offHeight < options_.height_px) {
+    const std::string got = std::to_string(s.context.offWidth) + "x" + std::to_string(s.context.offHeight);
+    mjr_freeContext(&s.context);
+    mjv_freeScene(&s.scene);
+    throw std::runtime_error("render: the OpenGL implementation gave a " + got + " offscreen buffer for " +
+                             std::to_string(options_.width_px) + "x" + std::to_string(options_.height_px));
+  }
+  image_.width_px = options_.width_px;
+  image_.height_px = options_.height_px;
+  image_.rgb.resize(static_cast<size_t>(options_.width_px) * options_.height_px * 3);
+  bottom_up_.resize(image_.rgb.size());
+}
+
+Renderer::~Renderer() {
+  try {
+    gl_.MakeCurrent();
+  } catch (const std::exception&) {
+    // The context is gone with its GL objects; freeing MuJoCo's host-side state is all that is left.
+  }
+  mjr_freeContext(&scene_->context);
+  mjv_freeScene(&scene_->scene);
+}
+
+std::array<double, 3> Renderer::UnitCenter(const Simulation& simulation, int unit) const {
+  const mjData* d = simulation.data();
+  const mjModel* m = scene_->model.get();
+  const int geom = unit_geoms_.at(static_cast<size_t>(unit));
+  const mjtNum* center = d->geom_xpos + 3 * geom;
+  const mjtNum* frame = d->geom_xmat + 9 * geom;  // row-major; columns: beam, cross, outward normal
+  // The mesa box reaches from inside its groove to mesa_height above the surface.
+  const double above_surface = mesa_height_m_ - m->geom_size[3 * geom + 2];
+  return {center[0] - above_surface * frame[2], center[1] - above_surface * frame[5],
+          center[2] - above_surface * frame[8]};
+}
+
+const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::TactileState* state,
+                                        const CameraSpec& camera, const std::string& label) {
+  Scene& s = *scene_;
+  mjModel* m = s.model.get();
+  mjData* d = simulation.mutable_data();
+  gl_.MakeCurrent();
+
+  // Where the units are and which way they face: the built-in cameras aim from there.
+  const int units = static_cast<int>(unit_geoms_.size());
+  std::array<double, 3> centroid{};
+  std::array<double, 3> normal{};
+  for (int i = 0; i < units; ++i) {
+    const std::array<double, 3> c = UnitCenter(simulation, i);
+    const mjtNum* frame = d->geom_xmat + 9 * unit_geoms_[i];
+    for (int k = 0; k < 3; ++k) {
+      centroid[k] += c[k] / units;
+      normal[k] += frame[3 * k + 2];
+    }
+  }
+
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  switch (camera.kind) {
+    case CameraSpec::Kind::kModel: {
+      const int id = mj_name2id(m, mjOBJ_CAMERA, camera.model_camera.c_str());
+      if (id < 0) {
+        std::string names;
+        for (int c = 0; c < m->ncam; ++c) names += std::string(names.empty() ? "" : ", ") + mj_id2name(m, mjOBJ_CAMERA, c);
+        throw std::invalid_argument("--camera " + camera.model_camera + ": no such camera; built in: grasp, fingertip" +
+                                    (names.empty() ? "; the model has none" : "; the model has " + names));
+      }
+      cam.type = mjCAMERA_FIXED;
+      cam.fixedcamid = id;
+      break;
+    }
+    case CameraSpec::Kind::kFree:
+      cam.type = mjCAMERA_FREE;
+      cam.azimuth = camera.free.azimuth_deg;
+      cam.elevation = camera.free.elevation_deg;
+      cam.distance = camera.free.distance_m;
+      for (int k = 0; k < 3; ++k) cam.lookat[k] = camera.free.lookat_m[k];
+      break;
+    case CameraSpec::Kind::kGrasp:
+    case CameraSpec::Kind::kFingertip: {
+      const bool grasp = camera.kind == CameraSpec::Kind::kGrasp;
+      // Heading of the outward normal; the camera sits beside it, so the units face it at an angle and
+      // the opposing digit is not in the line of sight.
+      const double normal_heading_deg = std::atan2(normal[1], normal[0]) * kDegPerRad;
+      const double side_deg = grasp ? kGraspSideAngleDeg : kFingertipSideAngleDeg;
+      cam.type = mjCAMERA_FREE;
+      cam.azimuth = normal_heading_deg + side_deg + 180.0;
+      cam.elevation = grasp ? kGraspElevationDeg : kFingertipElevationDeg;
+      for (int k = 0; k < 3; ++k) cam.lookat[k] = centroid[k];
+      cam.distance = kFingertipDistanceM;
+      if (grasp) {
+        // Between the fingertip and the object (nearer the fingertip, the hand is above it), far
+        // enough to show the hand around it.
+        double object_size_m = 0.0;
+        if (object_body_ >= 0) {
+          for (int k = 0; k < 3; ++k) cam.lookat[k] = 0.7 * centroid[k] + 0.3 * d->xipos[3 * object_body_ + k];
+          for (int g = 0; g < m->ngeom; ++g) {
+            if (m->geom_bodyid[g] == object_body_) object_size_m = std::max(object_size_m, m->geom_rbound[g]);
+          }
+        }
+        cam.distance = 0.15 + 2.0 * object_size_m;
+      }
+      break;
+    }
+  }
+
+  mjv_updateScene(m, d, &s.option, nullptr, &cam, mjCAT_ALL, &s.scene);
+
+  // Units coloured by their estimate; the object made see-through (or left out).
+  std::vector<std::array<float, 4>> colors(units);
+  for (int i = 0; i < units; ++i) {
+    colors[i] = state != nullptr && i < state->unit_count
+                    ? UnitColor(state->fn_n[i], state->validity[i], options_.rated_force_n)
+                    : std::array<float, 4>{kUnloadedGrey[0], kUnloadedGrey[1], kUnloadedGrey[2], 1.0f};
+  }
+  // The fingertip camera sits inside the object when it is held: left out there.
+  const bool leave_out_object = options_.object_alpha <= 0.0 || camera.kind == CameraSpec::Kind::kFingertip;
+  int kept = 0;
+  for (int g = 0; g < s.scene.ngeom; ++g) {
+    mjvGeom& geom = s.scene.geoms[g];
+    if (geom.objtype == mjOBJ_GEOM && geom.objid >= 0 && geom.objid < m->ngeom) {
+      const int unit = unit_of_geom_[geom.objid];
+      if (unit >= 0) {
+        SetRgba(geom.rgba, colors[unit]);
+        geom.emission = kUnitEmission;
+        geom.specular = 0.0f;
+      }
+      if (object_body_ >= 0 && m->geom_bodyid[geom.objid] == object_body_) {
+        if (leave_out_object) continue;
+        geom.rgba[3] = static_cast<float>(options_.object_alpha);
+        geom.transparent = options_.object_alpha < 1.0;
+      }
+    }
+    if (kept != g) s.scene.geoms[kept] = geom;
+    ++kept;
+  }
+  s.scene.ngeom = kept;
+  // A footprint patch per unit: the mesas alone (1 x 2 mm) are a few pixels in a whole-hand view.
+  for (int i = 0; i < units && s.scene.ngeom < s.scene.maxgeom; ++i) {
+    const std::array<double, 3> c = UnitCenter(simulation, i);
+    const mjtNum* frame = d->geom_xmat + 9 * unit_geoms_[i];
+    mjtNum pos[3];
+    for (int k = 0; k < 3; ++k) pos[k] = c[k] + (kPatchLiftM) * frame[3 * k + 2];
+    const mjtNum size[3] = {0.5 * unit_footprint_m_[0], 0.5 * unit_footprint_m_[1], kPatchHalfThicknessM};
+    mjvGeom* patch = s.scene.geoms + s.scene.ngeom;
+    mjv_initGeom(patch, mjGEOM_BOX, size, pos, frame, colors[i].data());
+    patch->category = mjCAT_DECOR;
+    patch->emission = kUnitEmission;
+    patch->specular = 0.0f;
+    ++s.scene.ngeom;
+  }
+
+  const mjrRect viewport = {0, 0, options_.width_px, options_.height_px};
+  mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
+  mjr_render(viewport, &s.scene, &s.context);
+  if (!label.empty()) {
+    std::string names;
+    std::string values;
+    std::stringstream lines(label);
+    for (std::string line; std::getline(lines, line);) {
+      const size_t tab = line.find('\t');
+      if (!names.empty()) {
+        names += '\n';
+        values += '\n';
+      }
+      names.append(line, 0, tab);
+      if (tab != std::string::npos) values.append(line, tab + 1);
+    }
+    mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, viewport, names.c_str(), values.c_str(), &s.context);
+  }
+  mjr_readPixels(bottom_up_.data(), nullptr, viewport, &s.context);
+  const size_t row_bytes = static_cast<size_t>(options_.width_px) * 3;
+  for (int row = 0; row < options_.height_px; ++row) {
+    std::copy_n(bottom_up_.data() + static_cast<size_t>(options_.height_px - 1 - row) * row_bytes, row_bytes,
+                image_.rgb.data() + static_cast<size_t>(row) * row_bytes);
+  }
+  s.camera = mjv_averageCamera(&s.scene.camera[0], &s.scene.camera[1]);
+  rendered_ = true;
+  return image_;
+}
+
+std::optional<std::array<double, 2>> Renderer::Project(const std::array<double, 3>& point_m) const {
+  if (!rendered_) return std::nullopt;
+  const mjvGLCamera& c = scene_->camera;
+  double forward[3], up[3], right[3], rel[3];
+  for (int k = 0; k < 3; ++k) {
+    forward[k] = c.forward[k];
+    up[k] = c.up[k];
+    rel[k] = point_m[k] - c.pos[k];
+  }
+  mju_cross(right, forward, up);
+  const double depth = mju_dot3(rel, forward);
+  if (depth <= c.frustum_near) return std::nullopt;
+  // mjr_render's frustum: vertical extent as given, horizontal from the viewport's aspect ratio.
+  const double x = mju_dot3(rel, right) * c.frustum_near / depth;
+  const double y = mju_dot3(rel, up) * c.frustum_near / depth;
+  const double height = c.frustum_top - c.frustum_bottom;
+  const double half_width = 0.5 * height * options_.width_px / options_.height_px;
+  const double column = (x - (c.frustum_center - half_width)) / (2.0 * half_width) * options_.width_px;
+  const double row_from_bottom = (y - c.frustum_bottom) / height * options_.height_px;
+  return std::array<double, 2>{column, options_.height_px - row_from_bottom};
+}
+
+}  // namespace graspbed::sim

@@ -1,0 +1,117 @@
+#pragma once
+/// Renderer: pictures of a Simulation's current state with MuJoCo's own renderer (mjv/mjr), offscreen
+/// (OffscreenGlContext: EGL, no display, no GPU needed). The sensing units are drawn coloured by their
+/// estimated normal force -- each mesa (geom unit_i) and a patch the size of the unit's footprint on the
+/// holder surface under it -- from a TactileState: grey unloaded, red at the rated force. Optional
+/// contact-force arrows, an optionally see-through object (the units face it), a text label. Sites
+/// (markers for code) are not drawn.
+///
+/// The renderer draws from its own copy of the model (visual settings only), so the simulation's
+/// mjModel is never touched. Nothing is hard-coded about the hand's bodies: the units are found as
+/// geoms unit_0 .. unit_{N-1}, the object as body "object" (or the body of geom "object_geom"), and
+/// the built-in cameras aim from the units' own outward normals.
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/rgb_image.h"
+#include "sensor/tactile_state.h"
+#include "sim/render/offscreen_gl_context.h"
+#include "sim/simulation.h"
+
+namespace graspbed::sim {
+
+/// MuJoCo's orbit camera: looks at `lookat_m` from `distance_m` away.
+struct FreeView {
+  double azimuth_deg = 0.0;     ///< heading of the view direction about world z: 0 looks along +x, 90 along +y [deg]
+  double elevation_deg = -20.0; ///< pitch of the view direction: negative looks down [deg], in (-90, 90)
+  double distance_m = 0.3;      ///< camera to lookat point [m], > 0
+  std::array<double, 3> lookat_m{};  ///< point at the image centre, world frame [m]
+};
+
+/// Parses "azimuth,elevation,distance,lookat_x,lookat_y,lookat_z" (deg, deg, m, m, m, m). Throws
+/// std::invalid_argument quoting the text and saying what is wrong.
+FreeView ParseFreeView(const std::string& text);
+
+/// The camera a picture is taken with.
+struct CameraSpec {
+  enum class Kind {
+    kGrasp,      ///< built in: hand and object, from 45 deg beside the units' outward normal, from above
+    kFingertip,  ///< built in: close-up of the units, from 30 deg beside their outward normal; no object
+    kModel,      ///< a <camera> of the model, by name
+    kFree,       ///< `free`
+  };
+  Kind kind = Kind::kGrasp;
+  std::string model_camera;  ///< kModel: the camera's name in the model
+  FreeView free;             ///< kFree
+};
+
+/// "grasp" and "fingertip" name the built-in cameras; any other name is a model camera (checked when
+/// rendering, against the model).
+CameraSpec CameraByName(const std::string& name);
+
+/// Size and content of the pictures.
+struct RenderOptions {
+  int width_px = 800;   ///< [px], 16 .. 4096
+  int height_px = 600;  ///< [px], 16 .. 4096
+  /// Force arrows at every contact (MuJoCo's contact-force visualisation) [-].
+  bool contact_forces = false;
+  double force_arrow_m_per_n = 0.01;  ///< arrow length per newton of contact force [m/N], > 0
+  /// Opacity of the object [0, 1]: below 1 the units it covers show through; 0 leaves it out.
+  double object_alpha = 0.3;
+  double rated_force_n = 10.0;  ///< estimated Fn drawn full red [N], > 0 (the paper's range)
+  /// Throws std::invalid_argument naming the field and value.
+  void Validate() const;
+};
+
+/// RGBA of a unit with estimate `fn_n` [N]: grey (0 N or less) to red (at `rated_force_n` and above)
+/// on a square-root scale (a quarter of the range is half way) when valid; magenta when saturated (out of range); black when the estimate is unusable (open,
+/// short, implausible, not tared).
+std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, double rated_force_n);
+
+/// Renders one simulation's scene. Owns its model copy, mjvScene and mjrContext; not copyable, not
+/// movable. Use it on the thread that owns `gl`, which must outlive it.
+class Renderer {
+ public:
+  /// Throws std::invalid_argument for bad options, std::runtime_error when MuJoCo cannot set up its
+  /// GL resources (e.g. a size beyond the GL implementation's limit).
+  Renderer(OffscreenGlContext& gl, const Simulation& simulation, const RenderOptions& options);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Renders `simulation` (the one this renderer was made for) as it is now, units coloured from
+  /// `state` (nullptr: all grey), seen by `camera`, with `label` in the top-left corner: lines split at
+  /// '\n', each "name\tvalue" in two columns ("" draws none). Returns the picture, valid until the next call. Throws std::invalid_argument
+  /// for a model camera the model lacks (naming those it has).
+  const image::RgbImage& Render(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
+                                const std::string& label = "");
+
+  /// Pixel where world point `point_m` [m] appears in the last picture: {column, row}, from the top
+  /// left, in pixels (may lie outside the picture); nullopt when it is behind the camera or no
+  /// picture was rendered yet.
+  std::optional<std::array<double, 2>> Project(const std::array<double, 3>& point_m) const;
+
+  /// Centre of unit `unit`'s footprint on the holder surface now, world frame [m].
+  std::array<double, 3> UnitCenter(const Simulation& simulation, int unit) const;
+
+ private:
+  struct Scene;  // model copy and MuJoCo's visualisation state, kept out of this header
+
+  OffscreenGlContext& gl_;
+  RenderOptions options_;
+  double mesa_height_m_ = 0.0;
+  std::array<double, 2> unit_footprint_m_{};  ///< beam length, beam width [m]
+  std::vector<int> unit_geoms_;               ///< geom id per unit
+  std::vector<int> unit_of_geom_;             ///< unit index per geom id, -1 for other geoms
+  int object_body_ = -1;                      ///< -1: no object found
+  std::unique_ptr<Scene> scene_;
+  image::RgbImage image_;
+  std::vector<uint8_t> bottom_up_;  ///< mjr_readPixels output, rows from the bottom
+  bool rendered_ = false;
+};
+
+}  // namespace graspbed::sim
