@@ -17,10 +17,6 @@ Eigen::Vector2d IndexPalmar(double phi) { return {std::sin(phi), -std::cos(phi)}
 // The thumb mirrors it: (cos a, -sin a), a = 0 straight out towards +x, pi/2 straight down.
 Eigen::Vector2d ThumbDirection(double alpha) { return {std::cos(alpha), -std::sin(alpha)}; }
 
-// The thumb's distal segment leans this far past vertical towards the index in the nominal pinch,
-// so its rounded tip, not the segment's side, meets the object [rad].
-constexpr double kThumbNominalLeanRad = 0.1;
-
 // Root of the increasing (sign = +1) or decreasing (sign = -1) function f on [lo, hi], clamped.
 double Bisect(const std::function<double(double)>& f, double target, double lo, double hi, double sign) {
   if (sign * (f(lo) - target) >= 0.0) return lo;
@@ -55,7 +51,7 @@ ProstheticKinematics::ProstheticKinematics(const FingerConfig& finger, const Thu
   const DigitContact pad = IndexPad(mcp_nominal);
   mcp_.x() = -0.5 * kNominalWidthM - pad.point_xz.x();
   const double pad_z = pad.point_xz.y();
-  const double thumb_nominal = 0.5 * std::numbers::pi + kThumbNominalLeanRad - thumb_.ip_flexion_rad;
+  const double thumb_nominal = 0.5 * std::numbers::pi + kThumbLeanRad - thumb_.ip_flexion_rad;
   thumb_base_ = {0.0, 0.0};
   const DigitContact tip = ThumbTip(thumb_nominal);
   thumb_base_ = {0.5 * kNominalWidthM - tip.point_xz.x(), pad_z - tip.point_xz.y()};

@@ -34,6 +34,10 @@ class ProstheticKinematics {
   static constexpr double kMcpMaxRad = 1.45;
   static constexpr double kThumbMinRad = -0.6;
   static constexpr double kThumbMaxRad = 1.9;
+  /// In the nominal pinch the thumb's distal segment leans this far past vertical towards the
+  /// index [rad]: its rounded tip meets the object while the thumb comes in from the side, so its
+  /// base sits a palm's width (about 50 mm) from the index MCP, as on a hand [rad].
+  static constexpr double kThumbLeanRad = 0.3;
   /// The palm's palmar face is at H z = -kPalmDepthM; MCP and thumb base sit on it.
   static constexpr double kPalmDepthM = 0.024;
 

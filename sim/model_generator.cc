@@ -293,8 +293,11 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   o << "              <geom name=\"thumb_pad\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(thumb.distal_length_m)
     << " 0 0\" size=\"" << w.Num(thumb.tip_radius_m) << "\" mass=\"" << w.Num(0.4 * hand.digit_mass_kg)
     << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
-  // The tip's face towards the index in the nominal pinch (distal segment about vertical).
-  o << "              <site name=\"thumb_pad\" pos=\"" << w.Vec(thumb.distal_length_m, 0, -thumb.tip_radius_m)
+  // The tip's face towards the index (H -x) in the nominal pinch, in the distal segment's frame.
+  const double distal_nominal = 0.5 * std::numbers::pi + ProstheticKinematics::kThumbLeanRad;
+  o << "              <site name=\"thumb_pad\" pos=\""
+    << w.Vec(thumb.distal_length_m - thumb.tip_radius_m * std::cos(distal_nominal), 0,
+             -thumb.tip_radius_m * std::sin(distal_nominal))
     << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
   o << "            </body>\n";
   o << "          </body>\n";

@@ -94,15 +94,15 @@ struct FingerConfig {
   /// PIP flexion per radian of MCP flexion, fixed by the linkage (commercial fingers: 1 to 1.3) [-].
   double pip_mcp_ratio = 1.1;
   /// Fixed flexion of the DIP joint (the holder against the middle phalanx) [rad].
-  double dip_flexion_rad = 0.2;
+  double dip_flexion_rad = 0.15;
   /// Fixed angle of the proximal phalanx at MCP = 0 below the palm plane, towards flexion [rad].
-  double mcp_rest_angle_rad = -0.06;
+  double mcp_rest_angle_rad = 0.3;
 };
 
 /// The opposable thumb: a rotation about the palm normal set by the pre-shape, then one flexion joint
 /// with a fixed interphalangeal bend; an unsensorised rounded tip.
 struct ThumbConfig {
-  double proximal_length_m = 0.040;  ///< flexion joint -> IP [m]
+  double proximal_length_m = 0.060;  ///< flexion joint (CMC) -> IP: metacarpal + proximal phalanx [m]
   double distal_length_m = 0.030;    ///< IP -> tip centre [m]
   double tip_radius_m = 0.008;       ///< radius of the rounded distal segment [m]
   double ip_flexion_rad = 0.35;      ///< fixed interphalangeal flexion [rad]
