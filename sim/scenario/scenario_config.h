@@ -1,8 +1,8 @@
 #pragma once
 /// ScenarioConfig: one scripted grasp experiment read from a scenario YAML file -- the scene (object,
 /// hand, physics), the sensor (layout, sampling, strain model, readout), the controller, a seed, a
-/// duration, a timed script of actions and the expectations a run is scored against. Every key, its
-/// unit and its default: docs/scenarios.md.
+/// duration, a script of actions (at fixed times or after events) and the expectations a run is
+/// scored against. Every key, its unit and its default: docs/scenarios.md.
 ///
 /// Loading validates everything before anything runs: unknown keys, wrong types, out-of-range
 /// values and unknown action or controller names are common::ConfigError "file:line: key = value:

@@ -147,6 +147,7 @@ void ScriptPlayer::Fire(const Action& action, double time_s, sim::SimRig& rig) {
 }
 
 void ScriptPlayer::Observe(double time_s, const sensor::TactileState& state, bool slip_flag) {
+  if (event_actions_.empty()) return;  // nothing waits: no need to decide events
   tick_events_ = monitor_.Update(time_s, intent_, state, slip_flag);
   tick_time_s_ = time_s;
 }
