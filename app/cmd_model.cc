@@ -19,6 +19,7 @@ struct ModelOptions {
   std::string scene_path;
   std::string output_path;
   double check_s = 0.0;
+  bool kinematics = false;
 };
 
 void RunModel(const ModelOptions& options) {
@@ -26,6 +27,10 @@ void RunModel(const ModelOptions& options) {
       sensor::LoadLayout(options.layout_path.empty() ? sensor::DefaultLayoutPath() : options.layout_path);
   const sim::SceneConfig scene =
       options.scene_path.empty() ? sim::SceneConfig{} : sim::LoadSceneConfigFile(options.scene_path);
+  if (options.kinematics) {
+    std::cout << sim::DescribeHand(layout, scene);
+    return;
+  }
   const std::string mjcf = sim::GenerateMjcf(layout, scene);
   if (options.check_s > 0.0) {
     // Load it in MuJoCo and let it settle; a warning or NaN fails the check.
@@ -67,6 +72,9 @@ void AddModelCommand(CLI::App& root) {
   command->add_option("--check", options->check_s,
                       "also load the model in MuJoCo and step it this many seconds; exit 1 on a warning/NaN")
       ->check(CLI::NonNegativeNumber);
+  command->add_flag("--kinematics", options->kinematics,
+                    "print the hand's design and its placement for the scene (joints, pre-shape, lever arms, "
+                    "motors) instead of the MJCF");
   command->callback([options] { RunModel(*options); });
 }
 

@@ -390,6 +390,59 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
   return place;
 }
 
+std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene) {
+  scene.Validate();
+  const HandPlacement place = PlaceHand(layout, scene);
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(2);
+  const auto mm = [](double m) { return m * 1e3; };
+  const auto deg = [](double rad) { return rad * 180.0 / std::numbers::pi; };
+  o << "hand model " << ToString(scene.hand.model) << ", grasp " << ToString(scene.hand.grasp) << ", object "
+    << ToString(scene.object.shape) << " " << mm(place.object_width_m) << " mm across, pre-shape aperture "
+    << mm(place.open_gap_m) << " mm\n";
+  o << "wrist start (world) [mm]: " << mm(place.wrist_position_m[0]) << " " << mm(place.wrist_position_m[1]) << " "
+    << mm(place.wrist_position_m[2]) << "\n";
+  if (scene.hand.model == HandModel::kJaw) {
+    o << "jaw: each digit travels " << mm(place.contact_joint[0]) << " mm to the object; stall force "
+      << scene.hand.motor.stall_force_n << " N; no-load gap speed " << scene.hand.motor.no_load_speed_m_s << " m/s\n";
+    return o.str();
+  }
+  const ProstheticKinematics kin = MakeKinematics(layout, scene);
+  const FingerConfig& f = scene.hand.finger;
+  const ThumbConfig& t = scene.hand.thumb;
+  o << "hand frame H: origin at the wrist, x index -> thumb, z up; palmar face at z = "
+    << mm(-ProstheticKinematics::kPalmDepthM) << " mm\n";
+  o << "index: MCP at x " << mm(kin.mcp_xz().x()) << " z " << mm(kin.mcp_xz().y()) << " mm; proximal "
+    << mm(f.proximal_length_m) << " mm, middle " << mm(f.middle_length_m) << " mm, distal = holder "
+    << mm(layout.holder.length_m) << " mm + " << mm(kTipCapLengthM) << " mm rounded tip; PIP = " << f.pip_mcp_ratio
+    << " x MCP; DIP fixed at " << deg(f.dip_flexion_rad) << " deg; proximal " << deg(f.mcp_rest_angle_rad)
+    << " deg below the palm at MCP 0; MCP range " << deg(ProstheticKinematics::kMcpMinRad) << " .. "
+    << deg(ProstheticKinematics::kMcpMaxRad) << " deg\n";
+  o << "thumb: base at x " << mm(kin.thumb_base_xz().x()) << " z " << mm(kin.thumb_base_xz().y()) << " mm; CMC-IP "
+    << mm(t.proximal_length_m) << " mm, IP-tip " << mm(t.distal_length_m) << " mm, tip radius " << mm(t.tip_radius_m)
+    << " mm, IP fixed at " << deg(t.ip_flexion_rad) << " deg; opposition " << deg(scene.ThumbOppositionRad())
+    << " deg; flexion range " << deg(ProstheticKinematics::kThumbMinRad) << " .. "
+    << deg(ProstheticKinematics::kThumbMaxRad) << " deg\n";
+  const double mcp_square =
+      (0.5 * std::numbers::pi - f.dip_flexion_rad - f.mcp_rest_angle_rad) / (1.0 + f.pip_mcp_ratio);
+  o << "nominal pinch: " << mm(ProstheticKinematics::kNominalWidthM) << " mm, pad square to the object at MCP "
+    << deg(mcp_square) << " deg\n";
+  o << "                     MCP [deg]  thumb [deg]  pad tilt [deg]\n";
+  o << "pre-shape            " << std::setw(9) << deg(place.preshape_joint[0]) << "  " << std::setw(11)
+    << deg(place.preshape_joint[1]) << "  " << std::setw(14) << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad)
+    << "\n";
+  o << "contact              " << std::setw(9) << deg(place.contact_joint[0]) << "  " << std::setw(11)
+    << deg(place.contact_joint[1]) << "  " << std::setw(14) << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad)
+    << "\n";
+  o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm, thumb " << mm(place.lever_arm_m[1]) << " mm\n";
+  o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
+    << " N m (thumb) = " << scene.hand.digit_motor.stall_pinch_force_n << " N pinch; no-load "
+    << place.no_load_speed[0] << " rad/s (index), " << place.no_load_speed[1] << " rad/s (thumb)\n";
+  o << "pinch height: pad centre " << mm(PinchHeightM(scene.object)) << " mm above the table\n";
+  o << "largest aperture: " << mm(kin.MaxApertureM()) << " mm\n";
+  return o.str();
+}
+
 std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene) {
   scene.Validate();
   if (layout.unit_count() < 1 || layout.unit_count() > sensor::kMaxUnits) {

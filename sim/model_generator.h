@@ -53,6 +53,11 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene);
 std::vector<std::string> GripMotorNames(HandModel model);
 std::vector<std::string> GripBrakeNames(HandModel model);
 
+/// A plain-text table of the hand's design and of its placement for this scene (joint positions in
+/// the hand frame, pre-shape and contact angles, lever arms, motor sizes, pinch height), for docs and
+/// for users checking a pre-shape; the numbers are the ones GenerateMjcf uses.
+std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene);
+
 /// Full MJCF text of the scene. Throws std::invalid_argument if the layout or scene is invalid
 /// (e.g. more units than sensor::kMaxUnits, an object too wide for the hand).
 std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene);
