@@ -1,4 +1,5 @@
-// Cost of the simulated pipeline against bare physics, and the force coverage of the fingertip.
+// Cost of the simulated pipeline against bare physics (prosthetic hand, and the jaw fixture that was
+// the default hand before it), and the force coverage of the fingertip.
 //   BM_PhysicsOnly:   Simulation::Step (mj_step + the NaN/warning check) on the default scene, the
 //                     default box held in a 10 N pinch (effort 0.5 of a 20 N stall).
 //   BM_FullPipeline:  the same scene through SimRig::Step: physics, contact mapping + strain model at
@@ -39,11 +40,13 @@ std::unique_ptr<Simulation> HeldPhysics(const SceneConfig& scene = {}) {
   return simulation;
 }
 
-std::unique_ptr<SimRig> HeldRig() {
+std::unique_ptr<SimRig> HeldRig(const SceneConfig& scene = {}) {
   // The reference controller holding about the same pinch as the bare-physics case, so both step
   // the same contact configuration and the difference is the sensing and control path.
+  SimRigConfig config;
+  config.scene = scene;
   auto rig = std::make_unique<SimRig>(
-      Layout(), sensor::PaperCalibration(Layout().unit_count()), SimRigConfig{},
+      Layout(), sensor::PaperCalibration(Layout().unit_count()), config,
       controller::MakeController("grip_slip", {{"initial_grip_n", kHeldGripN}, {"min_grip_n", kHeldGripN}}));
   rig->controller().SetIntent(controller::GraspIntent::kClose);
   rig->AdvanceTo(kSettleS);
@@ -78,11 +81,11 @@ double ThreadCpuSeconds() {
   return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
-void PrintRatio() {
+void PrintRatio(const char* label, const SceneConfig& scene) {
   constexpr int kRounds = 6;
   constexpr double kRoundS = 1.0;
-  auto physics = HeldPhysics();
-  auto rig = HeldRig();
+  auto physics = HeldPhysics(scene);
+  auto rig = HeldRig(scene);
   double physics_wall = 0.0;
   double pipeline_wall = 0.0;
   double physics_cpu = 0.0;
@@ -100,7 +103,7 @@ void PrintRatio() {
     pipeline_cpu += ThreadCpuSeconds() - cpu_start;
   }
   const double simulated = kRounds * kRoundS;
-  std::printf("\nPipeline cost, default scene, 10 N pinch hold, %.0f s simulated each, interleaved:\n", simulated);
+  std::printf("\nPipeline cost, %s, 10 N pinch hold, %.0f s simulated each, interleaved:\n", label, simulated);
   std::printf("  bare physics   : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / physics_wall,
               simulated / physics_cpu);
   std::printf("  full pipeline  : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / pipeline_wall,
@@ -149,7 +152,12 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
-  graspbed::sim::PrintRatio();
+  graspbed::sim::PrintRatio("prosthetic hand (default scene)", graspbed::sim::SceneConfig{});
+  // The slide-joint jaw fixture: the default hand before the prosthetic one, for comparison.
+  graspbed::sim::SceneConfig jaw;
+  jaw.hand.model = graspbed::sim::HandModel::kJaw;
+  jaw.hand.open_gap_m = 0.065;
+  graspbed::sim::PrintRatio("jaw fixture (the previous default hand)", jaw);
   graspbed::sim::PrintCoverage();
   return 0;
 }
