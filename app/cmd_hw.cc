@@ -442,6 +442,10 @@ class SimulatedDevice {
     // release. The motor going off (watchdog, stream loss) is no decision of the host's.
     if (motor.enable && motor.effort > 0.0) host_intent_ = controller::GraspIntent::kClose;
     if (motor.enable && motor.effort < 0.0) host_intent_ = controller::GraspIntent::kOpen;
+    if (host_intent_ == controller::GraspIntent::kClose) {
+      std::lock_guard lock(mutex_);
+      if (host_close_s_ < 0.0) host_close_s_ = rig_.simulation().time_s();
+    }
   }
 
   /// Ground truth and the metrics of `graspbed run` (same keys) as the host left the hand.
@@ -463,6 +467,7 @@ class SimulatedDevice {
     }
     return {
         {"sim_time_s", outcome_time_s_},
+        {"host_close_time_s", host_close_s_ >= 0.0 ? nlohmann::json(host_close_s_) : nlohmann::json(nullptr)},
         {"object_lift_m", last_truth_.object_position_m[2] - initial_object_z_m_},
         {"object_height_above_table_m", last_truth_.object_height_above_table_m},
         {"peak_squeeze_n", peak_squeeze_n_},
@@ -499,6 +504,7 @@ class SimulatedDevice {
   double outcome_time_s_ = 0.0;
   double outcome_wall_s_ = 0.0;
   double peak_squeeze_n_ = 0.0;
+  double host_close_s_ = -1.0;  // simulated time of the host's first closing command; < 0 none
   sim::GroundTruth last_truth_;
   sim::PhysicsFault physics_fault_;
 };

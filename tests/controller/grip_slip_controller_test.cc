@@ -269,7 +269,7 @@ TEST(GripSlipControllerTest, LearnsLowFrictionFromSlipAndThenHolds) {
 
 /// The limit of the previous case: the same object lifted in 0.2 s accelerates out of the grasp
 /// (20 mm in about 130 ms) before the contact's travel is flagged and the grip catches up. Pinned
-/// so a controller that holds it shows up here (issue 12: slip cues that see this slide sooner).
+/// so a controller that holds it shows up here (it needs slip cues that see this slide sooner).
 TEST(GripSlipControllerTest, FastLiftOfAnObjectWithHalfTheEstimatedFrictionIsDroppedToday) {
   HandPlant::Options plant;
   plant.friction = 0.25;
