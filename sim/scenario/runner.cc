@@ -710,8 +710,8 @@ std::string SummaryTable(const RunResult& result) {
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;
   if (m.physics_fault) {
-    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n", m.physics_fault_time_s,
-                  m.physics_fault_cause.c_str());
+    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n",
+                  m.physics_fault_time_s, m.physics_fault_cause.c_str());
     out << line;
   }
   for (const ExpectationOutcome& o : result.outcomes) {
