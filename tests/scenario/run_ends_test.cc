@@ -206,9 +206,10 @@ TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheK
     std::string set;
     std::vector<std::string> message;
   } cases[] = {
-      // 70 mm box, 65 mm pre-shape: it once ran and reported a 271 N peak grip.
-      {"object.size_m=[0.07,0.05,0.08]",
-       {"the object and the hand overlap by ", "object.size_m = [0.07, 0.05, 0.08]", "hand.open_gap_m = 0.065"}},
+      // The default wrist is at [0, 0, 0.1546]; 20 mm along the pinch puts the finger into the box.
+      {"hand.initial_wrist_position_m=[0.02,0,0.1546]",
+       {"the object and the hand overlap by ", "object.size_m = [0.05, 0.05, 0.08]",
+        "hand.open_gap_m = auto = 0.065 m", "hand.initial_wrist_position_m = [0.02, 0, 0.1546]"}},
       // A 3 mm high box puts the fingertip, level with its centre, into the table.
       {"object.size_m=[0.05,0.05,0.003]",
        {"the hand and the table overlap by ", "hand.initial_wrist_position_m = [auto, auto, auto]",
@@ -216,9 +217,10 @@ TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheK
       {"object.initial_position_m=[0,0,0.01]",
        {"the object and the table overlap by ", "object.initial_position_m = [0, 0, 0.01]"}},
   };
+  int index = 0;
   for (const auto& c : cases) {
     SCOPED_TRACE(c.set);
-    const std::string out = dir_.Path("out");
+    const std::string out = dir_.Path("out" + std::to_string(index++));
     const CliResult result = RunCli("run " + shipped + " --no-plots --out " + out + " --set " + c.set);
     EXPECT_EQ(result.exit_code, kExitBadInput) << result.out << result.err;
     EXPECT_NE(result.err.find(shipped + ": scene: "), std::string::npos) << result.err;
@@ -230,16 +232,15 @@ TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheK
 
 TEST(RunEndsTest, TheOverlapCheckPassesAHandPreShapedJustAroundTheObject) {
   const sensor::Layout layout = sensor::LoadLayout(SourcePath("sensor/layouts/default_20.yaml"));
-  sim::SceneConfig scene;
-  scene.object.size_m = {0.05, 0.05, 0.08};
-  scene.hand.open_gap_m = 0.0505;  // 0.25 mm clearance each side
-  sim::Simulation fits(layout, scene);
-  EXPECT_EQ(ErrorOf<std::invalid_argument>([&] { sim::CheckInitialPenetration(fits); }), "(no error)");
-  scene.hand.open_gap_m = 0.049;  // 0.5 mm into the object each side
-  sim::Simulation tight(layout, scene);
-  EXPECT_NE(ErrorOf<std::invalid_argument>([&] { sim::CheckInitialPenetration(tight); })
-                .find("hand.open_gap_m = 0.049"),
-            std::string::npos);
+  for (const sim::HandModel model : {sim::HandModel::kProsthetic, sim::HandModel::kJaw}) {
+    sim::SceneConfig scene;
+    scene.hand.model = model;
+    scene.object.size_m = {0.05, 0.05, 0.08};
+    scene.hand.open_gap_m = 0.0505;  // 0.25 mm clearance each side
+    SCOPED_TRACE(sim::ToString(model));
+    sim::Simulation fits(layout, scene);
+    EXPECT_EQ(ErrorOf<std::invalid_argument>([&] { sim::CheckInitialPenetration(fits); }), "(no error)");
+  }
 }
 
 // ---- values no real scene has ---------------------------------------------------------------------------------
