@@ -5,7 +5,8 @@
 // written) or 2 (refused: a one-line message, nothing written) -- never hang, never crash.
 //
 // A longer campaign: GRASPBED_BINARY=build/graspbed GRASPBED_MUTATION_RUNS=2000 GRASPBED_MUTATION_SEED=7
-//   [GRASPBED_MUTATION_LIMIT_S=20] build/tests/scenario/scenario_tests --gtest_filter='Mutation*'.
+//   [GRASPBED_MUTATION_LIMIT_S=20] [GRASPBED_MUTATION_SCENARIOS=dir] build/tests/scenario/scenario_tests
+//   --gtest_filter='Mutation*'.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -78,9 +79,12 @@ void CollectNumbers(YAML::Node node, const std::string& path, std::vector<std::p
   }
 }
 
+// The shipped scenarios, or the *.yaml of $GRASPBED_MUTATION_SCENARIOS (another library, or an older
+// checkout's against its own binary).
 std::vector<std::string> ShippedScenarios() {
+  const char* dir = std::getenv("GRASPBED_MUTATION_SCENARIOS");
   std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(SourcePath("scenarios"))) {
+  for (const auto& entry : fs::directory_iterator(dir != nullptr ? std::string(dir) : SourcePath("scenarios"))) {
     if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
   }
   std::sort(files.begin(), files.end());
