@@ -243,6 +243,18 @@ TEST(RunEndsTest, TheOverlapCheckPassesAHandPreShapedJustAroundTheObject) {
   }
 }
 
+// The frame ring is sized for the script's largest latency: half a second added mid-run (the ring
+// used to hold 0.1 s) delays the frames instead of ending the run with an error.
+TEST(RunEndsTest, LatencyAddedMidRunBeyondTheDefaultRingRunsToTheEnd) {
+  const TempDir dir("run_ends_latency");
+  const testing::ScenarioRun run = testing::RunScenarioText(
+      dir, "late", HeldBoxScenario(0.8, "  - {at_s: 0.2, action: add_latency, latency_s: 0.5}\n"));
+  EXPECT_TRUE(run.result.completed);
+  EXPECT_FALSE(run.result.metrics.physics_fault);
+  EXPECT_NEAR(run.result.metrics.sim_s, 0.8, kStepS);
+  EXPECT_GT(run.result.stale_ticks, 0u) << "0.5 s without a fresh frame must leave the state stale";
+}
+
 // ---- values no real scene has ---------------------------------------------------------------------------------
 
 TEST(RunEndsTest, ValuesNoRealSceneHasAreRefusedWithFileLineAndKey) {
