@@ -386,6 +386,7 @@ class SimulatedDevice {
     rig.scene = config.scene;
     rig.backend.sample_rate_hz = config.sensor.sample_rate_hz;
     rig.backend.latency_s = config.sensor.latency_s;
+    rig.backend.max_latency_s = scenario::MaxLatencyS(config);  // add_latency actions in the script
     rig.backend.drop_probability = 0.0;  // link faults are the emulator's business here
     rig.backend.strain_model = config.sensor.strain_model;
     rig.loop.readout = config.sensor.readout;

@@ -30,10 +30,11 @@ void InversionConfig::Validate() const {
 InversionConfig LoadInversionConfig(const common::YamlMap& map) {
   InversionConfig config;
   config.contact_threshold_n =
-      map.GetNumber("contact_threshold_n", config.contact_threshold_n, NumberRule::NonNegative());
-  config.rated_force_n = map.GetNumber("rated_force_n", config.rated_force_n, NumberRule::Positive());
+      map.GetNumber("contact_threshold_n", config.contact_threshold_n, NumberRule::Between(0.0, 1000.0));
+  config.rated_force_n = map.GetNumber("rated_force_n", config.rated_force_n, {0.0, 1000.0, true});
   config.out_of_range_margin_fraction =
-      map.GetNumber("out_of_range_margin_fraction", config.out_of_range_margin_fraction, NumberRule::NonNegative());
+      map.GetNumber("out_of_range_margin_fraction", config.out_of_range_margin_fraction,
+                    NumberRule::Between(0.0, 100.0));
   map.RejectUnknownKeys();
   return config;
 }

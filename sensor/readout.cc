@@ -63,18 +63,18 @@ ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig&
   ReadoutConfig config = defaults;
   const ReadoutConfig& d = defaults;
   config.baseline_frames = map.GetInt("baseline_frames", d.baseline_frames, 1, 1000000);
-  config.short_circuit_ohm = map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::NonNegative());
-  config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", d.open_circuit_ohm, NumberRule::Positive());
+  config.short_circuit_ohm = map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::Between(0.0, 1e6));
+  config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", d.open_circuit_ohm, {0.0, 1e9, true});
   config.min_plausible_fraction =
       map.GetNumber("min_plausible_fraction", d.min_plausible_fraction, NumberRule::Between(0.0, 0.999));
   config.max_plausible_fraction = map.GetNumber("max_plausible_fraction", d.max_plausible_fraction,
-                                                {1.0, std::numeric_limits<double>::infinity(), true});
+                                                {1.0, 1000.0, true});
   config.max_baseline_deviation_fraction = map.GetNumber(
-      "max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, NumberRule::Positive());
+      "max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, {0.0, 100.0, true});
   config.min_mean_dr_rel = map.GetNumber("min_mean_dr_rel", d.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
-  config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", d.max_abs_dr_rel, NumberRule::Positive());
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::NonNegative());
-  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::NonNegative());
+  config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", d.max_abs_dr_rel, {0.0, 1000.0, true});
+  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Between(0.0, 1e8));
+  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::Between(0.0, 1e8));
   if (config.adc_full_scale_ohm > 0.0 && !(config.adc_min_ohm < config.adc_full_scale_ohm)) {
     map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm", "needs adc_min_ohm < adc_full_scale_ohm");
   }

@@ -79,18 +79,18 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
   StrainModelConfig config = defaults;
   const StrainModelConfig& d = defaults;
   UnitConstants& nominal = config.nominal;
-  nominal.r0_ohm = map.GetNumber("r0_ohm", d.nominal.r0_ohm, NumberRule::Positive());
-  nominal.gauge_factor = map.GetNumber("gauge_factor", d.nominal.gauge_factor, NumberRule::Positive());
-  nominal.kn_per_n = map.GetNumber("kn_per_n", d.nominal.kn_per_n, NumberRule::Positive());
-  nominal.kt_per_n = map.GetNumber("kt_per_n", d.nominal.kt_per_n, NumberRule::Positive());
-  nominal.rated_force_n = map.GetNumber("rated_force_n", d.nominal.rated_force_n, NumberRule::Positive());
+  nominal.r0_ohm = map.GetNumber("r0_ohm", d.nominal.r0_ohm, {0.0, 1e7, true});
+  nominal.gauge_factor = map.GetNumber("gauge_factor", d.nominal.gauge_factor, {0.0, 1000.0, true});
+  nominal.kn_per_n = map.GetNumber("kn_per_n", d.nominal.kn_per_n, {0.0, 1.0, true});
+  nominal.kt_per_n = map.GetNumber("kt_per_n", d.nominal.kt_per_n, {0.0, 1.0, true});
+  nominal.rated_force_n = map.GetNumber("rated_force_n", d.nominal.rated_force_n, {0.0, 1000.0, true});
   config.r0_spread_fraction = map.GetNumber("r0_spread_fraction", d.r0_spread_fraction, NumberRule::Between(0.0, 0.3));
   config.sensitivity_spread_fraction =
       map.GetNumber("sensitivity_spread_fraction", d.sensitivity_spread_fraction, NumberRule::Between(0.0, 0.3));
-  config.noise_ohm = map.GetNumber("noise_ohm", d.noise_ohm, NumberRule::NonNegative());
+  config.noise_ohm = map.GetNumber("noise_ohm", d.noise_ohm, NumberRule::Between(0.0, 1e6));
   config.adc_bits = map.GetInt("adc_bits", d.adc_bits, 0, 32);
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Positive());
-  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::NonNegative());
+  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, {0.0, 1e8, true});
+  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::Between(0.0, 1e8));
   if (!(config.adc_min_ohm < config.adc_full_scale_ohm)) {
     map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm",
              "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" + std::to_string(config.adc_min_ohm) +
@@ -98,9 +98,10 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
   }
   config.temperature_coefficient_per_k =
       map.GetNumber("temperature_coefficient_per_k", d.temperature_coefficient_per_k, NumberRule::Between(-0.0999, 0.0999));
-  config.temperature_offset_k = map.GetNumber("temperature_offset_k", d.temperature_offset_k);
-  config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", d.temperature_ramp_k_per_s);
-  config.saturation_force_n = map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::NonNegative());
+  config.temperature_offset_k = map.GetNumber("temperature_offset_k", d.temperature_offset_k, NumberRule::Between(-200.0, 200.0));
+  config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", d.temperature_ramp_k_per_s,
+                    NumberRule::Between(-100.0, 100.0));
+  config.saturation_force_n = map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::Between(0.0, 1000.0));
   config.cross_talk_shear_fraction =
       map.GetNumber("cross_talk_shear_fraction", d.cross_talk_shear_fraction, NumberRule::Between(-1, 1));
   config.cross_talk_offset_per_mm =

@@ -80,10 +80,15 @@ void CheckInitialPenetration(const Simulation& simulation) {
   const std::string object_position = "object.initial_position_m = " + Triple(scene.object.initial_position_m);
   const std::string wrist = "hand.initial_wrist_position_m = " + Triple(scene.hand.initial_wrist_position_m);
   if (object_hand.geom1 >= 0) {
-    throw std::invalid_argument(
-        Describe(m, "the object and the hand overlap", object_hand) + size +
-        " does not fit between the digits at the pre-shape hand.open_gap_m = " + Number(scene.hand.open_gap_m) +
-        " m; use a smaller object or a wider hand.open_gap_m (or move " + object_position + " or " + wrist + ")");
+    // The pre-shape as the file gave it, or as it followed the object (open_gap_m absent = NaN).
+    const std::string gap = std::isnan(scene.hand.open_gap_m)
+                                ? "auto = " + Number(scene.OpenGapM()) + " m (the object's width plus 2 x "
+                                      "hand.preshape_clearance_m = " + Number(scene.hand.preshape_clearance_m) + " m)"
+                                : Number(scene.hand.open_gap_m) + " m";
+    throw std::invalid_argument(Describe(m, "the object and the hand overlap", object_hand) + "the object (" + size +
+                                ", " + object_position + ") is not clear of the digits of the pre-shape " +
+                                "hand.open_gap_m = " + gap + " at " + wrist +
+                                "; a smaller object, a wider pre-shape or another position fixes it");
   }
   if (object_table.geom1 >= 0) {
     throw std::invalid_argument(Describe(m, "the object and the table overlap", object_table) + object_position +

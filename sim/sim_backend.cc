@@ -22,6 +22,10 @@ void SimBackendConfig::Validate() const {
   if (!(latency_s >= 0.0) || latency_s > 10.0) {
     throw std::invalid_argument("sim backend latency_s = " + std::to_string(latency_s) + ": must be in [0, 10]");
   }
+  if (!(max_latency_s >= 0.0) || max_latency_s > 10.0) {
+    throw std::invalid_argument("sim backend max_latency_s = " + std::to_string(max_latency_s) +
+                                ": must be in [0, 10]");
+  }
   if (!(drop_probability >= 0.0 && drop_probability <= 1.0)) {
     throw std::invalid_argument("sim backend drop_probability = " + std::to_string(drop_probability) +
                                 ": must be in [0, 1]");
@@ -47,7 +51,7 @@ SimBackend::SimBackend(Simulation& simulation, const SimBackendConfig& config, u
       drop_rng_(seed ^ 0x5eed'd20b'f4a3'e001ull) {
   config_.Validate();
   loads_.resize(static_cast<size_t>(simulation_.unit_count()));
-  const double ring_latency_s = std::max(config_.latency_s, kMinRingLatencyS);
+  const double ring_latency_s = std::max({config_.latency_s, config_.max_latency_s, kMinRingLatencyS});
   ring_.resize(static_cast<size_t>(std::ceil(ring_latency_s * config_.sample_rate_hz)) + 8);
   newest_.unit_count = simulation_.unit_count();
 }

@@ -27,6 +27,9 @@ namespace graspbed::sim {
 struct SimBackendConfig {
   double sample_rate_hz = 1000.0;   ///< frames per second of simulated time
   double latency_s = 0.0;           ///< sample -> available to Read() [s]; >= 0
+  /// Largest latency SetLatency() will be given during the run [s] (the frame ring is sized for
+  /// it); values below latency_s count as latency_s.
+  double max_latency_s = 0.0;
   /// Probability that a sampled frame is lost (seeded); its sequence number is skipped, so the
   /// readout sees a gap exactly as with a lost serial packet [0..1].
   double drop_probability = 0.0;

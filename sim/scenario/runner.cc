@@ -413,6 +413,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   rig_config.scene = config.scene;
   rig_config.backend.sample_rate_hz = config.sensor.sample_rate_hz;
   rig_config.backend.latency_s = config.sensor.latency_s;
+  rig_config.backend.max_latency_s = MaxLatencyS(config);
   rig_config.backend.drop_probability = config.sensor.drop_probability;
   rig_config.backend.strain_model = config.sensor.strain_model;
   rig_config.loop.stale_timeout_s = config.controller.stale_timeout_s;
@@ -446,14 +447,12 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
                          config.sensor.inversion.contact_threshold_n);
 
   // Everything the loop writes is allocated here.
-  const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * config.controller.rate_hz)) + 16;
+  // The loop ticks at most once per physics step (the loader bounds this storage, kMaxSignalBytes).
+  const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
+  const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * ticks_per_s)) + 16;
   SignalLog log(NumericColumns(units), {"intent", "phase"}, capacity_rows);
-  double max_latency_s = config.sensor.latency_s;
-  for (const Action& action : config.script) {
-    if (action.kind == ActionKind::kAddLatency) max_latency_s += action.latency_s;
-  }
   const size_t ring_capacity = static_cast<size_t>(std::ceil(
-                                   (max_latency_s + config.controller.stale_timeout_s + 0.05) *
+                                   (MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
                                    config.controller.rate_hz)) + 8;
   TruthRing truth_ring(ring_capacity, units, config.controller.rate_hz);
 
@@ -711,8 +710,8 @@ std::string SummaryTable(const RunResult& result) {
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;
   if (m.physics_fault) {
-    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n", m.physics_fault_time_s,
-                  m.physics_fault_cause.c_str());
+    std::snprintf(line, sizeof(line), "  PHYSICS FAULT at t = %.6g s, the run ended there: %s\n",
+                  m.physics_fault_time_s, m.physics_fault_cause.c_str());
     out << line;
   }
   for (const ExpectationOutcome& o : result.outcomes) {

@@ -23,6 +23,14 @@ using common::NumberRule;
 using common::YamlMap;
 
 constexpr double kMaxDurationS = 3600.0;  // one simulated hour: beyond that a scenario is a mistake
+constexpr double kMaxRateHz = 10000.0;  // sensor sampling and control rates [Hz]
+constexpr double kMaxSpeedMS = 10.0;       // metric speed thresholds [m/s]
+constexpr double kMaxStaleTimeoutS = 1.0;  // data older than a second is stale for any grasp [s]
+// Signals a run may keep in memory (SignalLog reserves them before the run) [bytes].
+constexpr double kMaxSignalBytes = 2e9;
+constexpr double kMaxLatencyS = 1.0;  // sensor latency in total, file plus add_latency actions [s]
+const NumberRule kDuration = NumberRule::Between(0.0, kMaxDurationS);
+const NumberRule kPositiveDuration{0.0, kMaxDurationS, true};
 constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every integer up to here is exact in YAML
 
 struct ActionEntry {
@@ -60,6 +68,14 @@ ScriptEvent EventFromName(const std::string& name) {
   throw std::logic_error("unvalidated event name " + name);
 }
 
+std::string FormatDouble(double value) {
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  if (std::isnan(value)) return ".nan";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
 std::string FileStem(const std::string& path) {
   std::filesystem::path p(path);
   return p.stem().string();
@@ -83,12 +99,12 @@ Profile ReadProfile(const YamlMap& map) {
   return text == "linear" ? Profile::kLinear : Profile::kMinimumJerk;
 }
 
-// A YAML list of exactly three finite numbers.
+// A YAML list of exactly three finite numbers within `rule`.
 std::array<double, 3> ReadVector(const YamlMap& map, std::string_view key, std::array<double, 3> fallback,
-                                 bool required) {
+                                 bool required, NumberRule rule = {}) {
   if (required && !map.Has(key)) map.Fail(key, "missing required key (a list of 3 numbers)");
   const std::vector<double> values =
-      map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3);
+      map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3, rule);
   return {values[0], values[1], values[2]};
 }
 
@@ -108,7 +124,7 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       map.Fail("timeout_s", "missing required key: an action after an event needs timeout_s > 0, the longest "
                             "wait for the event [s]");
     }
-    action.timeout_s = map.RequireNumber("timeout_s", NumberRule::Positive());
+    action.timeout_s = map.RequireNumber("timeout_s", kPositiveDuration);
   } else {
     for (const char* key : {"delay_s", "timeout_s"}) {
       if (map.Has(key)) map.Fail(key, "only with after: <event>; a fixed-time action fires at at_s");
@@ -127,44 +143,45 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       const bool offset = map.Has("offset_m");
       if (absolute == offset) map.FailHere("move needs exactly one of position_m (absolute) or offset_m");
       action.relative = offset;
-      action.vector = ReadVector(map, absolute ? "position_m" : "offset_m", {0, 0, 0}, true);
-      action.duration_s = map.GetNumber("duration_s", 1.0, NumberRule::NonNegative());
+      action.vector = ReadVector(map, absolute ? "position_m" : "offset_m", {0, 0, 0}, true,
+                                 NumberRule::Between(-sim::kMaxPositionM, sim::kMaxPositionM));
+      action.duration_s = map.GetNumber("duration_s", 1.0, kDuration);
       action.profile = ReadProfile(map);
       break;
     }
     case ActionKind::kLift:
       action.height_m = map.RequireNumber("height_m", NumberRule::Between(-1.0, 1.0));
-      action.duration_s = map.GetNumber("duration_s", 1.0, NumberRule::NonNegative());
+      action.duration_s = map.GetNumber("duration_s", 1.0, kDuration);
       action.profile = ReadProfile(map);
       break;
     case ActionKind::kShake: {
       action.frequency_hz = map.RequireNumber("frequency_hz", NumberRule{0.0, 100.0, true});
       action.amplitude_m = map.RequireNumber("amplitude_m", NumberRule{0.0, 0.1, true});
-      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
-      action.vector = ReadVector(map, "axis", {0, 0, 1}, false);
+      action.duration_s = map.RequireNumber("duration_s", kPositiveDuration);
+      action.vector = ReadVector(map, "axis", {0, 0, 1}, false, NumberRule::Between(-1e3, 1e3));
       const double norm = std::hypot(action.vector[0], action.vector[1], action.vector[2]);
       if (!(norm > 1e-9)) map.Fail("axis", "must not be the zero vector");
       for (double& component : action.vector) component /= norm;
       break;
     }
     case ActionKind::kAddMass:
-      action.mass_kg = map.RequireNumber("mass_kg", NumberRule::Between(-100.0, 100.0));
+      action.mass_kg = map.RequireNumber("mass_kg", NumberRule::Between(-sim::kMaxObjectMassKg, sim::kMaxObjectMassKg));
       if (action.mass_kg == 0.0) map.Fail("mass_kg", "must not be 0");
-      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, kDuration);
       action.profile = ReadProfile(map);
       break;
     case ActionKind::kPull:
       action.vector = ReadVector(map, "force_n", {0, 0, 0}, true);
       for (double component : action.vector) {
-        if (std::abs(component) > 1000.0) map.Fail("force_n", "each component must be within +-1000 N");
+        if (std::abs(component) > sim::kMaxForceN) map.Fail("force_n", "each component must be within +-1000 N");
       }
-      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
-      action.duration_s = map.GetNumber("duration_s", 0.0, NumberRule::NonNegative());
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, kDuration);
+      action.duration_s = map.GetNumber("duration_s", 0.0, kDuration);
       action.profile = ReadProfile(map);
       break;
     case ActionKind::kSetFriction:
-      action.friction = map.RequireNumber("friction", NumberRule{0.0, 10.0, true});
-      action.ramp_s = map.GetNumber("ramp_s", 0.0, NumberRule::NonNegative());
+      action.friction = map.RequireNumber("friction", NumberRule{0.0, sim::kMaxFriction, true});
+      action.ramp_s = map.GetNumber("ramp_s", 0.0, kDuration);
       action.profile = ReadProfile(map);
       break;
     case ActionKind::kDeadUnit:
@@ -179,13 +196,13 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       break;
     case ActionKind::kNoiseBurst:
       action.noise_scale = map.GetNumber("scale", 10.0, NumberRule::Between(0.0, 1e4));
-      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
+      action.duration_s = map.RequireNumber("duration_s", kPositiveDuration);
       if (config.sensor.strain_model.noise_ohm <= 0.0) {
         map.Fail("action", "noise_burst scales sensor.strain_model.noise_ohm, which is 0; set it > 0");
       }
       break;
     case ActionKind::kDropFrames:
-      action.duration_s = map.RequireNumber("duration_s", NumberRule::Positive());
+      action.duration_s = map.RequireNumber("duration_s", kPositiveDuration);
       action.probability = map.GetNumber("probability", 1.0, NumberRule::Between(0.0, 1.0));
       break;
     case ActionKind::kAddLatency:
@@ -231,8 +248,8 @@ Expectations LoadExpectations(const YamlMap& map, const ScenarioConfig& config) 
 
 MetricsConfig LoadMetricsConfig(const YamlMap& map) {
   MetricsConfig m;
-  m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, NumberRule::Positive());
-  m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, NumberRule::Positive());
+  m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, {0.0, kMaxSpeedMS, true});
+  m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, {0.0, kMaxSpeedMS, true});
   if (m.slip_speed_m_s < m.creep_speed_m_s) {
     // Name the key the file actually set: an absent one would print as "= null".
     char limit[64];
@@ -243,12 +260,11 @@ MetricsConfig LoadMetricsConfig(const YamlMap& map) {
     std::snprintf(limit, sizeof(limit), "%g", m.slip_speed_m_s);
     map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + std::string(limit) + ")");
   }
-  m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, NumberRule::NonNegative());
-  m.early_detection_window_s =
-      map.GetNumber("early_detection_window_s", m.early_detection_window_s, NumberRule::NonNegative());
-  m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, NumberRule::Positive());
-  m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, NumberRule::Positive());
-  m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, NumberRule::Positive());
+  m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, kDuration);
+  m.early_detection_window_s = map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
+  m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, {0.0, sim::kMaxForceN, true});
+  m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, {0.0, sim::kMaxPositionM, true});
+  m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, kPositiveDuration);
   m.stable_force_band = map.GetNumber("stable_force_band", m.stable_force_band, NumberRule{0.0, 1.0, true});
   map.RejectUnknownKeys();
   return m;
@@ -289,7 +305,7 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   }
   const std::string layout_path = IsShippedLayout(s.layout) ? ShippedLayoutPath(s.layout) : s.layout;
   *unit_count = sensor::LoadLayout(layout_path).unit_count();
-  s.sample_rate_hz = map.GetNumber("sample_rate_hz", s.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
+  s.sample_rate_hz = map.GetNumber("sample_rate_hz", s.sample_rate_hz, NumberRule::Between(1.0, kMaxRateHz));
   s.latency_s = map.GetNumber("latency_s", s.latency_s, NumberRule::Between(0.0, 1.0));
   s.drop_probability = map.GetNumber("drop_probability", s.drop_probability, NumberRule::Between(0.0, 1.0));
   // Nominal constants first (explicit keys, then the FEA's kn and kt), then the profile resolved
@@ -371,9 +387,9 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
       c.params[key] = params->GetNumber(key, match->default_value, NumberRule::Between(match->min, match->max));
     }
   }
-  c.grip_ceiling_n = map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::NonNegative());
-  c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, 100000.0));
-  c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, NumberRule::Positive());
+  c.grip_ceiling_n = map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN));
+  c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, kMaxRateHz));
+  c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, {0.0, kMaxStaleTimeoutS, true});
   map.RejectUnknownKeys();
   // Each value is in its range; what is left are the controller's cross-field checks (e.g. min_grip_n
   // <= max_grip_n). Build it once and blame the parameter its message names.
@@ -443,6 +459,26 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   }
   map.RejectUnknownKeys();
   AtMap(map, [&] { config.Validate(); });
+  double latency_s = config.sensor.latency_s;
+  for (const Action& action : config.script) {
+    if (action.kind != ActionKind::kAddLatency) continue;
+    latency_s += action.latency_s;
+    if (latency_s > kMaxLatencyS) {
+      throw ConfigError(file + ":" + std::to_string(action.line) + ": add_latency at_s = " +
+                        FormatDouble(action.at_s) + ": sensor.latency_s plus the add_latency actions up to here = " +
+                        FormatDouble(latency_s) + " s: must be <= " + FormatDouble(kMaxLatencyS) + " s");
+    }
+  }
+  // The signals are reserved before the run (one row per control tick, at most one per step).
+  const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
+  const double row_bytes = 8.0 * (40.0 + 7.0 * unit_count);
+  const double signal_bytes = std::ceil(config.duration_s * ticks_per_s) * row_bytes;
+  if (signal_bytes > kMaxSignalBytes) {
+    map.Fail("duration_s", "with controller.rate_hz = " + FormatDouble(config.controller.rate_hz) + " the run keeps " +
+                               FormatDouble(std::round(signal_bytes / 1e6)) + " MB of signals (at most " +
+                               FormatDouble(kMaxSignalBytes / 1e6) +
+                               " MB): shorten duration_s or lower controller.rate_hz");
+  }
   return config;
 }
 
@@ -519,14 +555,6 @@ void EnsureMap(YAML::Node& node, const std::string& what) {
   } else if (!node.IsMap()) {
     throw std::invalid_argument("--set " + what + ": not a mapping in the scenario");
   }
-}
-
-std::string FormatDouble(double value) {
-  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  if (std::isnan(value)) return ".nan";
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
 }
 
 void EmitNumber(YAML::Emitter& out, const char* key, double value) {
@@ -906,6 +934,14 @@ ScenarioConfig LoadScenario(const std::string& path, const std::vector<Override>
   std::stringstream text;
   text << stream.rdbuf();
   return LoadScenarioFromString(text.str(), path, overrides);
+}
+
+double MaxLatencyS(const ScenarioConfig& config) {
+  double latency_s = config.sensor.latency_s;
+  for (const Action& action : config.script) {
+    if (action.kind == ActionKind::kAddLatency) latency_s += action.latency_s;
+  }
+  return latency_s;
 }
 
 std::string ResolveLayoutPath(const ScenarioConfig& config) {

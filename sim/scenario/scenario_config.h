@@ -247,6 +247,9 @@ void ApplyOverride(YAML::Node& root, const Override& override_value);
 /// to the same configuration).
 std::string EmitScenarioYaml(const ScenarioConfig& config);
 
+/// Largest sensor latency of the run [s]: sensor.latency_s plus every add_latency action.
+double MaxLatencyS(const ScenarioConfig& config);
+
 /// Absolute path of the layout file `config.sensor.layout` names.
 std::string ResolveLayoutPath(const ScenarioConfig& config);
 

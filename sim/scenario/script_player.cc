@@ -104,7 +104,8 @@ void ScriptPlayer::Fire(const Action& action, double time_s, sim::SimRig& rig) {
     case ActionKind::kAddMass: {
       // From the mass now to the previous target plus this step: overlapping ramps add up.
       const double now = mass_.At(time_s);
-      const double target = std::max(mass_.to + action.mass_kg, 1e-6);
+      // The total stays within the bounds of object.mass_kg (an empty cup keeps its own mass).
+      const double target = std::clamp(mass_.to + action.mass_kg, sim::kMinObjectMassKg, sim::kMaxObjectMassKg);
       mass_ = Ramp{now, target, time_s, action.ramp_s, action.profile, true};
       break;
     }

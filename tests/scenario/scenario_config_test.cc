@@ -93,7 +93,8 @@ TEST(ScenarioConfigTest, UnknownTopLevelKeyNamesLineAndValidKeys) {
 TEST(ScenarioConfigTest, WrongTypeAndOutOfRangeNameKeyAndValue) {
   EXPECT_NE(ErrorOf("object:\n  mass_kg: heavy\n").find("test.yaml:2: object.mass_kg = heavy: expected a number"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("object:\n  shape: box\n  mass_kg: -0.1\n").find("test.yaml:3: object.mass_kg = -0.1: must be > 0"),
+  EXPECT_NE(ErrorOf("object:\n  shape: box\n  mass_kg: -0.1\n")
+                .find("test.yaml:3: object.mass_kg = -0.1: must be >= 0.001"),
             std::string::npos);
   EXPECT_NE(ErrorOf("duration_s: 0\n").find("test.yaml:1: duration_s = 0: must be > 0"), std::string::npos);
   EXPECT_NE(ErrorOf("seed: 1.5\n").find("test.yaml:1: seed = 1.5: expected a whole number"), std::string::npos);
@@ -180,7 +181,7 @@ TEST(ScenarioConfigTest, OverridesUseDottedKeysAndAreValidatedLikeTheFile) {
 
   std::string error = ErrorOf(text, {{"object.mass_kg", "-1"}});
   EXPECT_NE(error.find("--set object.mass_kg=-1: "), std::string::npos) << error;
-  EXPECT_NE(error.find("object.mass_kg = -1: must be > 0"), std::string::npos) << error;
+  EXPECT_NE(error.find("object.mass_kg = -1: must be >= 0.001"), std::string::npos) << error;
   error = ErrorOf(text, {{"object.mas", "1"}});
   EXPECT_NE(error.find("--set object.mas=1: "), std::string::npos) << error;
   EXPECT_NE(error.find("object.mas: unknown key"), std::string::npos) << error;

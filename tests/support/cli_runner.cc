@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <string>
 
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
@@ -14,7 +15,10 @@ std::string CliBinary() {
   return binary == nullptr ? "" : binary;
 }
 
-CliResult RunCli(const std::string& arguments) {
+namespace {
+
+// `prefix` goes before the binary (e.g. a `timeout` command), `arguments` after it.
+CliResult Run(const std::string& prefix, const std::string& arguments) {
   CliResult result;
   const std::string binary = CliBinary();
   if (binary.empty()) {
@@ -25,11 +29,23 @@ CliResult RunCli(const std::string& arguments) {
   const TempDir capture("cli_capture");
   const std::string out_path = capture.Path("stdout");
   const std::string err_path = capture.Path("stderr");
-  const std::string command = binary + " " + arguments + " >" + out_path + " 2>" + err_path + " </dev/null";
+  const std::string command =
+      prefix + binary + " " + arguments + " >" + out_path + " 2>" + err_path + " </dev/null";
   const int status = std::system(command.c_str());
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   result.out = ReadText(out_path);
   result.err = ReadText(err_path);
+  return result;
+}
+
+}  // namespace
+
+CliResult RunCli(const std::string& arguments) { return Run("", arguments); }
+
+CliResult RunCliWithin(const std::string& arguments, double limit_s) {
+  // timeout exits 128 + 9 when it had to kill; the shell reports a child killed by signal N as 128 + N.
+  CliResult result = Run("timeout -s KILL " + std::to_string(limit_s) + " ", arguments);
+  result.timed_out = result.exit_code == 128 + 9;
   return result;
 }
 

@@ -15,6 +15,7 @@ struct CliResult {
   int exit_code = -1;  ///< -1 when it did not exit normally (or could not be started)
   std::string out;     ///< everything written to stdout
   std::string err;     ///< everything written to stderr
+  bool timed_out = false;  ///< RunCliWithin only: killed at its time limit
 };
 
 /// Runs `$GRASPBED_BINARY <arguments>` to completion through the shell (arguments must be
@@ -22,5 +23,9 @@ struct CliResult {
 /// captured to files (neither is a terminal). Without GRASPBED_BINARY: exit code -1 and a message
 /// in `err`.
 CliResult RunCli(const std::string& arguments);
+
+/// RunCli, but the process is killed (SIGKILL, coreutils `timeout`) after `limit_s` seconds of wall
+/// time; then `timed_out` is set. A process that dies of a signal gets exit code 128 + signal.
+CliResult RunCliWithin(const std::string& arguments, double limit_s);
 
 }  // namespace graspbed::testing
