@@ -130,7 +130,10 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("vibration_confirm_frames", slip.vibration_confirm_frames, 1, 100, "frames",
                     "vibration cue fires after this many consecutive frames above its threshold"),
       GRASPBED_BIND("vibration_min_rms_n", slip.vibration_min_rms_n, 0.0001, 10.0, "N",
-                    "lower bound of the vibration threshold"),
+                    "lower bound of the vibration threshold (mechanical vibration, noise-free signals)"),
+      GRASPBED_BIND("vibration_noise_sigmas", slip.vibration_noise_sigmas, 0.0, 20.0, "sigma",
+                    "with the readout's measured noise: vibration threshold floor = max(vibration_min_rms_n, this x "
+                    "the high-passed per-unit shear noise); 0 = off"),
       GRASPBED_BIND("noise_floor_time_s", slip.noise_floor_time_s, 0.01, 100.0, "s",
                     "time constant of the learned noise floor"),
       GRASPBED_BIND("centroid_detector", slip.centroid_enabled, 0, 1, "",

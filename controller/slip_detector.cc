@@ -26,6 +26,9 @@ constexpr double kCentroidDeadbandFraction = 0.5;
 constexpr double kContactSumFactor = 3.0;
 /// Below this sum of squared weights a set carries no vibration estimate [N^2].
 constexpr double kMinWeightEnergyN2 = 1e-4;
+/// Samples of the high-pass impulse response summed for its noise power gain (it has decayed to
+/// nothing long before: the slowest pole pair settles within a few hundred samples at 40 Hz / 1 kHz).
+constexpr int kImpulseResponseSamples = 20000;
 
 void Require(bool ok, const char* field, double value, const char* rule) {
   if (ok) return;
@@ -51,6 +54,8 @@ void SlipDetectorConfig::Validate() const {
   Require(vibration_factor >= 1.0, "vibration_factor", vibration_factor, "must be >= 1");
   Require(vibration_confirm_frames >= 1, "vibration_confirm_frames", vibration_confirm_frames, "must be >= 1");
   Require(vibration_min_rms_n > 0.0, "vibration_min_rms_n", vibration_min_rms_n, "must be > 0");
+  Require(vibration_noise_sigmas >= 0.0 && std::isfinite(vibration_noise_sigmas), "vibration_noise_sigmas",
+          vibration_noise_sigmas, "must be >= 0");
   Require(noise_floor_time_s > 0.0, "noise_floor_time_s", noise_floor_time_s, "must be > 0");
   Require(centroid_filter_s >= 0.0, "centroid_filter_s", centroid_filter_s, "must be >= 0");
   const double window_samples = centroid_window_s * sample_rate_hz;
@@ -75,6 +80,13 @@ SlipDetector::SlipDetector(const SlipDetectorConfig& config) : config_(config) {
   const double ratio_alpha = config_.ratio_filter_s > 0.0 ? 1.0 - std::exp(-period_s / config_.ratio_filter_s) : 1.0;
   ratio_variance_reduction_ = ratio_alpha / (2.0 - ratio_alpha);
   for (auto& filter : shear_highpass_) filter = HighPassBiquad(config_.vibration_highpass_hz, config_.sample_rate_hz);
+  // White noise power the high-pass keeps: the energy of its impulse response.
+  HighPassBiquad impulse(config_.vibration_highpass_hz, config_.sample_rate_hz);
+  highpass_power_fraction_ = 0.0;
+  for (int n = 0; n < kImpulseResponseSamples; ++n) {
+    const double h = impulse.Update(n == 0 ? 1.0 : 0.0);
+    highpass_power_fraction_ += h * h;
+  }
   vibration_energy_ = LowPassFilter(config_.vibration_window_s, period_s);
   centroid_row_filter_ = LowPassFilter(config_.centroid_filter_s, period_s);
   const double centroid_alpha =
@@ -91,6 +103,8 @@ void SlipDetector::Reset() {
   noise_energy_ = start_rms * start_rms;
   noise_samples_ = 0;
   signals_ = SlipSignals{};
+  noise_known_seen_ = false;
+  noise_generation_seen_ = 0;
   Restart();
 }
 
@@ -148,6 +162,15 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   signals_.settled = settle_remaining_ == 0;
   const bool live = armed && signals_.settled && signals_.in_contact;
 
+  // The readout's own noise figure, RMS over the valid units: it changes only with a new tare or a
+  // unit changing validity.
+  const bool noise_changed = state.noise_known != noise_known_seen_ || state.noise_generation != noise_generation_seen_;
+  if (noise_changed || validity_changed) {
+    noise_known_seen_ = state.noise_known;
+    noise_generation_seen_ = state.noise_generation;
+    UpdateSensorNoise(state);
+  }
+
   UpdateRatio(state, grip_n, friction_estimate);
   UpdateVibration(state, learn_noise);
   UpdateCentroid(state, live);
@@ -166,6 +189,25 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
     centroid_reference_ = {signals_.centroid_row, signals_.centroid_column};
   }
   return signals_;
+}
+
+void SlipDetector::UpdateSensorNoise(const TactileState& state) {
+  signals_.sensor_shear_noise_n = 0.0;
+  signals_.sensor_normal_noise_n = 0.0;
+  if (!state.noise_known) return;
+  const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
+  double shear_sum = 0.0, normal_sum = 0.0;
+  int valid = 0;
+  for (int i = 0; i < count; ++i) {
+    if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
+    shear_sum += state.ft_noise_n[static_cast<size_t>(i)] * state.ft_noise_n[static_cast<size_t>(i)];
+    normal_sum += state.fn_noise_n[static_cast<size_t>(i)] * state.fn_noise_n[static_cast<size_t>(i)];
+    ++valid;
+  }
+  if (valid > 0) {
+    signals_.sensor_shear_noise_n = std::sqrt(shear_sum / valid);
+    signals_.sensor_normal_noise_n = std::sqrt(normal_sum / valid);
+  }
 }
 
 void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate) {
@@ -273,8 +315,13 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
     }
   }
   signals_.noise_rms_n = std::sqrt(noise_energy_);
-  signals_.vibration_threshold_n =
-      std::max(config_.vibration_factor * signals_.noise_rms_n, config_.vibration_min_rms_n);
+  // The floor: the fixed bound (the contact's own mechanical vibration, noise-free signals) or, on a
+  // noisier readout, a multiple of the noise the readout measured at its tare (known from the first
+  // frame of contact, before the learned floor has converged, and untouched by the contact).
+  const double floor_n = std::max(config_.vibration_min_rms_n, config_.vibration_noise_sigmas *
+                                                                   signals_.sensor_shear_noise_n *
+                                                                   std::sqrt(highpass_power_fraction_));
+  signals_.vibration_threshold_n = std::max(config_.vibration_factor * signals_.noise_rms_n, floor_n);
 }
 
 void SlipDetector::UpdateCentroid(const TactileState& state, bool live) {
@@ -319,13 +366,22 @@ void SlipDetector::UpdateCentroid(const TactileState& state, bool live) {
   }
   const Centroid raw{row_sum / weight_sum, column_sum / weight_sum};
   const Centroid now{centroid_row_filter_.Update(raw.row), centroid_column_filter_.Update(raw.column)};
-  // Noise of the centroid from the normal-force noise of the loaded units (taken equal to the
-  // learned shear noise, an upper bound for this sensor where k_t < k_n): sigma_c = sigma_fn x
+  // Noise of the centroid from the normal-force noise of the loaded units (from the readout's figures
+  // when it has them, else taken equal to the learned shear noise, an upper bound for this sensor
+  // where k_t < k_n): sigma_c = sigma_fn x
   // sqrt(sum |p - c|^2) / sum w, through the low-pass, and x sqrt(2) for a difference of two samples.
   const double spread = std::max(0.0, position_square_sum - 2.0 * (raw.row * position_sum[0] + raw.column * position_sum[1]) +
                                           loaded * (raw.row * raw.row + raw.column * raw.column));
+  // With the readout's figures the learned (live) shear noise is scaled by their normal/shear ratio,
+  // so the centroid follows a noise burst as the learned floor does, with the right proportion.
+  const double normal_noise_n =
+      signals_.sensor_normal_noise_n > 0.0 && signals_.sensor_shear_noise_n > 0.0
+          ? std::max(signals_.sensor_normal_noise_n,
+                     signals_.noise_rms_n / std::sqrt(highpass_power_fraction_) *
+                         (signals_.sensor_normal_noise_n / signals_.sensor_shear_noise_n))
+          : signals_.noise_rms_n;
   const double difference_sigma =
-      signals_.noise_rms_n * std::sqrt(spread * centroid_variance_reduction_ * 2.0) / weight_sum;
+      normal_noise_n * std::sqrt(spread * centroid_variance_reduction_ * 2.0) / weight_sum;
   signals_.centroid_shift_threshold = config_.centroid_shift_units + config_.centroid_noise_sigmas * difference_sigma;
   signals_.centroid_drift_threshold = config_.centroid_drift_units + config_.centroid_noise_sigmas * difference_sigma;
   centroid_history_.Push(now);

@@ -42,6 +42,14 @@ struct SlipDetectorConfig {
   double vibration_factor = 1.7;        ///< cue fires when the RMS exceeds this multiple of the noise RMS
   int vibration_confirm_frames = 3;     ///< cue fires after this many consecutive frames above threshold
   double vibration_min_rms_n = 0.03;    ///< lower bound of the threshold (noise-free signals) [N]
+  /// When the readout reports its own noise figure (TactileState::noise_known with ft_noise_n > 0,
+  /// i.e. a real or realistically simulated readout chain), the vibration threshold's lower bound is
+  /// max(vibration_min_rms_n, this x that per-unit shear noise after the high-pass); 0 = off (the
+  /// default for now: on the simulated hand a floor raised from 0.03 to 0.036 N in degraded_sensor
+  /// changed the response timing and raised its false slips from 4 to 11; to be tuned with the
+  /// realistic profiles). The fixed bound stays either way: the contact's own mechanical vibration
+  /// is not in the readout's figure.
+  double vibration_noise_sigmas = 0.0;
   double noise_floor_time_s = 0.5;      ///< time constant of the noise-floor estimate [s]
 
   bool centroid_enabled = true;         ///< use the contact-centroid movement cue
@@ -77,6 +85,12 @@ struct SlipSignals {
   double vibration_rms_n = 0.0;
   double vibration_threshold_n = 0.0;  ///< current threshold of the vibration cue [N]
   double noise_rms_n = 0.0;            ///< learned RMS of high-passed shear noise per unit [N]
+  /// Per-unit noise the readout measured at its tare, RMS over the valid units [N]; 0 when the
+  /// state carries none (ideal sensor, stored baseline). With both figures the centroid's noise is
+  /// the learned shear noise scaled by their normal/shear ratio (at least the normal figure)
+  /// instead of the learned shear noise itself (an upper bound: k_t < k_n, 5x with the FEA's).
+  double sensor_shear_noise_n = 0.0;
+  double sensor_normal_noise_n = 0.0;
   double centroid_row = 0.0;           ///< filtered normal-force centroid, row index (along the axis)
   double centroid_column = 0.0;        ///< filtered normal-force centroid, column index (around)
   double centroid_shift_units = 0.0;   ///< centroid movement over the window [unit pitches]
@@ -121,6 +135,7 @@ class SlipDetector {
   };
 
   bool IsAxial(int unit) const;
+  void UpdateSensorNoise(const sensor::TactileState& state);
   void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate);
   void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
   void UpdateCentroid(const sensor::TactileState& state, bool live);
@@ -139,6 +154,9 @@ class SlipDetector {
   LowPassFilter ratio_filter_;  ///< axial component (or the whole ratio without orientations)
   LowPassFilter ratio_circumferential_filter_;
   double ratio_variance_reduction_ = 1.0;
+  double highpass_power_fraction_ = 1.0;  // white-noise power the shear high-pass keeps [-]
+  bool noise_known_seen_ = false;          // the state's noise figures last summarised
+  uint32_t noise_generation_seen_ = 0;
   double centroid_variance_reduction_ = 1.0;
   std::array<HighPassBiquad, sensor::kMaxUnits> shear_highpass_{};
   LowPassFilter vibration_energy_;

@@ -78,6 +78,7 @@ Inversion::Inversion(const Layout& layout, const Calibration& calibration, const
 void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
   state->sequence = frame.sequence;
   state->time_s = frame.time_s;
+  const bool units_changed = state->unit_count != unit_count_;
   state->unit_count = unit_count_;
   state->valid_count = 0;
   state->total_fn_n = 0.0;
@@ -88,12 +89,19 @@ void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
   const double limit_n = config_.rated_force_n * (1.0 + config_.out_of_range_margin_fraction);
   // A frame for another unit count carries nothing usable for this layout.
   const bool size_ok = frame.unit_count == unit_count_;
+  // The noise figures change only when the readout tares again.
+  if (state->noise_generation != frame.noise_generation || units_changed) {
+    for (int unit = 0; unit < unit_count_; ++unit) {
+      const UnitCalibration& calibration = calibration_[unit];
+      state->r1_noise_ohm[unit] = frame.r1_noise_ohm[unit];
+      state->r2_noise_ohm[unit] = frame.r2_noise_ohm[unit];
+      state->fn_noise_n[unit] = frame.sum_noise_rel[unit] / (calibration.gauge_factor * calibration.kn_per_n);
+      state->ft_noise_n[unit] = frame.diff_noise_rel[unit] / (calibration.gauge_factor * calibration.kt_per_n);
+    }
+    state->noise_generation = frame.noise_generation;
+  }
   for (int unit = 0; unit < unit_count_; ++unit) {
     const UnitCalibration& calibration = calibration_[unit];
-    state->r1_noise_ohm[unit] = frame.r1_noise_ohm[unit];
-    state->r2_noise_ohm[unit] = frame.r2_noise_ohm[unit];
-    state->fn_noise_n[unit] = frame.sum_noise_rel[unit] / (calibration.gauge_factor * calibration.kn_per_n);
-    state->ft_noise_n[unit] = frame.diff_noise_rel[unit] / (calibration.gauge_factor * calibration.kt_per_n);
     UnitValidity validity = size_ok ? frame.validity[unit] : UnitValidity::kImplausible;
     if (validity != UnitValidity::kValid && validity != UnitValidity::kOutOfRange) {
       state->fn_n[unit] = 0.0;

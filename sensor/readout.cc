@@ -134,6 +134,7 @@ void Readout::SetBaseline(std::span<const double> r1_ohm, std::span<const double
   r2_noise_ohm_.fill(0.0);
   sum_noise_rel_.fill(0.0);
   diff_noise_rel_.fill(0.0);
+  if (++noise_generation_ == 0) noise_generation_ = 1;
   tared_ = true;
 }
 
@@ -165,6 +166,7 @@ void Readout::FinishBaseline() {
     FinishNoise(unit);
   }
   noise_known_ = true;
+  if (++noise_generation_ == 0) noise_generation_ = 1;
   tared_ = true;
 }
 
@@ -197,11 +199,14 @@ void Readout::Process(const RawFrame& frame, ReadoutFrame* out) {
   out->time_s = frame.time_s;
   out->unit_count = unit_count_;
   out->noise_known = noise_known_;
-  const auto units = static_cast<size_t>(unit_count_);
-  std::copy_n(r1_noise_ohm_.begin(), units, out->r1_noise_ohm.begin());
-  std::copy_n(r2_noise_ohm_.begin(), units, out->r2_noise_ohm.begin());
-  std::copy_n(sum_noise_rel_.begin(), units, out->sum_noise_rel.begin());
-  std::copy_n(diff_noise_rel_.begin(), units, out->diff_noise_rel.begin());
+  if (out->noise_generation != noise_generation_) {
+    const auto units = static_cast<size_t>(unit_count_);
+    std::copy_n(r1_noise_ohm_.begin(), units, out->r1_noise_ohm.begin());
+    std::copy_n(r2_noise_ohm_.begin(), units, out->r2_noise_ohm.begin());
+    std::copy_n(sum_noise_rel_.begin(), units, out->sum_noise_rel.begin());
+    std::copy_n(diff_noise_rel_.begin(), units, out->diff_noise_rel.begin());
+    out->noise_generation = noise_generation_;
+  }
   if (frame.unit_count != unit_count_) {
     for (int unit = 0; unit < unit_count_; ++unit) {
       out->dr1_rel[unit] = 0.0;

@@ -23,6 +23,9 @@ struct ReadoutFrame {
   /// Noise measured during the last tare (Readout::noise_known() and the arrays below); copied into
   /// every frame so the inversion can report it in N.
   bool noise_known = false;
+  /// Which tare the noise arrays below come from (Readout::noise_generation()); Process() copies
+  /// them only when this differs, so the per-frame cost stays flat.
+  uint32_t noise_generation = 0;
   std::array<double, kMaxUnits> r1_noise_ohm{};  ///< standard deviation of R1 over the tare [Ohm]
   std::array<double, kMaxUnits> r2_noise_ohm{};  ///< standard deviation of R2 over the tare [Ohm]
   /// Standard deviation of s = (dR1/R1 + dR2/R2) / 2 and d = (dR1/R1 - dR2/R2) / 2 over the tare,
@@ -98,6 +101,8 @@ class Readout {
   int baseline_frames_seen() const { return frames_seen_; }
   /// True once a tare window of >= 3 frames produced a noise estimate (not after SetBaseline()).
   bool noise_known() const { return noise_known_; }
+  /// Changes whenever the noise figures change (each finished tare, SetBaseline()); never 0.
+  uint32_t noise_generation() const { return noise_generation_; }
   /// Residual standard deviation of each channel over the last tare window [Ohm].
   const std::array<double, kMaxUnits>& r1_noise_ohm() const { return r1_noise_ohm_; }
   const std::array<double, kMaxUnits>& r2_noise_ohm() const { return r2_noise_ohm_; }
@@ -133,6 +138,7 @@ class Readout {
   };
   std::array<NoiseSums, kMaxUnits> noise_sums_{};
   bool noise_known_ = false;
+  uint32_t noise_generation_ = 1;
   std::array<double, kMaxUnits> r1_noise_ohm_{}, r2_noise_ohm_{}, sum_noise_rel_{}, diff_noise_rel_{};
 };
 

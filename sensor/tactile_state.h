@@ -43,6 +43,9 @@ struct TactileState {
   /// controller can scale its thresholds to the signal it actually has. False until a tare has
   /// finished (and after a stored baseline, which carries no noise figure).
   bool noise_known = false;
+  /// Which readout tare the noise arrays come from (ReadoutFrame::noise_generation): the inversion
+  /// converts them only when it changes.
+  uint32_t noise_generation = 0;
   /// Standard deviation of R1 and R2 per unit over the tare, a straight-line drift removed [Ohm].
   std::array<double, kMaxUnits> r1_noise_ohm{};
   std::array<double, kMaxUnits> r2_noise_ohm{};

@@ -28,7 +28,8 @@ constexpr double kGripTolN = 0.25;           // force-loop tracking tolerance in
 constexpr double kCeilingTolN = 0.3;         // ceiling overshoot allowed (noise + loop transient)
 constexpr double kSlowSlideLatencyLimitS = 0.100;  // slide seen only by centroid travel, light grip
 constexpr double kAddedMassSlipLimitM = 5e-3;  // slide allowed after a load step of 2x the friction limit
-constexpr double kLowFrictionSlipLimitM = 10e-3;  // slide allowed while a 2x friction overestimate is learned
+constexpr double kLowFrictionSlipLimitM = 10e-3;
+constexpr double kVibrationNoiseSigmas = 2.5;  // vibration floor from the readout's noise, when switched on  // slide allowed while a 2x friction overestimate is learned
 
 /// Controller + plant + sensor at 1 kHz, with the tangential load given as a function of time.
 class ClosedLoop {
@@ -179,6 +180,90 @@ TEST(GripSlipControllerTest, NoFalseSlipInLongStaticHold) {
     EXPECT_EQ(false_events, 0) << "noise x" << noise_scale;
     EXPECT_EQ(detected_ticks, 0) << "noise x" << noise_scale;
     EXPECT_FALSE(loop.plant.sliding());
+  }
+}
+
+/// Noise-aware cues (vibration_noise_sigmas): with the readout's own noise figure in the state,
+/// the vibration threshold's floor rises with the sensor's noise above the fixed 0.03 N and the
+/// centroid's noise is the sensor's normal-force noise. At the noise of realistic readout chains
+/// (tests/sensor/sensor_profile_test.cc: divider_12bit with the paper's sensitivities, inamp_16bit
+/// with the FEA's) and at issue 12's noisy FEA case, a minute of static hold raises at most one false
+/// slip, and the slips of the tests above are still flagged.
+TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
+  struct Level {
+    const char* name;
+    double fn_n, ft_n;
+  };
+  // Third: the FEA's sensitivities behind 0.5 Ohm of channel noise (issue 12's case; no shipped
+  // profile is this noisy), where the noise, not the fixed floor, has to set the threshold.
+  for (const Level level : {Level{"divider_12bit, paper", 0.0103, 0.0138}, Level{"inamp_16bit, fea", 0.00083, 0.0044},
+                            Level{"0.5 Ohm, fea", 0.031, 0.165}}) {
+    // Without the noise figure in the state (today's learned-noise cues), with it (the centroid's
+    // noise from the readout's figures), and with the vibration floor from it too.
+    for (const int mode : {0, 1, 2}) {
+      const double sigmas = mode == 2 ? kVibrationNoiseSigmas : 0.0;
+      SCOPED_TRACE(std::string(level.name) + " mode " + std::to_string(mode));
+      SyntheticTactile::Options sensor;
+      sensor.noise_fn_n = level.fn_n;
+      sensor.noise_ft_n = level.ft_n;
+      sensor.report_noise = mode > 0;
+      sensor.seed = 7;
+      GripSlipConfig config = DefaultConfig();
+      config.slip.vibration_noise_sigmas = sigmas;
+
+      // A minute of static hold.
+      ClosedLoop hold(config, {}, sensor);
+      hold.Grasp(0.5, 1.0);
+      const int events_after_grasp = hold.controller.telemetry().slip_events;
+      constexpr double kHoldS = 60.0;
+      hold.RunUntil(1.0 + kHoldS, [](double) { return 0.5; });
+      const int false_events = hold.controller.telemetry().slip_events - events_after_grasp;
+      EXPECT_EQ(events_after_grasp, 0);
+      EXPECT_LE(false_events, 1) << "more than one false slip per minute held";
+      EXPECT_FALSE(hold.plant.dropped());
+
+      // Added mass (load 0.5 -> 1.5 N at mu 0.5).
+      HandPlant::Options slippery;
+      slippery.friction = 0.5;
+      ClosedLoop added(config, slippery, sensor);
+      added.Grasp(0.5, 1.0);
+      added.RunUntil(2.0, [](double t) { return t < 1.2 ? 0.5 : 1.5; });
+      ASSERT_GT(added.plant.slip_onset_s(), 0.0);
+      ASSERT_GT(added.first_slip_s, 0.0) << "added mass not flagged";
+      const double added_latency_s = added.first_slip_s - added.plant.slip_onset_s();
+      EXPECT_LT(added_latency_s, kSlipLatencyLimitS);
+      EXPECT_FALSE(added.plant.dropped());
+
+      // Low friction (0.25 against 0.5), lifted in 0.5 s and in 0.2 s.
+      double low_latency_s[2] = {-1.0, -1.0};
+      bool low_dropped[2] = {false, false};
+      for (int fast = 0; fast < 2; ++fast) {
+        HandPlant::Options low;
+        low.friction = 0.25;
+        ClosedLoop lift(config, low, sensor);
+        lift.Grasp(0.0, 0.5);
+        const double ramp_s = fast ? 0.2 : 0.5;
+        lift.RunUntil(3.0, [&](double t) { return std::clamp((t - 0.5) / ramp_s, 0.0, 1.0) * 1.2; });
+        ASSERT_GT(lift.plant.slip_onset_s(), 0.0);
+        ASSERT_GT(lift.first_slip_s, 0.0) << "low-friction slide not flagged";
+        low_latency_s[fast] = lift.first_slip_s - lift.plant.slip_onset_s();
+        low_dropped[fast] = lift.plant.dropped();
+      }
+      EXPECT_FALSE(low_dropped[0]) << "the 0.5 s lift was dropped";
+      // With the noise figure the centroid's noise is the normal-force noise, not the (up to 5x
+      // larger) shear noise: at the noisy FEA level that holds the 0.2 s lift the learned noise drops.
+      if (mode > 0) {
+        EXPECT_FALSE(low_dropped[1]) << "the 0.2 s lift was dropped";
+      }
+      std::printf("[ measure  ] %s noise (fn %.4f, ft %.4f N), %s: %d false slips in %.0f s held (vibration threshold "
+                  "%.4f N); added mass flagged after %.0f ms; low friction flagged after %.0f ms (0.5 s lift, %s), "
+                  "%.0f ms (0.2 s lift, %s)\n",
+                  level.name, level.fn_n, level.ft_n,
+                  mode == 0 ? "learned noise only" : (mode == 1 ? "noise figure, centroid" : "noise figure, centroid + vibration floor"),
+                  false_events, kHoldS, hold.controller.diagnostics().signals.vibration_threshold_n,
+                  added_latency_s * 1e3, low_latency_s[0] * 1e3, low_dropped[0] ? "dropped" : "held",
+                  low_latency_s[1] * 1e3, low_dropped[1] ? "dropped" : "held");
+    }
   }
 }
 

@@ -40,6 +40,9 @@ class SyntheticTactile {
     double range_n = 10.0;     ///< units beyond this report kOutOfRange
     double contact_threshold_n = 0.25;
     uint32_t seed = 1;
+    /// Report the noise in the state as a readout that measured it at its tare would
+    /// (TactileState::noise_known, fn_noise_n, ft_noise_n); off: the state carries no noise figure.
+    bool report_noise = false;
   };
 
   explicit SyntheticTactile(const Options& options) : options_(options), rng_(options.seed) {
@@ -61,6 +64,13 @@ class SyntheticTactile {
     state.sequence = ++sequence_;
     state.time_s = time_s;
     state.unit_count = unit_count();
+    if (options_.report_noise) {
+      state.noise_known = true;
+      for (int i = 0; i < unit_count(); ++i) {
+        state.fn_noise_n[static_cast<size_t>(i)] = options_.noise_fn_n;
+        state.ft_noise_n[static_cast<size_t>(i)] = options_.noise_ft_n;
+      }
+    }
     std::array<double, sensor::kMaxUnits> weight{};
     double weight_sum = 0.0;
     for (int i = 0; i < unit_count(); ++i) {
