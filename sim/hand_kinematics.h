@@ -36,9 +36,11 @@ class ProstheticKinematics {
   static constexpr double kThumbMaxRad = 1.9;
   /// In the nominal pinch the thumb's distal segment leans this far past vertical towards the
   /// index [rad]: its rounded tip meets the object while the thumb comes in from the side, so its
-  /// base sits a palm's width (about 50 mm) from the index MCP, as on a hand [rad].
+  /// base sits 36 mm along the palm from the index MCP and its tip closes nearly square to the
+  /// object (0.07 m up per m across) [rad].
   static constexpr double kThumbLeanRad = 0.3;
-  /// The palm's palmar face is at H z = -kPalmDepthM; MCP and thumb base sit on it.
+  /// The palm's palmar face is at H z = -kPalmDepthM; the MCP sits on it, the thumb base (placed by
+  /// the nominal pinch) inside the palm above it.
   static constexpr double kPalmDepthM = 0.024;
 
   /// `holder_length_m`, `holder_half_depth_m`: the distal phalanx from the layout; `mesa_height_m`:

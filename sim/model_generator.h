@@ -3,7 +3,7 @@
 /// where the units are) and the scene config. The output loads in mj_loadXML and in MuJoCo's own
 /// tools (mujoco-simulate, mujoco-testspeed) with no other files.
 ///
-/// Names the rest of sim/ relies on (docs/simulation.md, "Model"), both hand models:
+/// Names the rest of sim/ relies on (docs/simulation.md, "One source of truth"), both hand models:
 ///   bodies  wrist, palm, finger (root of the sensorised digit), holder (its distal phalanx, the
 ///           holder frame), thumb (root of the thumb), object, table
 ///   geoms   unit_0 .. unit_{N-1} (one mesa box per layout unit, layout order, holder frame),

@@ -98,7 +98,7 @@ void CheckInitialPenetration(const Simulation& simulation) {
   if (hand_table.geom1 >= 0) {
     throw std::invalid_argument(
         Describe(m, "the hand and the table overlap", hand_table) + wrist +
-        " (auto: the fingertip level with the object's centre, set by " + size + " and " + object_position +
+        " (auto: the fingertip pad at the pinch height, set by " + size + " and " + object_position +
         ") puts the hand into the table; raise hand.initial_wrist_position_m[2] or use a taller object");
   }
 }

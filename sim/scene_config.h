@@ -179,8 +179,10 @@ struct HandConfig {
   double digit_mass_kg = 0.03;
   /// Friction of hand geoms (used only against geoms without priority, e.g. the table).
   double friction = 1.0;
-  /// Initial wrist position [m], world frame; NaN entries: chosen so the holder centre is level with
-  /// the object's centre and the digits straddle it (pre-grasp pose).
+  /// Initial wrist position [m], world frame; NaN entries: chosen so the digits straddle the object
+  /// (pre-grasp pose): prosthetic hand, pad centre at the pinch height (a box or cylinder 13 mm
+  /// below its top, a sphere at its equator; docs/simulation.md); jaw, holder centre level with the
+  /// object's centre.
   std::array<double, 3> initial_wrist_position_m = {std::numeric_limits<double>::quiet_NaN(),
                                                     std::numeric_limits<double>::quiet_NaN(),
                                                     std::numeric_limits<double>::quiet_NaN()};

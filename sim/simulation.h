@@ -56,7 +56,7 @@ struct GroundTruth {
   double slip_speed_m_s = 0.0;
   /// Same, normal-force weighted mean over the finger/thumb contacts [m/s].
   double mean_slip_speed_m_s = 0.0;
-  /// Total contact normal force on the sensorised finger (holder, mesas, link) from anything
+  /// Total contact normal force on the sensorised finger (holder, mesas, fingertip, phalanges) from anything
   /// outside the hand [N]; on the thumb (pad, link) [N].
   double finger_normal_force_n = 0.0;
   double thumb_normal_force_n = 0.0;

@@ -541,16 +541,17 @@ bool WaitForFile(const std::string& path, Child& child) {
 // A scenario long enough (60 simulated seconds) never to end on its own during a test.
 std::string LongScenario() { return HeldBoxScenario(60.0); }
 
+// Suites start the longest expected run first, so a run finishes beside a long one only with two
+// workers; with one worker the long one starts first and the short one never does.
 TEST_F(CliTest, CtrlCDuringASuiteKeepsFinishedRunsAndMarksTheRestIncomplete) {
   dir_.Write("suite/a_short.yaml", HeldBoxScenario(0.2, "", "expectations: {not_dropped: true}\n"));
   dir_.Write("suite/b_long.yaml", LongScenario());
-  dir_.Write("suite/c_never.yaml", HeldBoxScenario(0.2));
   const std::string out = dir_.Path("out");
-  Child child({"suite", dir_.Path("suite"), "-j", "1", "--no-plots", "--out", out}, dir_.Path("suite_cli"));
+  Child child({"suite", dir_.Path("suite"), "-j", "2", "--no-plots", "--out", out}, dir_.Path("suite_cli"));
   ASSERT_GT(child.pid(), 0);
   // a_short has finished when its summary exists; b_long is running when its INCOMPLETE marker does.
+  ASSERT_TRUE(WaitForFile(out + "/a_short/summary.json", child)) << ReadText(dir_.Path("suite_cli.err"));
   ASSERT_TRUE(WaitForFile(out + "/b_long/INCOMPLETE", child)) << ReadText(dir_.Path("suite_cli.err"));
-  ASSERT_TRUE(fs::exists(out + "/a_short/summary.json"));
   child.Interrupt();
   EXPECT_EQ(child.Wait(), kExitInterrupted) << ReadText(dir_.Path("suite_cli.err"));
 
@@ -567,15 +568,33 @@ TEST_F(CliTest, CtrlCDuringASuiteKeepsFinishedRunsAndMarksTheRestIncomplete) {
   EXPECT_EQ(b.at("completed"), false);
   EXPECT_EQ(b.at("passed"), false);
   EXPECT_LT(b.at("metrics").at("sim_s").get<double>(), 60.0);
-  // The run never started has no directory; the suite's JSON records all three.
-  EXPECT_FALSE(fs::exists(out + "/c_never"));
+  // The suite's JSON records both, in file order.
   const nlohmann::json suite = ReadJson(out + "/suite.json");
   EXPECT_EQ(suite.at("completed"), false);
   EXPECT_EQ(suite.at("passed"), false);
-  ASSERT_EQ(suite.at("runs").size(), 3u);
+  ASSERT_EQ(suite.at("runs").size(), 2u);
   EXPECT_EQ(suite.at("runs")[0].at("completed"), true);
   EXPECT_EQ(suite.at("runs")[1].at("completed"), false);
-  EXPECT_EQ(suite.at("runs")[2].at("error"), "not run (interrupted)");
+  ExpectNoTemporaries(out);
+}
+
+TEST_F(CliTest, CtrlCDuringASuiteLeavesTheRunsNotStartedWithoutADirectory) {
+  dir_.Write("suite/a_never.yaml", HeldBoxScenario(0.2));
+  dir_.Write("suite/b_long.yaml", LongScenario());
+  const std::string out = dir_.Path("out");
+  Child child({"suite", dir_.Path("suite"), "-j", "1", "--no-plots", "--out", out}, dir_.Path("suite_cli"));
+  ASSERT_GT(child.pid(), 0);
+  // The longest expected run starts first; a_never waits behind it.
+  ASSERT_TRUE(WaitForFile(out + "/b_long/INCOMPLETE", child)) << ReadText(dir_.Path("suite_cli.err"));
+  child.Interrupt();
+  EXPECT_EQ(child.Wait(), kExitInterrupted) << ReadText(dir_.Path("suite_cli.err"));
+  EXPECT_TRUE(fs::exists(out + "/b_long/INCOMPLETE"));
+  EXPECT_FALSE(fs::exists(out + "/a_never"));
+  const nlohmann::json suite = ReadJson(out + "/suite.json");
+  EXPECT_EQ(suite.at("completed"), false);
+  ASSERT_EQ(suite.at("runs").size(), 2u);
+  EXPECT_EQ(suite.at("runs")[0].at("error"), "not run (interrupted)");
+  EXPECT_EQ(suite.at("runs")[1].at("completed"), false);
   ExpectNoTemporaries(out);
 }
 
@@ -602,7 +621,8 @@ TEST_F(CliTest, CtrlCDuringASweepLeavesNoResultsThatMergeWouldTake) {
   const std::string spec =
       dir_.Write("spec.yaml", "scenario: base.yaml\nparameters:\n  duration_s: [0.2, 60]\n");
   const std::string out = dir_.Path("out");
-  Child child({"sweep", spec, "--out", out}, dir_.Path("sweep_cli"));
+  // Two workers: the long run 1 starts first (longest expected first), run 0 beside it.
+  Child child({"sweep", spec, "-j", "2", "--out", out}, dir_.Path("sweep_cli"));
   // Run 0's row reaches the .partial file when it finishes.
   const auto deadline = std::chrono::steady_clock::now() + kPatience;
   while (ReadText(out + "/results.jsonl.partial").empty() && child.Running() &&
