@@ -128,6 +128,8 @@ TEST_F(HandTest, TheLoadMovesAlongTheFingertipWithTheObjectsWidth) {
   wide.object.size_m = {0.07, 0.05, 0.08};
   const Pinch a = PinchAndAverage(narrow, 0.8, 0.4);
   const Pinch b = PinchAndAverage(wide, 0.8, 0.4);
+  RecordProperty("centroid_narrow_mm", std::to_string(a.centroid_axial_m * 1e3));
+  RecordProperty("centroid_wide_mm", std::to_string(b.centroid_axial_m * 1e3));
   EXPECT_GE(std::abs(a.centroid_axial_m - b.centroid_axial_m), kMinCentroidShiftM)
       << "narrow " << a.centroid_axial_m * 1e3 << " mm, wide " << b.centroid_axial_m * 1e3 << " mm";
   EXPECT_GE(a.sensed_share, kMinCoverage);
