@@ -542,19 +542,21 @@ bool WaitForFile(const std::string& path, Child& child) {
 std::string LongScenario() { return HeldBoxScenario(60.0); }
 
 TEST_F(CliTest, CtrlCDuringASuiteKeepsFinishedRunsAndMarksTheRestIncomplete) {
+  // Suites start the longest run first. With two workers the short runs finish beside the long one.
   dir_.Write("suite/a_short.yaml", HeldBoxScenario(0.2, "", "expectations: {not_dropped: true}\n"));
   dir_.Write("suite/b_long.yaml", LongScenario());
-  dir_.Write("suite/c_never.yaml", HeldBoxScenario(0.2));
+  dir_.Write("suite/c_short.yaml", HeldBoxScenario(0.2));
   const std::string out = dir_.Path("out");
-  Child child({"suite", dir_.Path("suite"), "-j", "1", "--no-plots", "--out", out}, dir_.Path("suite_cli"));
+  Child child({"suite", dir_.Path("suite"), "-j", "2", "--no-plots", "--out", out}, dir_.Path("suite_cli"));
   ASSERT_GT(child.pid(), 0);
-  // a_short has finished when its summary exists; b_long is running when its INCOMPLETE marker does.
+  // A run has finished when its summary exists; b_long is running when its INCOMPLETE marker does.
   ASSERT_TRUE(WaitForFile(out + "/b_long/INCOMPLETE", child)) << ReadText(dir_.Path("suite_cli.err"));
-  ASSERT_TRUE(fs::exists(out + "/a_short/summary.json"));
+  ASSERT_TRUE(WaitForFile(out + "/a_short/summary.json", child)) << ReadText(dir_.Path("suite_cli.err"));
+  ASSERT_TRUE(WaitForFile(out + "/c_short/summary.json", child)) << ReadText(dir_.Path("suite_cli.err"));
   child.Interrupt();
   EXPECT_EQ(child.Wait(), kExitInterrupted) << ReadText(dir_.Path("suite_cli.err"));
 
-  // The finished run is intact and complete.
+  // The finished runs are intact and complete.
   const nlohmann::json a = ReadJson(out + "/a_short/summary.json");
   EXPECT_EQ(a.at("completed"), true);
   EXPECT_EQ(a.at("passed"), true);
@@ -567,16 +569,31 @@ TEST_F(CliTest, CtrlCDuringASuiteKeepsFinishedRunsAndMarksTheRestIncomplete) {
   EXPECT_EQ(b.at("completed"), false);
   EXPECT_EQ(b.at("passed"), false);
   EXPECT_LT(b.at("metrics").at("sim_s").get<double>(), 60.0);
-  // The run never started has no directory; the suite's JSON records all three.
-  EXPECT_FALSE(fs::exists(out + "/c_never"));
+  // The suite's JSON records all three, in file order.
   const nlohmann::json suite = ReadJson(out + "/suite.json");
   EXPECT_EQ(suite.at("completed"), false);
   EXPECT_EQ(suite.at("passed"), false);
   ASSERT_EQ(suite.at("runs").size(), 3u);
   EXPECT_EQ(suite.at("runs")[0].at("completed"), true);
   EXPECT_EQ(suite.at("runs")[1].at("completed"), false);
-  EXPECT_EQ(suite.at("runs")[2].at("error"), "not run (interrupted)");
+  EXPECT_EQ(suite.at("runs")[2].at("completed"), true);
   ExpectNoTemporaries(out);
+
+  // With one worker the long run goes first, and a run that never started leaves no directory and
+  // is recorded as not run.
+  fs::remove(dir_.Path("suite/a_short.yaml"));
+  const std::string serial_out = dir_.Path("serial");
+  Child serial({"suite", dir_.Path("suite"), "-j", "1", "--no-plots", "--out", serial_out}, dir_.Path("serial_cli"));
+  ASSERT_GT(serial.pid(), 0);
+  ASSERT_TRUE(WaitForFile(serial_out + "/b_long/INCOMPLETE", serial)) << ReadText(dir_.Path("serial_cli.err"));
+  serial.Interrupt();
+  EXPECT_EQ(serial.Wait(), kExitInterrupted) << ReadText(dir_.Path("serial_cli.err"));
+  EXPECT_FALSE(fs::exists(serial_out + "/c_short"));
+  const nlohmann::json serial_suite = ReadJson(serial_out + "/suite.json");
+  ASSERT_EQ(serial_suite.at("runs").size(), 2u);
+  EXPECT_EQ(serial_suite.at("runs")[0].at("completed"), false);
+  EXPECT_EQ(serial_suite.at("runs")[1].at("error"), "not run (interrupted)");
+  ExpectNoTemporaries(serial_out);
 }
 
 TEST_F(CliTest, CtrlCDuringARunLeavesItMarkedIncomplete) {
@@ -598,11 +615,11 @@ TEST_F(CliTest, CtrlCDuringARunLeavesItMarkedIncomplete) {
 
 TEST_F(CliTest, CtrlCDuringASweepLeavesNoResultsThatMergeWouldTake) {
   dir_.Write("base.yaml", HeldBoxScenario(0.2));
-  // Run 0 is short, run 1 is long.
+  // Run 0 is short, run 1 is long; two workers run both at once (the long one is started first).
   const std::string spec =
       dir_.Write("spec.yaml", "scenario: base.yaml\nparameters:\n  duration_s: [0.2, 60]\n");
   const std::string out = dir_.Path("out");
-  Child child({"sweep", spec, "--out", out}, dir_.Path("sweep_cli"));
+  Child child({"sweep", spec, "-j", "2", "--out", out}, dir_.Path("sweep_cli"));
   // Run 0's row reaches the .partial file when it finishes.
   const auto deadline = std::chrono::steady_clock::now() + kPatience;
   while (ReadText(out + "/results.jsonl.partial").empty() && child.Running() &&
