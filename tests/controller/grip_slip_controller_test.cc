@@ -187,14 +187,14 @@ TEST(GripSlipControllerTest, NoFalseSlipInLongStaticHold) {
 /// the vibration threshold's floor rises with the sensor's noise above the fixed 0.03 N and the
 /// centroid's noise is the sensor's normal-force noise. At the noise of realistic readout chains
 /// (tests/sensor/sensor_profile_test.cc: divider_12bit with the paper's sensitivities, inamp_16bit
-/// with the FEA's) and at issue 12's noisy FEA case, a minute of static hold raises at most one false
+/// with the FEA's) and at the noisy FEA case (FEA sensitivities, 0.5 Ohm channel noise, 16-bit ADC), a minute of static hold raises at most one false
 /// slip, and the slips of the tests above are still flagged.
 TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
   struct Level {
     const char* name;
     double fn_n, ft_n;
   };
-  // Third: the FEA's sensitivities behind 0.5 Ohm of channel noise (issue 12's case; no shipped
+  // Third: the FEA's sensitivities behind 0.5 Ohm of channel noise (the noisy FEA case; no shipped
   // profile is this noisy), where the noise, not the fixed floor, has to set the threshold.
   for (const Level level : {Level{"divider_12bit, paper", 0.0103, 0.0138}, Level{"inamp_16bit, fea", 0.00083, 0.0044},
                             Level{"0.5 Ohm, fea", 0.031, 0.165}}) {

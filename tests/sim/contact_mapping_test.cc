@@ -24,7 +24,7 @@
 namespace graspbed::sim {
 namespace {
 
-constexpr double kRelativeForceTol = 0.02;  // the 2 % at equilibrium
+constexpr double kRelativeForceTol = 0.02;  // 2 % at equilibrium: the inversion is exact for an ideal sensor, so what is left is the contact model's force balance
 constexpr double kUnsensedShearTolN = 0.01;
 constexpr double kPressForceN = 5.0;
 constexpr double kShearForceN = 1.0;
