@@ -105,6 +105,8 @@ const std::vector<Binding>& Bindings() {
                     "a further slip event is counted no sooner than this"),
       GRASPBED_BIND("slip_floor_decay_n_per_s", slip_floor_decay_n_per_s, 0.0, 1000.0, "N/s",
                     "how fast the grip raised by a slip response relaxes back to the coupled target"),
+      GRASPBED_BIND("slip_grip_rate_n_per_s", slip_grip_rate_n_per_s, 0.0, 10000.0, "N/s",
+                    "while the cues keep reporting slip after a response, the slip floor keeps rising this fast; 0 = off"),
       GRASPBED_BIND("sample_rate_hz", slip.sample_rate_hz, 10.0, 100000.0, "Hz",
                     "tactile frame rate the detector filters are designed for"),
       GRASPBED_BIND("grid_columns", slip.grid_columns, 1, 64, "units",
@@ -150,8 +152,17 @@ const std::vector<Binding>& Bindings() {
                     "centroid thresholds raised by this many standard deviations of noise-induced movement"),
       GRASPBED_BIND("centroid_min_weight_n", slip.centroid_min_weight_n, 0.01, 100.0, "N",
                     "minimum contact normal force for a centroid"),
+      GRASPBED_BIND("centroid_grip_band", slip.centroid_grip_band, 0.0, 10.0, "",
+                    "the centroid drift reference is taken afresh when the grip moved by more than this fraction "
+                    "(the pad rolls with the grip); 0 = off"),
       GRASPBED_BIND("detector_settle_s", slip.settle_s, 0.0, 1.0, "s",
-                    "slip cues stay silent this long after contact onset or after stale data"),
+                    "slip cues stay silent at least this long after contact onset or after stale data"),
+      GRASPBED_BIND("detector_settle_max_s", slip.settle_max_s, 0.0, 2.0, "s",
+                    "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
+                    "at most this long after contact onset or stale data"),
+      GRASPBED_BIND("preload_reference", slip.preload_reference, 0, 1, "",
+                    "1: the shear/normal ratio when the cues arm is preload; the ratio cue and the tangential load "
+                    "are measured from it"),
   };
   return bindings;
 }
@@ -399,7 +410,7 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
       if (new_frame) contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
       if (contact_frames_ >= config_.contact_confirm_frames) {
         Enter(Phase::kLoading, time_s);
-        detector_.Restart();
+        detector_.RestartContact();
         last_contact_s_ = time_s;
         load_target_n_ = std::min(grip_n, config_.initial_grip_n);
         coupled_target_n_ = 0.0;
@@ -429,6 +440,8 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
         if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
       }
       slip_now = signals.any();
+      // Slip persisting within the refractory time: the step did not cover the load; keep raising.
+      if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
       if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
       if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
       const double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;

@@ -62,6 +62,9 @@ struct GripSlipConfig {
   double slip_grip_step_n = 0.5;           ///< additive part of the slip response [N]
   double slip_refractory_s = 0.04;         ///< a new slip event is counted no sooner than this [s]
   double slip_floor_decay_n_per_s = 0.5;   ///< the raised grip after slip relaxes this fast [N/s]
+  /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
+  /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
+  double slip_grip_rate_n_per_s = 100.0;
 
   SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
 

@@ -65,7 +65,9 @@ void SlipDetectorConfig::Validate() const {
   Require(centroid_drift_units > 0.0, "centroid_drift_units", centroid_drift_units, "must be > 0");
   Require(centroid_noise_sigmas >= 0.0, "centroid_noise_sigmas", centroid_noise_sigmas, "must be >= 0");
   Require(centroid_min_weight_n > 0.0, "centroid_min_weight_n", centroid_min_weight_n, "must be > 0");
+  Require(centroid_grip_band >= 0.0, "centroid_grip_band", centroid_grip_band, "must be >= 0");
   Require(settle_s >= 0.0, "settle_s", settle_s, "must be >= 0");
+  Require(settle_max_s >= settle_s, "settle_max_s", settle_max_s, "must be >= settle_s");
 }
 
 SlipDetector::SlipDetector(const SlipDetectorConfig& config) : config_(config) {
@@ -73,6 +75,7 @@ SlipDetector::SlipDetector(const SlipDetectorConfig& config) : config_(config) {
   const double period_s = 1.0 / config_.sample_rate_hz;
   centroid_window_samples_ = std::max(1, static_cast<int>(std::lround(config_.centroid_window_s / period_s)));
   settle_samples_ = static_cast<int>(std::lround(config_.settle_s / period_s));
+  settle_max_samples_ = static_cast<int>(std::lround(config_.settle_max_s / period_s));
   noise_floor_alpha_ = 1.0 - std::exp(-period_s / config_.noise_floor_time_s);
   ratio_filter_ = LowPassFilter(config_.ratio_filter_s, period_s);
   ratio_circumferential_filter_ = LowPassFilter(config_.ratio_filter_s, period_s);
@@ -105,12 +108,14 @@ void SlipDetector::Reset() {
   signals_ = SlipSignals{};
   noise_known_seen_ = false;
   noise_generation_seen_ = 0;
-  Restart();
+  RestartContact();
 }
 
 void SlipDetector::Restart() {
   restart_pending_ = true;
   settle_remaining_ = settle_samples_;
+  settle_max_remaining_ = settle_max_samples_;
+  signals_.settled = false;
   ratio_filter_.Clear();
   ratio_circumferential_filter_.Clear();
   vibration_energy_.Reset(0.0);
@@ -118,6 +123,14 @@ void SlipDetector::Restart() {
   centroid_column_filter_.Clear();
   centroid_history_.Clear();
   have_reference_ = false;
+}
+
+void SlipDetector::RestartContact() {
+  Restart();
+  have_preload_ = false;
+  preload_frames_ = 0;
+  signals_.preload_ratio_axial = 0.0;
+  signals_.preload_ratio_circumferential = 0.0;
 }
 
 bool SlipDetector::IsAxial(int unit) const {
@@ -159,7 +172,13 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   signals_.in_contact = signals_.contact_units > 0 || grip_n > kContactSumFactor * config_.contact_unit_threshold_n;
 
   if (settle_remaining_ > 0) --settle_remaining_;
-  signals_.settled = settle_remaining_ == 0;
+  if (settle_max_remaining_ > 0) --settle_max_remaining_;
+  // Settled: settle_s over and the contact quiet (last frame's vibration statistic under its
+  // threshold), or settle_max_s over. Once settled it stays so until the next Restart().
+  if (!signals_.settled) {
+    const bool quiet = signals_.vibration_rms_n <= signals_.vibration_threshold_n;
+    signals_.settled = settle_remaining_ == 0 && (quiet || settle_max_remaining_ == 0);
+  }
   const bool live = armed && signals_.settled && signals_.in_contact;
 
   // The readout's own noise figure, RMS over the valid units: it changes only with a new tare or a
@@ -171,11 +190,13 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
     UpdateSensorNoise(state);
   }
 
-  UpdateRatio(state, grip_n, friction_estimate);
-  UpdateVibration(state, learn_noise);
-  UpdateCentroid(state, live);
+  UpdateRatio(state, grip_n, friction_estimate, live);
+  // The contact's seating transient (armed, not yet settled) is not noise: the floor learns before
+  // contact and once the grasp has settled.
+  UpdateVibration(state, learn_noise && (!armed || signals_.settled));
+  UpdateCentroid(state, grip_n, live);
   signals_.ratio_slip = live && config_.ratio_enabled && grip_n > config_.ratio_min_grip_n &&
-                        signals_.ratio > signals_.ratio_threshold;
+                        signals_.load_ratio > signals_.ratio_threshold;
   // A single frame over the threshold is a noise peak of the averaged statistic far more often than
   // slip, which keeps the statistic up for many frames.
   vibration_frames_ = signals_.vibration_rms_n > signals_.vibration_threshold_n ? vibration_frames_ + 1 : 0;
@@ -187,6 +208,7 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   if (signals_.centroid_slip) {
     // A drift is reported once; the next one is measured from here.
     centroid_reference_ = {signals_.centroid_row, signals_.centroid_column};
+    centroid_reference_grip_n_ = grip_n;
   }
   return signals_;
 }
@@ -210,7 +232,7 @@ void SlipDetector::UpdateSensorNoise(const TactileState& state) {
   }
 }
 
-void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate) {
+void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate, bool live) {
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   // Normal-weighted ratio per beam orientation: sum(fn ft) / sum(fn^2) equals the traction ratio
   // when shear is proportional to pressure, and gives units without contact (noise only) no weight.
@@ -255,6 +277,8 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     const double circumferential = ratio_circumferential_filter_.Update(component[1]);
     signals_.ratio = std::hypot(axial, circumferential);
     signals_.instant_ratio = std::hypot(component[0], component[1]);
+    ratio_axial_ = axial;
+    ratio_circumferential_ = circumferential;
     // Delta method: variance of the magnitude from the components' variances, reduced by the
     // low-pass; the learned shear noise sets the scale.
     if (signals_.ratio > 0.0) {
@@ -267,8 +291,28 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     ratio_circumferential_filter_.Clear();
     signals_.ratio = 0.0;
     signals_.instant_ratio = 0.0;
+    ratio_axial_ = 0.0;
+    ratio_circumferential_ = 0.0;
   }
-  signals_.tangential_load_n = signals_.ratio * std::max(grip_n, 0.0);
+  // The preload: the ratio when the cues arm, i.e. once the grasp has settled. The contact sticks
+  // under it, and on a flexing finger it grows with the grip (the squeeze is not square to the
+  // object), so as load it would drive the grip up by itself. Taken once per contact (RestartContact()), kept over a stale gap.
+  // The reference is the mean over the first settle_s of armed frames (at least one), so the noise of
+  // one filtered sample is not locked in as a bias.
+  if (config_.preload_reference && live && grip_n > config_.ratio_min_grip_n &&
+      (!have_preload_ || preload_frames_ < std::max(settle_samples_, 1))) {
+    have_preload_ = true;
+    ++preload_frames_;
+    const double weight = 1.0 / preload_frames_;
+    signals_.preload_ratio_axial += weight * (ratio_axial_ - signals_.preload_ratio_axial);
+    signals_.preload_ratio_circumferential += weight * (ratio_circumferential_ - signals_.preload_ratio_circumferential);
+  }
+  // Before the grasp has settled there is no load estimate: the seating shear is not load.
+  signals_.load_ratio = config_.preload_reference && !have_preload_
+                            ? 0.0
+                            : std::hypot(ratio_axial_ - signals_.preload_ratio_axial,
+                                         ratio_circumferential_ - signals_.preload_ratio_circumferential);
+  signals_.tangential_load_n = signals_.load_ratio * std::max(grip_n, 0.0);
   signals_.ratio_threshold = config_.ratio_slip_fraction * friction_estimate + config_.ratio_noise_sigmas * noise_sigma;
 }
 
@@ -324,7 +368,7 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
   signals_.vibration_threshold_n = std::max(config_.vibration_factor * signals_.noise_rms_n, floor_n);
 }
 
-void SlipDetector::UpdateCentroid(const TactileState& state, bool live) {
+void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool live) {
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   // Weights fall continuously to zero at the contact threshold, so units entering or leaving the
   // contact do not make the centroid jump, and noise on unloaded units carries no weight.
@@ -388,8 +432,14 @@ void SlipDetector::UpdateCentroid(const TactileState& state, bool live) {
   signals_.centroid_row = now.row;
   signals_.centroid_column = now.column;
   // The drift reference follows the contact until the cues are armed, then stays put.
-  if (!live || !have_reference_) {
+  // On a flexing finger the contact rolls along the pad as the grip changes: a grip relaxed by more
+  // than the band below the reference's grip takes a new reference. A rising grip does not: it is
+  // the controller answering a growing load or a slip, when a slide must still be measured whole.
+  const bool grip_moved = config_.centroid_grip_band > 0.0 &&
+                          centroid_reference_grip_n_ - grip_n > config_.centroid_grip_band * centroid_reference_grip_n_;
+  if (!live || !have_reference_ || grip_moved) {
     centroid_reference_ = now;
+    centroid_reference_grip_n_ = grip_n;
     have_reference_ = true;
   }
   signals_.centroid_drift_units = std::hypot(now.row - centroid_reference_.row, now.column - centroid_reference_.column);

@@ -63,8 +63,22 @@ struct SlipDetectorConfig {
   /// movement expected from noise (light contacts on a noisy sensor).
   double centroid_noise_sigmas = 3.0;
   double centroid_min_weight_n = 0.2;   ///< minimum contact normal force for a centroid [N]
+  /// The drift reference is taken afresh when the grip has changed by more than this fraction of
+  /// the grip at the reference: a flexing finger's pad rolls on the object as the squeeze changes,
+  /// so the contact moves with the grip without slipping. A slide under a steady grip is still
+  /// measured from one reference; 0 = off (the reference stays put whatever the grip).
+  double centroid_grip_band = 0.15;
 
-  double settle_s = 0.05;               ///< cues stay silent this long after Restart() [s]
+  double settle_s = 0.05;               ///< cues stay silent at least this long after Restart() [s]
+  /// After settle_s the cues stay silent until the contact is quiet (vibration statistic below its
+  /// threshold: the ringing of the contact's onset has died away), at most this long after
+  /// Restart() [s]. A flexing finger's pad seats with a shear transient that outlasts settle_s.
+  double settle_max_s = 0.3;
+  /// 1: the shear/normal ratio when the cues arm (the grasp has settled) is the contact's preload
+  /// (a flexing finger's pad meets the object obliquely and locks shear in as it squeezes; the
+  /// contact sticks under it): the ratio cue and the tangential load are measured from it.
+  /// 0: from zero shear (a pinch square to the object).
+  bool preload_reference = false;
 
   /// Longest centroid window the delay line holds [samples].
   static constexpr int kMaxWindowSamples = 512;
@@ -76,11 +90,17 @@ struct SlipDetectorConfig {
 /// What the detector saw in the newest frame. Which cues fired is reported separately.
 struct SlipSignals {
   double ratio = 0.0;                  ///< filtered tangential/normal load ratio [-]
+  /// The filtered ratio's part from load added since the cues armed: |ratio vector - preload| [-]
+  /// (equal to ratio with preload_reference off). The ratio cue and tangential_load_n use it.
+  double load_ratio = 0.0;
+  /// Preload ratio taken when the cues armed, per beam orientation (axial, circumferential) [-].
+  double preload_ratio_axial = 0.0;
+  double preload_ratio_circumferential = 0.0;
   /// The same ratio from this frame alone, unfiltered [-]: at a slip onset the filtered ratio still
   /// lags a step of load, this one does not (noisier; used to learn friction, not to detect).
   double instant_ratio = 0.0;
   double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
-  double tangential_load_n = 0.0;      ///< ratio times measured grip: load the grip must hold [N]
+  double tangential_load_n = 0.0;      ///< load_ratio times measured grip: load the grip must hold [N]
   /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
   double vibration_rms_n = 0.0;
   double vibration_threshold_n = 0.0;  ///< current threshold of the vibration cue [N]
@@ -115,9 +135,12 @@ class SlipDetector {
 
   /// Forgets everything, the learned noise floor included.
   void Reset();
-  /// Restarts filters and histories (keeps the noise floor) and silences the cues for settle_s;
-  /// call at contact onset and when data come back after a stale period.
+  /// Restarts filters and histories (keeps the noise floor and the preload ratio) and silences the
+  /// cues until the contact settles (settle_s, settle_max_s); call when data come back after a
+  /// stale period.
   void Restart();
+  /// Restart() for a new contact: the preload ratio is taken afresh when the cues arm.
+  void RestartContact();
 
   /// Processes one new frame. `grip_n` is the measured grip force [N]; `friction_estimate` the
   /// current friction coefficient estimate; `armed` false keeps the cues silent (filters still
@@ -136,17 +159,23 @@ class SlipDetector {
 
   bool IsAxial(int unit) const;
   void UpdateSensorNoise(const sensor::TactileState& state);
-  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate);
+  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool live);
   void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
-  void UpdateCentroid(const sensor::TactileState& state, bool live);
+  void UpdateCentroid(const sensor::TactileState& state, double grip_n, bool live);
 
   SlipDetectorConfig config_;
   int centroid_window_samples_ = 1;
   int settle_samples_ = 0;
+  int settle_max_samples_ = 0;
   double noise_floor_alpha_ = 0.0;
 
   SlipSignals signals_;
   int settle_remaining_ = 0;
+  int settle_max_remaining_ = 0;
+  bool have_preload_ = false;  ///< the preload ratio was taken since the last RestartContact()
+  int preload_frames_ = 0;     ///< armed frames averaged into the preload ratio so far
+  double ratio_axial_ = 0.0;   ///< filtered ratio components of the newest frame [-]
+  double ratio_circumferential_ = 0.0;
   int vibration_frames_ = 0;  ///< consecutive frames with the vibration statistic above threshold
   bool restart_pending_ = true;
   std::array<bool, sensor::kMaxUnits> was_valid_{};
@@ -167,6 +196,7 @@ class SlipDetector {
   LowPassFilter centroid_column_filter_;
   DelayLine<Centroid, SlipDetectorConfig::kMaxWindowSamples> centroid_history_;
   Centroid centroid_reference_;
+  double centroid_reference_grip_n_ = 0.0;  ///< measured grip when the drift reference was taken [N]
   bool have_reference_ = false;
 };
 

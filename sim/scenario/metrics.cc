@@ -31,6 +31,11 @@ void MetricsTracker::OpenEvent(double time_s) {
   current_.onset_s = time_s;
   current_.end_s = time_s;
   last_above_s_ = time_s;
+  // A flag still raised at the onset (the controller reports slip as it starts) detects it.
+  if (previous_flag_) {
+    current_.detected = true;
+    current_.latency_s = 0.0;
+  }
   // A flag shortly before the onset detected the slip early (incipient slip).
   const double window_start = time_s - config_.early_detection_window_s;
   int kept = 0;
@@ -95,6 +100,7 @@ void MetricsTracker::Update(const TickSample& sample) {
   } else if (!grasped_ && truth.finger_contacts > 0 && truth.thumb_contacts > 0 &&
              truth.finger_normal_force_n >= config_.grasp_force_n) {
     grasped_ = true;
+    grasp_start_s_ = t;
     if (!grasped_ever_) grasp_time_s_ = t;
     grasped_ever_ = true;
     for (int k = 0; k < 3; ++k) {
@@ -128,7 +134,12 @@ void MetricsTracker::Update(const TickSample& sample) {
       slip_distance_m_ += speed * dt;
       if (event_open_) current_.distance_m += speed * dt;
     }
-    if (speed > config_.slip_speed_m_s) {
+    // The pads seating on the object right after the grasp is acquisition, not the held object
+    // slipping: it opens no event and flags then match nothing (nor count as false).
+    const bool seating = t < grasp_start_s_ + config_.seating_s;
+    if (seating) {
+      if (rising_flag) ++flags_;
+    } else if (speed > config_.slip_speed_m_s) {
       if (!event_open_) OpenEvent(t);
       last_above_s_ = t;
       current_.end_s = t;
@@ -136,7 +147,7 @@ void MetricsTracker::Update(const TickSample& sample) {
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
     }
-    if (rising_flag) OnControllerFlag(t);
+    if (rising_flag && !seating) OnControllerFlag(t);
     // Flags that fell out of the early window can no longer match an event.
     int kept = 0;
     for (int i = 0; i < pending_count_; ++i) {

@@ -114,6 +114,7 @@ class MetricsTracker {
 
   bool grasped_ever_ = false;
   double grasp_time_s_ = -1.0;
+  double grasp_start_s_ = -1.0;  ///< when the current grasp was established [s]
   bool grasped_ = false;  ///< grasped since the latest close
   bool holding_ = false;
   std::array<double, 3> reference_offset_m_{};  ///< object - wrist when grasped [m]

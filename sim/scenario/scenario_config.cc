@@ -263,6 +263,7 @@ MetricsConfig LoadMetricsConfig(const YamlMap& map) {
   m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, kDuration);
   m.early_detection_window_s = map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
   m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, {0.0, sim::kMaxForceN, true});
+  m.seating_s = map.GetNumber("seating_s", m.seating_s, kDuration);
   m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, {0.0, sim::kMaxPositionM, true});
   m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, kPositiveDuration);
   m.stable_force_band = map.GetNumber("stable_force_band", m.stable_force_band, NumberRule{0.0, 1.0, true});
@@ -992,6 +993,7 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   EmitNumber(out, "slip_event_gap_s", m.slip_event_gap_s);
   EmitNumber(out, "early_detection_window_s", m.early_detection_window_s);
   EmitNumber(out, "grasp_force_n", m.grasp_force_n);
+  EmitNumber(out, "seating_s", m.seating_s);
   EmitNumber(out, "drop_distance_m", m.drop_distance_m);
   EmitNumber(out, "stable_window_s", m.stable_window_s);
   EmitNumber(out, "stable_force_band", m.stable_force_band);

@@ -149,6 +149,10 @@ struct MetricsConfig {
   double early_detection_window_s = 0.05;
   /// Finger normal force above which the object counts as grasped [N].
   double grasp_force_n = 0.3;
+  /// Seating: for this long after a grasp is established the pads settle on the object (the
+  /// impact of the closing digits, a flexing pad rolling onto the face). Relative motion then
+  /// counts in max_slip_mm but opens no slip event, and controller flags then are not false [s].
+  double seating_s = 0.05;
   /// Object displacement relative to the wrist, from where it was when grasped, that counts as
   /// dropped [m].
   double drop_distance_m = 0.02;
