@@ -1,0 +1,71 @@
+// `graspbed score`: controllers side by side over the shipped benchmark set (a scorecard).
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/command_registry.h"
+#include "app/stop_signal.h"
+#include "sim/scenario/scorecard.h"
+
+namespace graspbed::app {
+namespace {
+
+/// Exit code after Ctrl-C (128 + SIGINT, the shell convention).
+constexpr int kExitInterrupted = 130;
+
+struct ScoreCommandOptions {
+  std::vector<std::string> controllers;
+  std::string set_dir = "scenarios/scorecard";
+  int jobs = 1;
+  int limit = 0;
+  std::string out_dir = "out/scorecard";
+};
+
+void ScoreCommand(const ScoreCommandOptions& options) {
+  const scenario::ScorecardSet set = scenario::LoadScorecardSet(options.set_dir + "/set.yaml");
+  scenario::ScorecardOptions score;
+  if (!options.controllers.empty()) score.controllers = options.controllers;
+  score.jobs = options.jobs;
+  score.limit = options.limit;
+  score.stop = &StopRequested();
+  const bool terminal = ::isatty(STDERR_FILENO) == 1;
+  score.on_finished = [terminal](int done, int total) {
+    if (!terminal) return;
+    std::fprintf(stderr, "\r\033[K  score: %d/%d runs", done, total);
+    std::fflush(stderr);
+  };
+  StopSignalGuard guard;
+  const scenario::Scorecard scorecard = scenario::RunScorecard(set, score);
+  if (terminal) std::fprintf(stderr, "\r\033[K");
+  scenario::WriteScorecard(scorecard, options.out_dir);
+  std::cout << scenario::ScorecardTable(scorecard);
+  std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json)\n";
+  if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
+}
+
+void AddScoreCommand(CLI::App& root) {
+  auto options = std::make_shared<ScoreCommandOptions>();
+  CLI::App* command = root.add_subcommand(
+      "score", "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
+               "base scenarios plus seeded variations): slip detection, latency, false flags, drops, crushes, "
+               "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv and scorecard.json");
+  command->add_option("--controller", options->controllers,
+                      "controller to score (repeatable; default grip_slip and open_loop)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  command->add_option("--set-dir", options->set_dir, "directory holding set.yaml (default scenarios/scorecard, the shipped set)");
+  command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
+  command->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--out", options->out_dir, "output directory (default out/scorecard)");
+  command->callback([options] { ScoreCommand(*options); });
+}
+
+const bool kRegisteredScore = RegisterCommands(&AddScoreCommand);
+
+}  // namespace
+}  // namespace graspbed::app

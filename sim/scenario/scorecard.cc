@@ -1,0 +1,473 @@
+#include "sim/scenario/scorecard.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include <yaml-cpp/yaml.h>
+
+#include "common/yaml_map.h"
+#include "sim/scenario/schedule.h"
+
+namespace graspbed::scenario {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void Fail(const std::string& file, const YAML::Node& node, const std::string& key,
+                       const std::string& value, const std::string& reason) {
+  const int line = node.IsDefined() ? node.Mark().line + 1 : 0;
+  throw common::ConfigError(file + ":" + std::to_string(line) + ": " + key + " = " + value + ": " + reason);
+}
+
+std::string NodeText(const YAML::Node& node) {
+  YAML::Emitter emitter;
+  emitter.SetSeqFormat(YAML::Flow);
+  emitter.SetMapFormat(YAML::Flow);
+  emitter << node;
+  return emitter.c_str();
+}
+
+double NumberOf(const std::string& file, const YAML::Node& node, const std::string& key) {
+  try {
+    const double value = node.as<double>();
+    if (std::isfinite(value)) return value;
+  } catch (const YAML::Exception&) {
+  }
+  Fail(file, node, key, NodeText(node), "expected a number");
+}
+
+std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& list, const std::string& where) {
+  std::vector<ScorecardVary> vary;
+  if (!list.IsDefined() || list.IsNull()) return vary;
+  if (!list.IsSequence()) Fail(file, list, where, NodeText(list), "expected a list of {key, min, max} or {choose: [...]}");
+  for (size_t i = 0; i < list.size(); ++i) {
+    const YAML::Node item = list[i];
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    if (!item.IsMap()) Fail(file, item, at, NodeText(item), "expected {key, min, max} or {choose: [...]}");
+    ScorecardVary entry;
+    if (item["choose"]) {
+      const YAML::Node choices = item["choose"];
+      if (!choices.IsSequence() || choices.size() == 0) {
+        Fail(file, choices, at + ".choose", NodeText(choices), "expected a non-empty list of override maps");
+      }
+      for (size_t c = 0; c < choices.size(); ++c) {
+        const YAML::Node group = choices[c];
+        if (!group.IsMap() || group.size() == 0) {
+          Fail(file, group, at + ".choose[" + std::to_string(c) + "]", NodeText(group),
+               "expected a map of dotted keys to values, e.g. {object.shape: box}");
+        }
+        std::vector<Override> overrides;
+        for (const auto& pair : group) {
+          const YAML::Node value = pair.second;
+          overrides.push_back({pair.first.as<std::string>(), value.IsScalar() ? value.as<std::string>() : NodeText(value)});
+        }
+        entry.choices.push_back(std::move(overrides));
+      }
+    } else {
+      if (!item["key"] || !item["min"] || !item["max"]) {
+        Fail(file, item, at, NodeText(item), "a range needs key, min and max");
+      }
+      entry.key = item["key"].as<std::string>();
+      entry.min = NumberOf(file, item["min"], at + ".min");
+      entry.max = NumberOf(file, item["max"], at + ".max");
+      if (entry.max < entry.min) Fail(file, item["max"], at + ".max", NodeText(item["max"]), "must be >= min");
+    }
+    vary.push_back(std::move(entry));
+  }
+  return vary;
+}
+
+std::string FormatNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.4g", value);
+  return text;
+}
+
+void Sample(const ScorecardVary& vary, std::mt19937_64& rng, std::vector<Override>& out) {
+  if (vary.key.empty()) {
+    const size_t pick = std::uniform_int_distribution<size_t>(0, vary.choices.size() - 1)(rng);
+    for (const Override& each : vary.choices[pick]) out.push_back(each);
+    return;
+  }
+  const double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  out.push_back({vary.key, FormatNumber(vary.min + u * (vary.max - vary.min))});
+}
+
+std::string OptionalText(const std::optional<double>& value, const char* format) {
+  if (!value) return "-";
+  char text[48];
+  std::snprintf(text, sizeof(text), format, *value);
+  return text;
+}
+
+nlohmann::json OptionalJson(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+ScorecardSet LoadScorecardSet(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw common::ConfigError(path + ": cannot read the scorecard set");
+  } catch (const YAML::Exception& error) {
+    throw common::ConfigError(path + ":" + std::to_string(error.mark.line + 1) + ": " + error.msg);
+  }
+  if (!root.IsMap()) throw common::ConfigError(path + ": expected a map with name, version, seed, bases");
+  ScorecardSet set;
+  set.source_file = path;
+  if (!root["name"] || !root["name"].IsScalar()) Fail(path, root, "name", "", "the set needs a name");
+  set.name = root["name"].as<std::string>();
+  if (!root["version"]) Fail(path, root, "version", "", "the set needs a version (a whole number >= 1)");
+  const double version = NumberOf(path, root["version"], "version");
+  if (version < 1 || version != std::floor(version)) {
+    Fail(path, root["version"], "version", NodeText(root["version"]), "expected a whole number >= 1");
+  }
+  set.version = static_cast<int>(version);
+  if (root["seed"]) {
+    const double seed = NumberOf(path, root["seed"], "seed");
+    if (seed < 0 || seed != std::floor(seed)) Fail(path, root["seed"], "seed", NodeText(root["seed"]), "expected a whole number >= 0");
+    set.seed = static_cast<uint64_t>(seed);
+  }
+  set.common = ParseVary(path, root["vary"], "vary");
+  const YAML::Node bases = root["bases"];
+  if (!bases.IsSequence() || bases.size() == 0) {
+    Fail(path, bases.IsDefined() ? bases : root, "bases", bases.IsDefined() ? NodeText(bases) : "",
+         "expected a non-empty list of {scenario, variations}");
+  }
+  const fs::path directory = fs::path(path).parent_path();
+  for (size_t i = 0; i < bases.size(); ++i) {
+    const YAML::Node item = bases[i];
+    const std::string at = "bases[" + std::to_string(i) + "]";
+    if (!item.IsMap() || !item["scenario"]) Fail(path, item, at, NodeText(item), "expected {scenario: FILE, variations: N}");
+    ScorecardBase base;
+    base.scenario_path = (directory / item["scenario"].as<std::string>()).lexically_normal().string();
+    if (!fs::is_regular_file(base.scenario_path)) {
+      Fail(path, item["scenario"], at + ".scenario", item["scenario"].as<std::string>(),
+           "no such file (" + base.scenario_path + ")");
+    }
+    if (item["variations"]) {
+      const double count = NumberOf(path, item["variations"], at + ".variations");
+      if (count < 0 || count > 1000 || count != std::floor(count)) {
+        Fail(path, item["variations"], at + ".variations", NodeText(item["variations"]), "expected a whole number in [0, 1000]");
+      }
+      base.variations = static_cast<int>(count);
+    }
+    base.vary = ParseVary(path, item["vary"], at + ".vary");
+    set.bases.push_back(std::move(base));
+  }
+  return set;
+}
+
+std::vector<ScorecardRun> ExpandScorecardSet(const ScorecardSet& set) {
+  std::vector<ScorecardRun> runs;
+  for (size_t b = 0; b < set.bases.size(); ++b) {
+    const ScorecardBase& base = set.bases[b];
+    const std::string stem = fs::path(base.scenario_path).stem().string();
+    for (int k = 0; k <= base.variations; ++k) {
+      ScorecardRun run;
+      run.name = stem + ".v" + std::to_string(k);
+      run.scenario_path = base.scenario_path;
+      if (k > 0) {
+        std::seed_seq seeds{static_cast<uint32_t>(set.seed), static_cast<uint32_t>(set.seed >> 32),
+                            static_cast<uint32_t>(b), static_cast<uint32_t>(k)};
+        std::mt19937_64 rng(seeds);
+        for (const ScorecardVary& vary : set.common) Sample(vary, rng, run.overrides);
+        for (const ScorecardVary& vary : base.vary) Sample(vary, rng, run.overrides);
+        // A seed per variation too, so sensor noise and any random script differ between variations.
+        run.overrides.push_back({"seed", std::to_string(std::uniform_int_distribution<uint32_t>(1, 1u << 30)(rng))});
+      }
+      runs.push_back(std::move(run));
+    }
+  }
+  return runs;
+}
+
+std::optional<double> Percentile(std::vector<double> values, double p) {
+  if (values.empty()) return std::nullopt;
+  std::sort(values.begin(), values.end());
+  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(values.size() - 1);
+  const size_t lower = static_cast<size_t>(std::floor(rank));
+  const size_t upper = std::min(lower + 1, values.size() - 1);
+  return values[lower] + (rank - static_cast<double>(lower)) * (values[upper] - values[lower]);
+}
+
+ControllerScore ScoreRuns(const std::string& controller, const std::vector<const RunResult*>& finished, int errors) {
+  ControllerScore score;
+  score.controller = controller;
+  score.errors = errors;
+  std::vector<double> latencies_ms;
+  std::vector<double> grip_ratios;
+  double fn_square_sum = 0.0;
+  int64_t fn_samples = 0;
+  for (const RunResult* result : finished) {
+    const Metrics& metrics = result->metrics;
+    ++score.runs;
+    if (result->passed) ++score.passed;
+    score.slip_events += metrics.slip_events;
+    score.slip_detected += metrics.slip_events - metrics.missed_slip_events;
+    for (const SlipEvent& event : metrics.events) {
+      if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
+    }
+    score.false_flags += metrics.false_slip_flags;
+    score.held_min += metrics.held_s / 60.0;
+    if (metrics.dropped) ++score.drops;
+    if (metrics.crushed) ++score.crushes;
+    if (metrics.grip_efficiency_ratio) grip_ratios.push_back(*metrics.grip_efficiency_ratio);
+    if (metrics.fn_rmse_n && metrics.estimation_samples > 0) {
+      fn_square_sum += *metrics.fn_rmse_n * *metrics.fn_rmse_n * static_cast<double>(metrics.estimation_samples);
+      fn_samples += metrics.estimation_samples;
+    }
+    if (metrics.physics_fault) ++score.physics_faults;
+  }
+  if (score.slip_events > 0) score.detected_pct = 100.0 * score.slip_detected / score.slip_events;
+  score.latency_p50_ms = Percentile(latencies_ms, 50.0);
+  score.latency_p95_ms = Percentile(latencies_ms, 95.0);
+  if (score.held_min > 0.0) score.false_per_min = score.false_flags / score.held_min;
+  score.grip_ratio_median = Percentile(grip_ratios, 50.0);
+  score.grip_ratio_p95 = Percentile(grip_ratios, 95.0);
+  if (fn_samples > 0) score.fn_rmse_n = std::sqrt(fn_square_sum / static_cast<double>(fn_samples));
+  return score;
+}
+
+Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.controllers.empty()) throw common::ConfigError("score: no controller to score");
+  std::vector<ScorecardRun> runs = ExpandScorecardSet(set);
+  if (options.limit > 0 && static_cast<size_t>(options.limit) < runs.size()) runs.resize(options.limit);
+
+  Scorecard scorecard;
+  scorecard.set_name = set.name;
+  scorecard.set_version = set.version;
+  scorecard.set_file = set.source_file;
+  scorecard.runs_per_controller = static_cast<int>(runs.size());
+  scorecard.jobs = std::max(1, options.jobs);
+
+  // Load everything first: a bad override or an unknown controller refuses the whole scorecard.
+  std::vector<ScenarioConfig> configs;
+  for (const std::string& controller : options.controllers) {
+    for (const ScorecardRun& run : runs) {
+      std::vector<Override> overrides = run.overrides;
+      overrides.push_back({"controller.name", controller});
+      ScenarioConfig config = LoadScenario(run.scenario_path, overrides);
+      config.name = run.name + "@" + controller;
+      configs.push_back(std::move(config));
+      scorecard.rows.push_back({controller, run.name, run.overrides, "", {}});
+    }
+  }
+
+  const std::vector<size_t> order = LongestFirst(configs);
+  std::atomic<size_t> next{0};
+  std::mutex mutex;
+  int finished = 0;
+  const auto worker = [&] {
+    while (true) {
+      if (options.stop != nullptr && options.stop->load()) return;
+      const size_t position = next.fetch_add(1);
+      if (position >= order.size()) return;
+      const size_t index = order[position];
+      ScorecardRow& row = scorecard.rows[index];  // each index is written by one worker only
+      try {
+        RunOptions run_options;
+        run_options.stop = options.stop;
+        row.result = RunScenario(configs[index], run_options);
+        if (!row.result.completed) row.error = "interrupted";
+      } catch (const std::exception& error) {
+        row.error = error.what();
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      ++finished;
+      if (options.on_finished) options.on_finished(finished, static_cast<int>(configs.size()));
+    }
+  };
+  std::vector<std::thread> threads;
+  const int thread_count = std::min<int>(scorecard.jobs, static_cast<int>(configs.size()));
+  for (int i = 0; i < thread_count; ++i) threads.emplace_back(worker);
+  for (std::thread& thread : threads) thread.join();
+
+  scorecard.completed = finished == static_cast<int>(configs.size()) &&
+                        std::none_of(scorecard.rows.begin(), scorecard.rows.end(),
+                                     [](const ScorecardRow& row) { return row.error == "interrupted"; });
+  for (const std::string& controller : options.controllers) {
+    std::vector<const RunResult*> done;
+    int errors = 0;
+    for (const ScorecardRow& row : scorecard.rows) {
+      if (row.controller != controller) continue;
+      if (row.error.empty() && row.result.completed) {
+        done.push_back(&row.result);
+      } else {
+        ++errors;
+      }
+    }
+    scorecard.scores.push_back(ScoreRuns(controller, done, errors));
+  }
+  scorecard.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return scorecard;
+}
+
+namespace {
+
+/// One figure of the table/CSV: label, CSV column, and its text for a score.
+struct Figure {
+  const char* label;
+  const char* column;
+  std::function<std::string(const ControllerScore&)> text;
+  std::function<nlohmann::json(const ControllerScore&)> json;
+};
+
+std::string Int(int value) { return std::to_string(value); }
+
+const std::vector<Figure>& Figures() {
+  static const std::vector<Figure> figures = {
+      {"runs (errors)", "runs", [](const ControllerScore& s) { return Int(s.runs) + (s.errors ? " (" + Int(s.errors) + ")" : ""); },
+       [](const ControllerScore& s) { return nlohmann::json(s.runs); }},
+      {"errors", "errors", [](const ControllerScore& s) { return Int(s.errors); },
+       [](const ControllerScore& s) { return nlohmann::json(s.errors); }},
+      {"passed", "passed", [](const ControllerScore& s) { return Int(s.passed) + "/" + Int(s.runs); },
+       [](const ControllerScore& s) { return nlohmann::json(s.passed); }},
+      {"slip events detected", "slip_detected_pct",
+       [](const ControllerScore& s) {
+         return OptionalText(s.detected_pct, "%.1f %%") + " (" + Int(s.slip_detected) + "/" + Int(s.slip_events) + ")";
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.detected_pct); }},
+      {"slip events", "slip_events", [](const ControllerScore& s) { return Int(s.slip_events); },
+       [](const ControllerScore& s) { return nlohmann::json(s.slip_events); }},
+      {"slip events flagged", "slip_detected", [](const ControllerScore& s) { return Int(s.slip_detected); },
+       [](const ControllerScore& s) { return nlohmann::json(s.slip_detected); }},
+      {"detection latency p50", "latency_p50_ms", [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
+       [](const ControllerScore& s) { return OptionalJson(s.latency_p50_ms); }},
+      {"detection latency p95", "latency_p95_ms", [](const ControllerScore& s) { return OptionalText(s.latency_p95_ms, "%.1f ms"); },
+       [](const ControllerScore& s) { return OptionalJson(s.latency_p95_ms); }},
+      {"false flags / min held", "false_flags_per_min",
+       [](const ControllerScore& s) { return OptionalText(s.false_per_min, "%.2f") + " (" + Int(s.false_flags) + ")"; },
+       [](const ControllerScore& s) { return OptionalJson(s.false_per_min); }},
+      {"false flags", "false_flags", [](const ControllerScore& s) { return Int(s.false_flags); },
+       [](const ControllerScore& s) { return nlohmann::json(s.false_flags); }},
+      {"time held", "held_min", [](const ControllerScore& s) { return OptionalText(s.held_min, "%.2f min"); },
+       [](const ControllerScore& s) { return nlohmann::json(s.held_min); }},
+      {"drops", "drops", [](const ControllerScore& s) { return Int(s.drops); },
+       [](const ControllerScore& s) { return nlohmann::json(s.drops); }},
+      {"crushes", "crushes", [](const ControllerScore& s) { return Int(s.crushes); },
+       [](const ControllerScore& s) { return nlohmann::json(s.crushes); }},
+      {"peak/needed grip median", "grip_ratio_median", [](const ControllerScore& s) { return OptionalText(s.grip_ratio_median, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_median); }},
+      {"peak/needed grip p95", "grip_ratio_p95", [](const ControllerScore& s) { return OptionalText(s.grip_ratio_p95, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_p95); }},
+      {"Fn estimation RMSE", "fn_rmse_n", [](const ControllerScore& s) { return OptionalText(s.fn_rmse_n, "%.3f N"); },
+       [](const ControllerScore& s) { return OptionalJson(s.fn_rmse_n); }},
+      {"physics faults", "physics_faults", [](const ControllerScore& s) { return Int(s.physics_faults); },
+       [](const ControllerScore& s) { return nlohmann::json(s.physics_faults); }},
+  };
+  return figures;
+}
+
+// Figures shown in the printed table (the CSV has every column).
+bool InTable(const Figure& figure) {
+  const std::string column = figure.column;
+  return column != "errors" && column != "slip_events" && column != "slip_detected" && column != "false_flags";
+}
+
+}  // namespace
+
+std::string ScorecardTable(const Scorecard& scorecard) {
+  std::ostringstream out;
+  out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " (" << scorecard.set_file << "): "
+      << scorecard.runs_per_controller << " runs per controller, " << scorecard.jobs << " jobs, "
+      << FormatNumber(scorecard.wall_s) << " s" << (scorecard.completed ? "" : ", INCOMPLETE") << "\n";
+  constexpr int kLabelWidth = 26;
+  constexpr int kColumnWidth = 24;
+  char cell[128];
+  std::snprintf(cell, sizeof(cell), "  %-*s", kLabelWidth, "");
+  out << cell;
+  for (const ControllerScore& score : scorecard.scores) {
+    std::snprintf(cell, sizeof(cell), "%-*s", kColumnWidth, score.controller.c_str());
+    out << cell;
+  }
+  out << "\n";
+  for (const Figure& figure : Figures()) {
+    if (!InTable(figure)) continue;
+    std::snprintf(cell, sizeof(cell), "  %-*s", kLabelWidth, figure.label);
+    out << cell;
+    for (const ControllerScore& score : scorecard.scores) {
+      std::snprintf(cell, sizeof(cell), "%-*s", kColumnWidth, figure.text(score).c_str());
+      out << cell;
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string ScorecardCsv(const Scorecard& scorecard) {
+  std::ostringstream out;
+  out << "set,version,controller";
+  for (const Figure& figure : Figures()) out << "," << figure.column;
+  out << "\n";
+  for (const ControllerScore& score : scorecard.scores) {
+    out << scorecard.set_name << "," << scorecard.set_version << "," << score.controller;
+    for (const Figure& figure : Figures()) {
+      const nlohmann::json value = figure.json(score);
+      out << ",";
+      if (value.is_null()) continue;
+      if (value.is_number_float()) {
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.6g", value.get<double>());
+        out << text;
+      } else {
+        out << value.dump();
+      }
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+nlohmann::json ScorecardJson(const Scorecard& scorecard) {
+  nlohmann::json json;
+  json["set"] = {{"name", scorecard.set_name},
+                 {"version", scorecard.set_version},
+                 {"file", scorecard.set_file},
+                 {"runs_per_controller", scorecard.runs_per_controller}};
+  json["completed"] = scorecard.completed;
+  json["wall_s"] = scorecard.wall_s;
+  json["jobs"] = scorecard.jobs;
+  json["controllers"] = nlohmann::json::array();
+  for (const ControllerScore& score : scorecard.scores) {
+    nlohmann::json entry = {{"controller", score.controller}};
+    for (const Figure& figure : Figures()) entry[figure.column] = figure.json(score);
+    json["controllers"].push_back(entry);
+  }
+  json["runs"] = nlohmann::json::array();
+  for (const ScorecardRow& row : scorecard.rows) {
+    nlohmann::json entry = {{"controller", row.controller}, {"run", row.run}};
+    nlohmann::json overrides = nlohmann::json::object();
+    for (const Override& each : row.overrides) overrides[each.key] = each.value;
+    entry["overrides"] = overrides;
+    if (!row.error.empty()) {
+      entry["error"] = row.error;
+    } else {
+      entry["summary"] = SummaryJson(row.result);
+    }
+    json["runs"].push_back(entry);
+  }
+  return json;
+}
+
+void WriteScorecard(const Scorecard& scorecard, const std::string& out_dir) {
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error) throw std::runtime_error(out_dir + ": cannot create the output directory: " + error.message());
+  WriteFileAtomic(out_dir + "/scorecard.csv", ScorecardCsv(scorecard));
+  WriteFileAtomic(out_dir + "/scorecard.json", ScorecardJson(scorecard).dump(2) + "\n");
+}
+
+}  // namespace graspbed::scenario

@@ -1,0 +1,241 @@
+// Scorecards: pooling of run metrics into a controller's score, the shipped set's expansion (seeded,
+// within its ranges), the set file's error messages, and `graspbed score` on a small set with both
+// controllers (table, CSV and JSON columns, the reference ahead of open_loop on slip detection).
+#include "sim/scenario/scorecard.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/yaml_map.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/error_of.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::scenario {
+namespace {
+
+using graspbed::testing::CliResult;
+using graspbed::testing::ReadText;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
+
+constexpr double kTol = 1e-9;
+constexpr int kExitOk = 0;
+constexpr int kExitBadInput = 2;
+
+const std::string kShippedSet = std::string(GRASPBED_SOURCE_DIR) + "/scenarios/scorecard/set.yaml";
+const std::string kScenarios = std::string(GRASPBED_SOURCE_DIR) + "/scenarios";
+
+RunResult FinishedRun(int events, int missed, std::vector<double> latencies_ms, int false_flags, double held_s) {
+  RunResult result;
+  result.completed = true;
+  result.passed = missed == 0;
+  result.metrics.slip_events = events;
+  result.metrics.missed_slip_events = missed;
+  for (double latency_ms : latencies_ms) {
+    SlipEvent event;
+    event.detected = true;
+    event.latency_s = latency_ms / 1000.0;
+    result.metrics.events.push_back(event);
+  }
+  for (int i = 0; i < missed; ++i) result.metrics.events.push_back(SlipEvent{});
+  result.metrics.false_slip_flags = false_flags;
+  result.metrics.held_s = held_s;
+  return result;
+}
+
+TEST(ScorecardTest, PercentileInterpolatesBetweenOrderStatistics) {
+  EXPECT_FALSE(Percentile({}, 50.0).has_value());
+  EXPECT_NEAR(*Percentile({3.0}, 95.0), 3.0, kTol);
+  EXPECT_NEAR(*Percentile({4.0, 1.0, 3.0, 2.0}, 50.0), 2.5, kTol);
+  // numpy.percentile([0, 10, ..., 100], 95) = 95.
+  EXPECT_NEAR(*Percentile({0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100}, 95.0), 95.0, kTol);
+}
+
+TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
+  RunResult a = FinishedRun(2, 0, {10.0, 20.0}, 1, 30.0);
+  a.metrics.grip_efficiency_ratio = 1.5;
+  a.metrics.fn_rmse_n = 0.1;
+  a.metrics.estimation_samples = 300;
+  RunResult b = FinishedRun(2, 1, {30.0}, 2, 30.0);
+  b.metrics.dropped = true;
+  b.metrics.grip_efficiency_ratio = 3.0;
+  b.metrics.fn_rmse_n = 0.2;
+  b.metrics.estimation_samples = 100;
+  RunResult c = FinishedRun(0, 0, {}, 0, 60.0);
+  c.metrics.crushed = true;
+  const ControllerScore score = ScoreRuns("x", {&a, &b, &c}, 1);
+  EXPECT_EQ(score.runs, 3);
+  EXPECT_EQ(score.errors, 1);
+  EXPECT_EQ(score.passed, 2);
+  EXPECT_EQ(score.slip_events, 4);
+  EXPECT_EQ(score.slip_detected, 3);
+  EXPECT_NEAR(*score.detected_pct, 75.0, kTol);
+  EXPECT_NEAR(*score.latency_p50_ms, 20.0, kTol);
+  EXPECT_NEAR(*score.latency_p95_ms, 29.0, kTol);
+  // 3 false flags over 2 minutes held in all.
+  EXPECT_NEAR(score.held_min, 2.0, kTol);
+  EXPECT_NEAR(*score.false_per_min, 1.5, kTol);
+  EXPECT_EQ(score.drops, 1);
+  EXPECT_EQ(score.crushes, 1);
+  EXPECT_NEAR(*score.grip_ratio_median, 2.25, kTol);
+  // RMS weighted by samples: sqrt((0.01 * 300 + 0.04 * 100) / 400).
+  EXPECT_NEAR(*score.fn_rmse_n, std::sqrt(7.0 / 400.0), kTol);
+}
+
+TEST(ScorecardTest, ScoreOfNoRunHasNoRatesRatherThanZeros) {
+  const ControllerScore score = ScoreRuns("x", {}, 0);
+  EXPECT_EQ(score.runs, 0);
+  EXPECT_FALSE(score.detected_pct.has_value());
+  EXPECT_FALSE(score.latency_p95_ms.has_value());
+  EXPECT_FALSE(score.false_per_min.has_value());
+  EXPECT_FALSE(score.grip_ratio_median.has_value());
+  EXPECT_FALSE(score.fn_rmse_n.has_value());
+}
+
+TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
+  const ScorecardSet set = LoadScorecardSet(kShippedSet);
+  EXPECT_FALSE(set.name.empty());
+  EXPECT_GE(set.version, 1);
+  const std::vector<ScorecardRun> runs = ExpandScorecardSet(set);
+  // ~30-40 runs per controller keeps the full scorecard at a few minutes on 2 cores.
+  EXPECT_GE(runs.size(), 30u);
+  EXPECT_LE(runs.size(), 40u);
+  const std::vector<ScorecardRun> again = ExpandScorecardSet(LoadScorecardSet(kShippedSet));
+  ASSERT_EQ(again.size(), runs.size());
+  std::set<std::string> names;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    EXPECT_TRUE(names.insert(runs[i].name).second) << runs[i].name;
+    ASSERT_EQ(runs[i].overrides.size(), again[i].overrides.size());
+    for (size_t k = 0; k < runs[i].overrides.size(); ++k) {
+      EXPECT_EQ(runs[i].overrides[k].key, again[i].overrides[k].key);
+      EXPECT_EQ(runs[i].overrides[k].value, again[i].overrides[k].value);
+    }
+    if (runs[i].name.ends_with(".v0")) {
+      EXPECT_TRUE(runs[i].overrides.empty()) << runs[i].name;
+    }
+    // The last value of a key is the one that applies; the set's mass and friction ranges hold.
+    double mass = -1.0, friction = -1.0;
+    for (const Override& each : runs[i].overrides) {
+      if (each.key == "object.mass_kg") mass = std::stod(each.value);
+      if (each.key == "object.friction") friction = std::stod(each.value);
+    }
+    if (!runs[i].name.ends_with(".v0")) {
+      EXPECT_GE(mass, 0.05) << runs[i].name;
+      EXPECT_LE(mass, 0.4) << runs[i].name;
+      EXPECT_GE(friction, 0.3) << runs[i].name;
+      EXPECT_LE(friction, 1.0) << runs[i].name;
+    }
+    // Every run loads: the overrides name keys the scenario schema accepts.
+    EXPECT_NO_THROW(LoadScenario(runs[i].scenario_path, runs[i].overrides)) << runs[i].name;
+  }
+}
+
+TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
+  TempDir dir;
+  const std::string no_version = dir.Write("a.yaml", "name: s\nbases:\n  - {scenario: x.yaml}\n");
+  EXPECT_NE(graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(no_version); }).find("version"), std::string::npos);
+  const std::string missing = dir.Write("b.yaml", "name: s\nversion: 1\nbases:\n  - {scenario: nowhere.yaml}\n");
+  const std::string message = graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(missing); });
+  EXPECT_NE(message.find("b.yaml:4: bases[0].scenario = nowhere.yaml: no such file"), std::string::npos) << message;
+  const std::string bad_range = dir.Write(
+      "c.yaml", "name: s\nversion: 1\nbases:\n  - scenario: " + kScenarios +
+                    "/default.yaml\n    vary:\n      - {key: object.mass_kg, min: 0.4, max: 0.1}\n");
+  const std::string range_message = graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
+  EXPECT_NE(range_message.find("bases[0].vary[0].max = 0.1: must be >= min"), std::string::npos) << range_message;
+}
+
+// A small set through the real CLI: two bases with a slip event each (a pull ramp and an added mass
+// step), one seeded variation of each, both controllers.
+TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMoreSlip) {
+  TempDir dir;
+  dir.Write("set/set.yaml", "name: small\nversion: 1\nseed: 3\nbases:\n"
+                            "  - {scenario: " + kScenarios + "/pull_ramp.yaml, variations: 1,\n"
+                            "     vary: [{key: object.mass_kg, min: 0.08, max: 0.15}]}\n"
+                            "  - {scenario: " + kScenarios + "/added_mass_step.yaml, variations: 1,\n"
+                            "     vary: [{key: \"script[2].mass_kg\", min: 0.2, max: 0.4}]}\n");
+  const std::string out = dir.Path("out");
+  const CliResult result = RunCli("score --set-dir " + dir.Path("set") + " -j 2 --out " + out);
+  ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
+  EXPECT_NE(result.out.find("scorecard small v1"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("4 runs per controller"), std::string::npos) << result.out;
+  // One table, one column per controller.
+  std::istringstream lines(result.out);
+  std::string line;
+  bool header = false;
+  while (std::getline(lines, line)) {
+    if (line.find("grip_slip") != std::string::npos && line.find("open_loop") != std::string::npos) header = true;
+  }
+  EXPECT_TRUE(header) << result.out;
+  for (const char* label : {"slip events detected", "detection latency p50", "detection latency p95",
+                            "false flags / min held", "drops", "crushes", "peak/needed grip median",
+                            "peak/needed grip p95", "Fn estimation RMSE", "passed"}) {
+    EXPECT_NE(result.out.find(label), std::string::npos) << label;
+  }
+
+  const std::string csv = ReadText(out + "/scorecard.csv");
+  const std::string csv_header = csv.substr(0, csv.find('\n'));
+  for (const char* column : {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms",
+                             "false_flags_per_min", "drops", "crushes", "grip_ratio_median", "grip_ratio_p95",
+                             "fn_rmse_n", "passed", "runs"}) {
+    EXPECT_NE(csv_header.find(column), std::string::npos) << column;
+  }
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
+
+  const nlohmann::json json = nlohmann::json::parse(ReadText(out + "/scorecard.json"));
+  EXPECT_EQ(json.at("set").at("name"), "small");
+  EXPECT_EQ(json.at("set").at("version"), 1);
+  ASSERT_EQ(json.at("controllers").size(), 2u);
+  const nlohmann::json& reference = json.at("controllers")[0];
+  const nlohmann::json& baseline = json.at("controllers")[1];
+  EXPECT_EQ(reference.at("controller"), "grip_slip");
+  EXPECT_EQ(baseline.at("controller"), "open_loop");
+  EXPECT_EQ(json.at("runs").size(), 8u);
+  // The outcome: both controllers met slip events, and the reference flagged more of them than the
+  // baseline (which has no slip detection at all) and in time.
+  ASSERT_GT(reference.at("slip_events").get<int>(), 0);
+  ASSERT_GT(baseline.at("slip_events").get<int>(), 0);
+  ASSERT_FALSE(reference.at("slip_detected_pct").is_null());
+  EXPECT_GT(reference.at("slip_detected_pct").get<double>(), baseline.at("slip_detected_pct").get<double>());
+  EXPECT_GE(reference.at("slip_detected_pct").get<double>(), 75.0);
+  ASSERT_FALSE(reference.at("latency_p95_ms").is_null());
+  EXPECT_LE(reference.at("latency_p95_ms").get<double>(), 50.0);
+  EXPECT_EQ(reference.at("drops"), 0);
+}
+
+TEST(ScorecardCliTest, LimitTakesTheFirstRunsOfTheShippedSetForOneController) {
+  TempDir dir;
+  const CliResult result =
+      RunCli("score --set-dir " + std::string(GRASPBED_SOURCE_DIR) + "/scenarios/scorecard --limit 2 "
+             "--controller open_loop --out " + dir.Path("out"));
+  ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
+  EXPECT_NE(result.out.find("2 runs per controller"), std::string::npos) << result.out;
+  const nlohmann::json json = nlohmann::json::parse(ReadText(dir.Path("out") + "/scorecard.json"));
+  ASSERT_EQ(json.at("controllers").size(), 1u);
+  EXPECT_EQ(json.at("runs").size(), 2u);
+}
+
+TEST(ScorecardCliTest, BadInputExitsTwoWithOneLineAndWritesNothing) {
+  TempDir dir;
+  CliResult result = RunCli("score --set-dir " + dir.Path("nowhere") + " --out " + dir.Path("out"));
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_NE(result.err.find("set.yaml: cannot read the scorecard set"), std::string::npos) << result.err;
+  result = RunCli("score --set-dir " + std::string(GRASPBED_SOURCE_DIR) +
+                  "/scenarios/scorecard --controller no_such_controller --out " + dir.Path("out"));
+  EXPECT_EQ(result.exit_code, kExitBadInput) << result.err;
+  EXPECT_NE(result.err.find("no_such_controller"), std::string::npos) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.Path("out")));
+}
+
+}  // namespace
+}  // namespace graspbed::scenario
