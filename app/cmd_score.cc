@@ -43,7 +43,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   if (terminal) std::fprintf(stderr, "\r\033[K");
   scenario::WriteScorecard(scorecard, options.out_dir);
   std::cout << scenario::ScorecardTable(scorecard);
-  std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json)\n";
+  std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
   if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
 }
 
@@ -52,7 +52,7 @@ void AddScoreCommand(CLI::App& root) {
   CLI::App* command = root.add_subcommand(
       "score", "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
                "base scenarios plus seeded variations): slip detection, latency, false flags, drops, crushes, "
-               "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv and scorecard.json");
+               "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv, scorecard.json and scorecard.png");
   command->add_option("--controller", options->controllers,
                       "controller to score (repeatable; default grip_slip and open_loop)")
       ->expected(1)

@@ -12,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "common/plot.h"
 #include "common/yaml_map.h"
 #include "sim/scenario/schedule.h"
 
@@ -462,12 +463,72 @@ nlohmann::json ScorecardJson(const Scorecard& scorecard) {
   return json;
 }
 
+void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
+  struct Panel {
+    const char* title;
+    const char* y_label;
+    std::function<std::optional<double>(const ControllerScore&)> value;
+  };
+  const std::vector<Panel> panels = {
+      {"slip events detected", "detected [%]", [](const ControllerScore& s) { return s.detected_pct; }},
+      {"detection latency p95", "latency [ms]", [](const ControllerScore& s) { return s.latency_p95_ms; }},
+      {"false flags per minute held", "false flags [1/min]", [](const ControllerScore& s) { return s.false_per_min; }},
+      {"peak / needed grip, median", "ratio [-]", [](const ControllerScore& s) { return s.grip_ratio_median; }},
+      {"drops + crushes", "runs [-]",
+       [](const ControllerScore& s) { return std::optional<double>(s.drops + s.crushes); }},
+      {"runs passed", "passed [%]",
+       [](const ControllerScore& s) {
+         return s.runs > 0 ? std::optional<double>(100.0 * s.passed / s.runs) : std::nullopt;
+       }},
+  };
+  plot::Figure figure;
+  figure.title = "scorecard " + scorecard.set_name + " v" + std::to_string(scorecard.set_version) + ", " +
+                 std::to_string(scorecard.runs_per_controller) + " runs per controller";
+  figure.columns = 3;
+  figure.panel_width_px = 420;
+  figure.panel_height_px = 320;
+  for (const Panel& panel : panels) {
+    plot::Chart chart;
+    chart.title = panel.title;
+    chart.x_label = "controller (legend)";
+    chart.y_label = panel.y_label;
+    chart.include_zero_y = true;
+    double top = 0.0;
+    for (const ControllerScore& score : scorecard.scores) top = std::max(top, panel.value(score).value_or(0.0));
+    // Unnamed padding: a baseline from 0.2 to N + 0.8 so the bars stand clear of the frame, and a
+    // lone point (drawn as nothing) 40 % above the tallest bar, so the legend sits above the bars.
+    const double count = static_cast<double>(scorecard.scores.size());
+    chart.series.push_back({"", {0.2, count + 0.8}, {0.0, 0.0}});
+    chart.series.push_back({"", {0.2}, {top > 0.0 ? 1.4 * top : 1.0}});
+    for (size_t i = 0; i < scorecard.scores.size(); ++i) {
+      // A bar as the outline of a rectangle centred on x = i + 1; a figure that does not exist
+      // (no slip event, nothing flagged) draws no bar.
+      plot::Series bar;
+      bar.name = scorecard.scores[i].controller;
+      const std::optional<double> value = panel.value(scorecard.scores[i]);
+      const double x = static_cast<double>(i) + 1.0;
+      if (value) {
+        bar.x = {x - 0.3, x - 0.3, x + 0.3, x + 0.3, x - 0.3};
+        bar.y = {0.0, *value, *value, 0.0, 0.0};
+      } else {
+        bar.x = {x};
+        bar.y = {0.0};
+        bar.markers = true;
+      }
+      chart.series.push_back(std::move(bar));
+    }
+    figure.panels.push_back(std::move(chart));
+  }
+  plot::WritePng(figure, path);
+}
+
 void WriteScorecard(const Scorecard& scorecard, const std::string& out_dir) {
   std::error_code error;
   fs::create_directories(out_dir, error);
   if (error) throw std::runtime_error(out_dir + ": cannot create the output directory: " + error.message());
   WriteFileAtomic(out_dir + "/scorecard.csv", ScorecardCsv(scorecard));
   WriteFileAtomic(out_dir + "/scorecard.json", ScorecardJson(scorecard).dump(2) + "\n");
+  WriteScorecardPlot(scorecard, out_dir + "/scorecard.png");
 }
 
 }  // namespace graspbed::scenario

@@ -7,6 +7,7 @@
 /// Output directory of `graspbed score`:
 ///   scorecard.csv   one row per controller (the columns of ScorecardCsv)
 ///   scorecard.json  the set (name, version, runs), one object per controller, and every run's row
+///   scorecard.png   bars of the headline figures, one colour per controller
 
 #include <atomic>
 #include <cstdint>
@@ -135,7 +136,10 @@ std::string ScorecardTable(const Scorecard& scorecard);
 std::string ScorecardCsv(const Scorecard& scorecard);
 /// JSON: set, controllers (one object each) and runs.
 nlohmann::json ScorecardJson(const Scorecard& scorecard);
-/// Writes scorecard.csv and scorecard.json into `out_dir` (created; atomic writes).
+/// Bars of the headline figures (slip detected, latency p95, false flags per minute, grip ratio median,
+/// drops + crushes, runs passed) as one PNG, one colour per controller.
+void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path);
+/// Writes scorecard.csv, scorecard.json and scorecard.png into `out_dir` (created; atomic writes).
 void WriteScorecard(const Scorecard& scorecard, const std::string& out_dir);
 
 }  // namespace graspbed::scenario

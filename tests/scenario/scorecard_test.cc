@@ -1,6 +1,6 @@
 // Scorecards: pooling of run metrics into a controller's score, the shipped set's expansion (seeded,
 // within its ranges), the set file's error messages, and `graspbed score` on a small set with both
-// controllers (table, CSV and JSON columns, the reference ahead of open_loop on slip detection).
+// controllers (table, CSV and JSON columns, the PNG, the reference ahead of open_loop on slip detection).
 #include "sim/scenario/scorecard.h"
 
 #include <gtest/gtest.h>
@@ -183,6 +183,7 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
     EXPECT_NE(result.out.find(label), std::string::npos) << label;
   }
 
+  EXPECT_EQ(ReadText(out + "/scorecard.png").substr(1, 3), "PNG");
   const std::string csv = ReadText(out + "/scorecard.csv");
   const std::string csv_header = csv.substr(0, csv.find('\n'));
   for (const char* column : {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms",
