@@ -5,16 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 #include <random>
 #include <sstream>
-#include <thread>
 
 #include <yaml-cpp/yaml.h>
 
 #include "common/plot.h"
 #include "common/yaml_map.h"
-#include "sim/scenario/schedule.h"
+#include "sim/scenario/suite.h"
 
 namespace graspbed::scenario {
 
@@ -267,38 +265,26 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
     }
   }
 
-  const std::vector<size_t> order = LongestFirst(configs);
-  std::atomic<size_t> next{0};
-  std::mutex mutex;
-  int finished = 0;
-  const auto worker = [&] {
-    while (true) {
-      if (options.stop != nullptr && options.stop->load()) return;
-      const size_t position = next.fetch_add(1);
-      if (position >= order.size()) return;
-      const size_t index = order[position];
-      ScorecardRow& row = scorecard.rows[index];  // each index is written by one worker only
-      try {
-        RunOptions run_options;
-        run_options.stop = options.stop;
-        row.result = RunScenario(configs[index], run_options);
-        if (!row.result.completed) row.error = "interrupted";
-      } catch (const std::exception& error) {
-        row.error = error.what();
-      }
-      std::lock_guard<std::mutex> lock(mutex);
-      ++finished;
-      if (options.on_finished) options.on_finished(finished, static_cast<int>(configs.size()));
+  // The suite's worker pool (longest expected run first, Ctrl-C aware); nothing written per run.
+  SuiteOptions suite_options;
+  suite_options.jobs = scorecard.jobs;
+  suite_options.write_plots = false;
+  suite_options.stop = options.stop;
+  if (options.on_finished) {
+    suite_options.on_finished = [&](int finished, int total, const SuiteRun&) { options.on_finished(finished, total); };
+  }
+  SuiteResult suite = RunSuite(configs, suite_options);
+  scorecard.completed = suite.completed;
+  for (size_t i = 0; i < suite.runs.size(); ++i) {
+    ScorecardRow& row = scorecard.rows[i];
+    SuiteRun& run = suite.runs[i];
+    row.result = std::move(run.result);
+    if (!run.error.empty()) {
+      row.error = run.error;
+    } else if (!run.started || !row.result.completed) {
+      row.error = "interrupted";
     }
-  };
-  std::vector<std::thread> threads;
-  const int thread_count = std::min<int>(scorecard.jobs, static_cast<int>(configs.size()));
-  for (int i = 0; i < thread_count; ++i) threads.emplace_back(worker);
-  for (std::thread& thread : threads) thread.join();
-
-  scorecard.completed = finished == static_cast<int>(configs.size()) &&
-                        std::none_of(scorecard.rows.begin(), scorecard.rows.end(),
-                                     [](const ScorecardRow& row) { return row.error == "interrupted"; });
+  }
   for (const std::string& controller : options.controllers) {
     std::vector<const RunResult*> done;
     int errors = 0;
