@@ -23,6 +23,9 @@ struct ControllerTelemetry {
   double grip_target_n = 0.0;       ///< grip force the controller aims for [N]
   double friction_estimate = 0.0;   ///< current estimate of the contact friction coefficient
   bool slip_detected = false;       ///< slip detected at this update
+  /// Static string naming the cues behind slip_detected ("ratio", "vibration+centroid", ...;
+  /// "" when none fired or the controller does not say).
+  const char* slip_cues = "";
   int slip_events = 0;              ///< slip events since Reset()
   bool safe_hold = false;           ///< holding because data are stale or too few units are valid
 };

@@ -19,6 +19,13 @@ constexpr double kMaxStepS = 0.01;
 /// Loading ends once the measured grip reaches this fraction of the target.
 constexpr double kLoadedFraction = 0.9;
 
+/// Static name of the cues that fired in `signals` (telemetry; no allocation).
+const char* CueNames(const SlipSignals& signals) {
+  static constexpr const char* kNames[8] = {"",          "ratio",           "vibration",          "ratio+vibration",
+                                            "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
+  return kNames[(signals.ratio_slip ? 1 : 0) | (signals.vibration_slip ? 2 : 0) | (signals.centroid_slip ? 4 : 0)];
+}
+
 /// One declared parameter bound to its field of GripSlipConfig.
 struct Binding {
   const char* name;
@@ -86,6 +93,8 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("friction_min", friction_min, 0.01, 5.0, "", "lower bound of the friction estimate"),
       GRASPBED_BIND("friction_learn_rate", friction_learn_rate, 0.0, 1.0, "",
                     "fraction of the way the estimate moves towards the ratio seen at slip"),
+      GRASPBED_BIND("friction_learn_max_drop", friction_learn_max_drop, 0.0, 1.0, "",
+                    "one slip lowers the friction estimate by at most this fraction of it"),
       GRASPBED_BIND("friction_learn_min_load_n", friction_learn_min_load_n, 0.0, 100.0, "N",
                     "the estimate is learned only from slips under at least this tangential load"),
       GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N",
@@ -117,6 +126,8 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("ratio_filter_s", slip.ratio_filter_s, 0.0, 1.0, "s", "low-pass time constant of the ratio"),
       GRASPBED_BIND("ratio_slip_fraction", slip.ratio_slip_fraction, 0.1, 2.0, "",
                     "ratio cue fires above this fraction of the friction estimate"),
+      GRASPBED_BIND("ratio_release_fraction", slip.ratio_release_fraction, 0.01, 1.0, "",
+                    "once fired, the ratio cue holds until the ratio falls below this fraction of its threshold"),
       GRASPBED_BIND("ratio_noise_sigmas", slip.ratio_noise_sigmas, 0.0, 20.0, "sigma",
                     "ratio threshold raised by this many standard deviations of the ratio estimate"),
       GRASPBED_BIND("ratio_min_grip_n", slip.ratio_min_grip_n, 0.01, 100.0, "N",
@@ -136,6 +147,11 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("vibration_noise_sigmas", slip.vibration_noise_sigmas, 0.0, 20.0, "sigma",
                     "with the readout's measured noise: vibration threshold floor = max(vibration_min_rms_n, this x "
                     "the high-passed per-unit shear noise); 0 = off"),
+      GRASPBED_BIND("shear_blind_noise_n", slip.shear_blind_noise_n, 0.0, 100.0, "N",
+                    "readout shear noise per unit above which the shear cues are off and the grip is held at "
+                    "shear_blind_grip_fraction of the ceiling; 0 = never"),
+      GRASPBED_BIND("shear_blind_grip_fraction", shear_blind_grip_fraction, 0.0, 1.0, "",
+                    "grip target as a fraction of the ceiling when the sensor cannot resolve shear"),
       GRASPBED_BIND("noise_floor_time_s", slip.noise_floor_time_s, 0.01, 100.0, "s",
                     "time constant of the learned noise floor"),
       GRASPBED_BIND("centroid_detector", slip.centroid_enabled, 0, 1, "",
@@ -161,8 +177,8 @@ const std::vector<Binding>& Bindings() {
                     "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
                     "at most this long after contact onset or stale data"),
       GRASPBED_BIND("preload_reference", slip.preload_reference, 0, 1, "",
-                    "1: the shear/normal ratio when the cues arm is preload; the ratio cue and the tangential load "
-                    "are measured from it"),
+                    "1: the preload ratio (slope of shear against grip over the loading ramp) is subtracted; the "
+                    "ratio cue and the tangential load are measured from it"),
   };
   return bindings;
 }
@@ -328,7 +344,11 @@ void GripSlipController::RespondToSlip(double time_s) {
   // where the cone is. The ratio cue itself compares against the estimate, so only the independent
   // cues teach the estimate.
   if ((signals.vibration_slip || signals.centroid_slip) && signals.tangential_load_n >= config_.friction_learn_min_load_n) {
-    const double observed = std::min(std::max(signals.ratio, signals.instant_ratio), friction_);
+    // In the coordinates the ratio cue and the coupling use (the load's part, preload removed), and
+    // by at most friction_learn_max_drop of the estimate per event: a slip at a ratio far below the
+    // estimate is a jolt (an impact, the pad reseating), not the friction limit.
+    const double observed = std::clamp(std::max(signals.load_ratio, signals.instant_load_ratio),
+                                       (1.0 - config_.friction_learn_max_drop) * friction_, friction_);
     friction_ = std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
   }
   const double grip_n = diagnostics_.measured_grip_n;
@@ -364,6 +384,7 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
     telemetry_.phase = "safe_hold";
     telemetry_.safe_hold = true;
     telemetry_.slip_detected = false;
+    telemetry_.slip_cues = "";
     telemetry_.grip_target_n = target_n_;
     telemetry_.friction_estimate = friction_;
     diagnostics_.effort = command.grip_effort;
@@ -444,7 +465,9 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
       if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
       if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
       if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
-      const double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
+      double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
+      // A sensor that cannot resolve shear cannot tell the load: hold at a fixed share of the ceiling.
+      if (signals.shear_blind && phase_ != Phase::kLoading) base_n = std::max(base_n, config_.shear_blind_grip_fraction * ceiling_n);
       target_n_ = std::min(std::max(base_n, slip_floor_n_), ceiling_n);
       command.grip_effort = ForceLoop(target_n_, grip_n, dt_s, may_increase);
       break;
@@ -466,6 +489,7 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
   telemetry_.grip_target_n = target_n_;
   telemetry_.friction_estimate = friction_;
   telemetry_.slip_detected = slip_now;
+  telemetry_.slip_cues = slip_now ? CueNames(signals) : "";
   diagnostics_.effort = command.grip_effort;
   diagnostics_.integrator = integrator_;
   diagnostics_.ceiling_n = ceiling_n;

@@ -41,12 +41,16 @@ struct GripSlipConfig {
   double safety_margin = 1.4;           ///< grip = tangential load / friction estimate x this
   double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
   double unit_range_n = 10.0;           ///< a saturated (out-of-range) unit counts as this force [N]
+  /// With a sensor that cannot resolve shear (SlipSignals::shear_blind) the hold grip is this
+  /// fraction of the ceiling: the load is unknown, so the grip is set for the heaviest it may be.
+  double shear_blind_grip_fraction = 0.8;
 
   // Friction estimate.
   double friction_initial = 0.5;      ///< friction coefficient assumed at the start of each grasp
   double friction_min = 0.15;         ///< the estimate never goes below this
   double friction_learn_rate = 1.0;   ///< fraction of the way towards the ratio observed at slip
   double friction_learn_min_load_n = 0.2;  ///< learn only from slips under at least this tangential load [N]
+  double friction_learn_max_drop = 0.5;    ///< one slip lowers the estimate by at most this fraction of it
 
   // Force loop (feed-forward + PI with anti-windup) on the measured grip.
   double effort_per_newton = 0.05;    ///< feed-forward effort per newton of target (1 / the 20 N stall pinch)

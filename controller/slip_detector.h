@@ -31,6 +31,8 @@ struct SlipDetectorConfig {
   double ratio_filter_s = 0.01;         ///< low-pass time constant of the ratio [s]
   double ratio_slip_fraction = 0.9;     ///< ratio cue fires above this fraction of the friction estimate
   double ratio_min_grip_n = 0.5;        ///< ratio is evaluated only above this measured grip [N]
+  /// Once fired, the ratio cue holds until the ratio falls below this fraction of its threshold.
+  double ratio_release_fraction = 0.85;
   /// The ratio threshold is raised by this many standard deviations of the ratio estimate (from the
   /// learned shear noise and the contact's normal forces), so a light grip on a noisy sensor does
   /// not read as slip.
@@ -51,6 +53,10 @@ struct SlipDetectorConfig {
   /// is not in the readout's figure.
   double vibration_noise_sigmas = 0.0;
   double noise_floor_time_s = 0.5;      ///< time constant of the noise-floor estimate [s]
+  /// Per-unit shear noise the readout reports (RMS over valid units) above which the shear cues
+  /// (ratio, vibration) and the tangential load are off: the sensor cannot resolve shear (the FEA's
+  /// k_t behind a 12-bit divider: 0.9 N per unit), and only the centroid cue is left [N]; 0 = never.
+  double shear_blind_noise_n = 0.4;
 
   bool centroid_enabled = true;         ///< use the contact-centroid movement cue
   double centroid_filter_s = 0.003;     ///< low-pass time constant of the centroid [s]
@@ -74,11 +80,13 @@ struct SlipDetectorConfig {
   /// threshold: the ringing of the contact's onset has died away), at most this long after
   /// Restart() [s]. A flexing finger's pad seats with a shear transient that outlasts settle_s.
   double settle_max_s = 0.3;
-  /// 1: the shear/normal ratio when the cues arm (the grasp has settled) is the contact's preload
-  /// (a flexing finger's pad meets the object obliquely and locks shear in as it squeezes; the
-  /// contact sticks under it): the ratio cue and the tangential load are measured from it.
+  /// 1 (default): the contact's preload ratio (a flexing finger's pad meets the object obliquely and
+  /// locks shear in as it squeezes; the contact sticks under it) is the slope of shear against grip
+  /// fitted over the loading ramp and the first settle_s of live frames (the mean ratio over those
+  /// live frames when the grip did not ramp enough to fit); the ratio cue and the tangential load
+  /// are measured from it.
   /// 0: from zero shear (a pinch square to the object).
-  bool preload_reference = false;
+  bool preload_reference = true;
 
   /// Longest centroid window the delay line holds [samples].
   static constexpr int kMaxWindowSamples = 512;
@@ -96,9 +104,14 @@ struct SlipSignals {
   /// Preload ratio taken when the cues armed, per beam orientation (axial, circumferential) [-].
   double preload_ratio_axial = 0.0;
   double preload_ratio_circumferential = 0.0;
+  /// The preload came from the fit of shear against the grip (the grip ramped while it was taken);
+  /// false: it is the mean ratio over the window.
+  bool preload_fitted = false;
   /// The same ratio from this frame alone, unfiltered [-]: at a slip onset the filtered ratio still
   /// lags a step of load, this one does not (noisier; used to learn friction, not to detect).
   double instant_ratio = 0.0;
+  /// The load's part of this frame's ratio alone, unfiltered: |instant ratio vector - preload| [-].
+  double instant_load_ratio = 0.0;
   double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
   double tangential_load_n = 0.0;      ///< load_ratio times measured grip: load the grip must hold [N]
   /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
@@ -120,6 +133,9 @@ struct SlipSignals {
   int contact_units = 0;               ///< valid units above the contact threshold
   bool in_contact = false;             ///< a unit above the threshold, or the grip above 3x the threshold
   bool orientation_consistent = true;  ///< layout assumption matched the state's shear totals
+  /// The readout's shear noise is above shear_blind_noise_n: ratio and vibration cues are off and
+  /// tangential_load_n is 0 (the controller has to grip without knowing the load).
+  bool shear_blind = false;
   bool ratio_slip = false;             ///< ratio cue fired
   bool vibration_slip = false;         ///< vibration cue fired
   bool centroid_slip = false;          ///< centroid cue fired
@@ -159,7 +175,9 @@ class SlipDetector {
 
   bool IsAxial(int unit) const;
   void UpdateSensorNoise(const sensor::TactileState& state);
-  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool live);
+  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool armed, bool live);
+  /// Ends the preload window: the preload ratios from the fit, or the mean ratio kept.
+  void FitPreload();
   void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
   void UpdateCentroid(const sensor::TactileState& state, double grip_n, bool live);
 
@@ -172,7 +190,18 @@ class SlipDetector {
   SlipSignals signals_;
   int settle_remaining_ = 0;
   int settle_max_remaining_ = 0;
-  bool have_preload_ = false;  ///< the preload ratio was taken since the last RestartContact()
+  /// Sums for the preload fit S = p N + L per beam orientation set, S its shear total and N its
+  /// normal total (RestartContact() clears them).
+  struct PreloadFit {
+    long frames = 0;
+    double normal_sum[2] = {0.0, 0.0};         // [N]
+    double normal_square_sum[2] = {0.0, 0.0};  // [N^2]
+    double shear_sum[2] = {0.0, 0.0};          // [N]
+    double shear_square_sum[2] = {0.0, 0.0};   // [N^2]
+    double normal_shear_sum[2] = {0.0, 0.0};   // [N^2]
+  };
+  PreloadFit preload_fit_;
+  bool have_preload_ = false;  ///< the preload window is over since the last RestartContact()
   int preload_frames_ = 0;     ///< armed frames averaged into the preload ratio so far
   double ratio_axial_ = 0.0;   ///< filtered ratio components of the newest frame [-]
   double ratio_circumferential_ = 0.0;

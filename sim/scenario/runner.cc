@@ -450,7 +450,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   // The loop ticks at most once per physics step (the loader bounds this storage, kMaxSignalBytes).
   const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
   const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * ticks_per_s)) + 16;
-  SignalLog log(NumericColumns(units), {"intent", "phase"}, capacity_rows);
+  SignalLog log(NumericColumns(units), {"intent", "phase", "slip_cues"}, capacity_rows);
   const size_t ring_capacity = static_cast<size_t>(std::ceil(
                                    (MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
                                    config.controller.rate_hz)) + 8;
@@ -496,6 +496,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     if (row != nullptr) {
       text[0] = IntentName(player.intent());
       text[1] = telemetry.phase;
+      text[2] = telemetry.slip_cues;
       row[kTime] = t;
       row[kGripEffort] = command.grip_effort;
       row[kEnable] = command.enable ? 1.0 : 0.0;

@@ -61,9 +61,18 @@ SyntheticContact Hold(double) {
   return contact;
 }
 
+/// The streams below hold their load from the first frame, with no loading ramp to tell preload
+/// from load, as a pinch square to the object: from zero shear (preload_reference 0). The preload
+/// has its own tests at the end.
+SlipDetectorConfig SquarePinch() {
+  SlipDetectorConfig config;
+  config.preload_reference = false;
+  return config;
+}
+
 /// Only one cue enabled, to measure it alone.
 SlipDetectorConfig OnlyCue(bool ratio, bool vibration, bool centroid) {
-  SlipDetectorConfig config;
+  SlipDetectorConfig config = SquarePinch();
   config.ratio_enabled = ratio;
   config.vibration_enabled = vibration;
   config.centroid_enabled = centroid;
@@ -71,7 +80,7 @@ SlipDetectorConfig OnlyCue(bool ratio, bool vibration, bool centroid) {
 }
 
 TEST(SlipDetectorTest, StaticHoldWithNoiseRaisesNothingAndLearnsTheNoise) {
-  Stream stream(SlipDetectorConfig{});
+  Stream stream(SquarePinch());
   EXPECT_LT(stream.Run(0.0, 30.0, Hold), 0.0);
   EXPECT_EQ(stream.flagged, 0);
   const SlipSignals& signals = stream.detector.signals();
@@ -187,7 +196,7 @@ TEST(SlipDetectorTest, LoadOutgrowingGripDetectedByRatioWithinLatency) {
 }
 
 TEST(SlipDetectorTest, SmoothLoadSwingsOfArmMotionRaiseNothing) {
-  Stream stream(SlipDetectorConfig{});
+  Stream stream(SquarePinch());
   // The load swings between 0.1 and 0.7 of the grip's friction limit at 1-5 Hz, the grip following
   // loosely: the ratio stays below 0.9 x friction, the shear is smooth, the contact does not move.
   const double first_s = stream.Run(0.0, 20.0, [](double t) {
@@ -202,7 +211,7 @@ TEST(SlipDetectorTest, SmoothLoadSwingsOfArmMotionRaiseNothing) {
 }
 
 TEST(SlipDetectorTest, NothingFiresDuringSettleOrWhenDisarmed) {
-  SlipDetector detector(SlipDetectorConfig{});
+  SlipDetector detector(SquarePinch());
   SyntheticTactile sensor({});
   detector.Restart();
   SyntheticContact slipping = Hold(0.0);
@@ -220,7 +229,7 @@ TEST(SlipDetectorTest, NothingFiresDuringSettleOrWhenDisarmed) {
 }
 
 TEST(SlipDetectorTest, CircumferentialLoadUsesTheOtherUnits) {
-  Stream stream(SlipDetectorConfig{});
+  Stream stream(SquarePinch());
   stream.Run(0.0, 0.5, [](double t) {
     SyntheticContact contact = Hold(t);
     contact.load_axial_n = 0.6;
@@ -231,13 +240,62 @@ TEST(SlipDetectorTest, CircumferentialLoadUsesTheOtherUnits) {
 }
 
 TEST(SlipDetectorTest, WrongOrientationAssumptionIsNoticedAndFallsBack) {
-  SlipDetectorConfig config;
+  SlipDetectorConfig config = SquarePinch();
   config.even_units_axial = false;  // the sensor has even units axial
   Stream stream(config);
   stream.Run(0.0, 0.5, Hold);
   EXPECT_FALSE(stream.detector.signals().orientation_consistent);
   // Fallback: 2 x |total shear| / total normal; about right for a patch centred on the grid.
   EXPECT_NEAR(stream.detector.signals().tangential_load_n, kHoldLoadN, 0.25);
+}
+
+/// Preload (preload_reference, the default): over the loading ramp the shear that grows with the
+/// grip is preload and is taken out of the load; shear already there and not growing with the grip
+/// is load and stays. Then a load step is measured from the preload.
+TEST(SlipDetectorTest, PreloadIsTheShearThatGrowsWithTheGripAndLoadIsKept) {
+  constexpr double kPreloadRatio = 0.4;  // a flexing pad's oblique squeeze (docs/controller.md)
+  constexpr double kRampS = 0.15;        // loading ramp, 0.5 -> kGripN
+  for (const double load_at_grasp_n : {0.0, kHoldLoadN}) {
+    SCOPED_TRACE("load at grasp " + std::to_string(load_at_grasp_n) + " N");
+    Stream stream(SlipDetectorConfig{});
+    const auto grasp = [&](double t) {
+      SyntheticContact contact;
+      contact.grip_n = 0.5 + (kGripN - 0.5) * std::min(t / kRampS, 1.0);
+      contact.load_axial_n = kPreloadRatio * contact.grip_n + load_at_grasp_n;
+      return contact;
+    };
+    // A preload ratio of 0.4 plus 0.3 of load is above 0.9 x 0.5: read as load it would fire.
+    EXPECT_LT(stream.Run(0.0, 1.0, grasp), 0.0);
+    const SlipSignals& signals = stream.detector.signals();
+    EXPECT_TRUE(signals.preload_fitted);
+    // Within the synthetic sensor's noise over a 0.1 s ramp: 0.05 of ratio, 5 % of the grip in load.
+    EXPECT_NEAR(signals.preload_ratio_axial, kPreloadRatio, 0.05);
+    EXPECT_NEAR(signals.tangential_load_n, load_at_grasp_n, 0.05 * kGripN);
+    // The load then grows to the friction limit (ratio 0.5 on top of the preload): flagged in time.
+    constexpr double kOnsetS = 1.0;
+    const double first_s = stream.Run(kOnsetS, 1.5, [&](double t) {
+      SyntheticContact contact = grasp(t);
+      contact.load_axial_n = kPreloadRatio * kGripN + kFriction * kGripN;
+      return contact;
+    });
+    ASSERT_GT(first_s, 0.0);
+    EXPECT_LT(first_s - kOnsetS, kSlipLatencyLimitS);
+  }
+}
+
+/// Without a ramp (the grip at its hold value from the first frame) the preload is the mean ratio
+/// over the settle window, and insignificant shear (noise about zero) is no preload.
+TEST(SlipDetectorTest, WithoutARampThePreloadIsTheSettledMeanRatio) {
+  Stream stream(SlipDetectorConfig{});
+  stream.Run(0.0, 0.5, [](double) {
+    SyntheticContact contact;
+    contact.grip_n = kGripN;
+    contact.load_axial_n = 0.3 * kGripN;
+    return contact;
+  });
+  EXPECT_FALSE(stream.detector.signals().preload_fitted);
+  EXPECT_NEAR(stream.detector.signals().preload_ratio_axial, 0.3, 0.05);
+  EXPECT_NEAR(stream.detector.signals().tangential_load_n, 0.0, 0.05 * kGripN);
 }
 
 TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
