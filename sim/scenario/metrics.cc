@@ -148,6 +148,7 @@ void MetricsTracker::Update(const TickSample& sample) {
       CloseEvent();
     }
     if (rising_flag && !seating) OnControllerFlag(t);
+    if (flag && !seating && !event_open_) false_flag_s_ += dt;
     // Flags that fell out of the early window can no longer match an event.
     int kept = 0;
     for (int i = 0; i < pending_count_; ++i) {
@@ -223,6 +224,8 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.false_slip_flags = copy.false_flags_;
   m.held_s = copy.held_s_;
   m.false_slip_per_min = copy.held_s_ > 0.0 ? copy.false_flags_ / (copy.held_s_ / 60.0) : 0.0;
+  m.false_slip_flag_s = copy.false_flag_s_;
+  m.false_slip_flag_pct = copy.held_s_ > 0.0 ? 100.0 * copy.false_flag_s_ / copy.held_s_ : 0.0;
   if (copy.estimation_samples_ > 0) {
     m.fn_rmse_n = std::sqrt(copy.fn_square_sum_ / static_cast<double>(copy.estimation_samples_));
     m.ft_rmse_n = std::sqrt(copy.ft_square_sum_ / static_cast<double>(copy.estimation_samples_));

@@ -51,6 +51,11 @@ struct Metrics {
   int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
   int false_slip_flags = 0;       ///< flags matching no slip event
   double false_slip_per_min = 0.0;  ///< false_slip_flags per minute held [1/min]
+  /// Time the controller's slip flag was up while held, outside slip events and seating [s]. A flag
+  /// that stays up counts once in false_slip_flags; this is what it costs.
+  double false_slip_flag_s = 0.0;
+  /// false_slip_flag_s as a share of the time held [%].
+  double false_slip_flag_pct = 0.0;
   double held_s = 0.0;            ///< time the object was held [s]
   std::optional<double> fn_rmse_n;  ///< per-unit Fn estimation RMSE over contact samples [N]
   std::optional<double> ft_rmse_n;  ///< per-unit Ft estimation RMSE over the same samples [N]
@@ -134,6 +139,7 @@ class MetricsTracker {
   bool previous_flag_ = false;
   int flags_ = 0;
   int false_flags_ = 0;
+  double false_flag_s_ = 0.0;
   /// Flags not (yet) matched to an event, within the early-detection window of now.
   std::array<double, 64> pending_flags_{};
   int pending_count_ = 0;

@@ -603,6 +603,8 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"crushed", m.crushed},
       {"slip_detect_latency_ms", Optional(m.slip_detect_latency_ms)},
       {"false_slip_per_min", m.false_slip_per_min},
+      {"false_slip_flag_s", m.false_slip_flag_s},
+      {"false_slip_flag_pct", m.false_slip_flag_pct},
       {"fn_rmse_n", Optional(m.fn_rmse_n)},
       {"ft_rmse_n", Optional(m.ft_rmse_n)},
       {"time_to_stable_s", Optional(m.time_to_stable_s)},

@@ -220,6 +220,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     }
     score.false_flags += metrics.false_slip_flags;
     score.held_min += metrics.held_s / 60.0;
+    score.false_flag_min += metrics.false_slip_flag_s / 60.0;
     if (metrics.dropped) ++score.drops;
     if (metrics.crushed) ++score.crushes;
     if (metrics.grip_efficiency_ratio) grip_ratios.push_back(*metrics.grip_efficiency_ratio);
@@ -232,7 +233,10 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
   if (score.slip_events > 0) score.detected_pct = 100.0 * score.slip_detected / score.slip_events;
   score.latency_p50_ms = Percentile(latencies_ms, 50.0);
   score.latency_p95_ms = Percentile(latencies_ms, 95.0);
-  if (score.held_min > 0.0) score.false_per_min = score.false_flags / score.held_min;
+  if (score.held_min > 0.0) {
+    score.false_per_min = score.false_flags / score.held_min;
+    score.false_flag_pct = 100.0 * score.false_flag_min / score.held_min;
+  }
   score.grip_ratio_median = Percentile(grip_ratios, 50.0);
   score.grip_ratio_p95 = Percentile(grip_ratios, 95.0);
   if (fn_samples > 0) score.fn_rmse_n = std::sqrt(fn_square_sum / static_cast<double>(fn_samples));
@@ -340,6 +344,9 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return OptionalJson(s.false_per_min); }},
       {"false flags", "false_flags", [](const ControllerScore& s) { return Int(s.false_flags); },
        [](const ControllerScore& s) { return nlohmann::json(s.false_flags); }},
+      {"false flag up, % of held", "false_flag_pct",
+       [](const ControllerScore& s) { return OptionalText(s.false_flag_pct, "%.1f %%"); },
+       [](const ControllerScore& s) { return OptionalJson(s.false_flag_pct); }},
       {"time held", "held_min", [](const ControllerScore& s) { return OptionalText(s.held_min, "%.2f min"); },
        [](const ControllerScore& s) { return nlohmann::json(s.held_min); }},
       {"drops", "drops", [](const ControllerScore& s) { return Int(s.drops); },
