@@ -43,6 +43,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   if (terminal) std::fprintf(stderr, "\r\033[K");
   scenario::WriteScorecard(scorecard, options.out_dir);
   std::cout << scenario::ScorecardTable(scorecard);
+  std::cout << "  by sensor (profile/sensitivities):\n" << scenario::ScorecardBySensorTable(scorecard);
   std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
   if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
 }

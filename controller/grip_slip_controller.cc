@@ -326,7 +326,9 @@ double GripSlipController::ForceLoop(double target_n, double grip_n, double dt_s
 
 void GripSlipController::UpdateHoldTarget(double dt_s) {
   const SlipSignals& signals = detector_.signals();
-  const double coupled = std::max(config_.min_grip_n, signals.tangential_load_n / friction_ * config_.safety_margin);
+  // The friction holds the whole shear, the locked-in preload too (constant while the contact
+  // sticks, so coupling to it does not feed back through the grip).
+  const double coupled = std::max(config_.min_grip_n, signals.contact_shear_n / friction_ * config_.safety_margin);
   // Rise at once, fall slowly: a load that drops for a moment must not loosen the grip with it.
   coupled_target_n_ = coupled >= coupled_target_n_
                           ? coupled

@@ -17,16 +17,6 @@ using sensor::UnitValidity;
 constexpr double kOrientationCheckTolN = 1e-6;
 /// Below this summed normal force an orientation set contributes no ratio component [N].
 constexpr double kMinSetNormalN = 0.1;
-/// The preload is fitted from at least this many frames of grip and shear [frames] ...
-constexpr long kPreloadFitMinFrames = 20;
-/// ... over which the grip's standard deviation is at least this fraction of its mean (a ramp from
-/// 0.5 to 2 N gives about 0.3); a steadier grip cannot tell preload from load.
-constexpr double kPreloadFitMinSpread = 0.05;
-/// Frames of the preload fit have at least this grip [N]: below it the units' noise dominates the
-/// normal-force weights of the ratio.
-constexpr double kPreloadFitMinGripN = 1.0;
-/// A fitted preload slope counts only when it is this many standard errors away from zero.
-constexpr double kPreloadSignificance = 3.0;
 /// Frames averaged without clipping when the noise floor starts (after Reset()).
 constexpr long kNoisePrimeFrames = 50;
 /// Centroid weights start at this fraction of the contact threshold (noise on unloaded units
@@ -142,10 +132,8 @@ void SlipDetector::RestartContact() {
   Restart();
   have_preload_ = false;
   preload_frames_ = 0;
-  preload_fit_ = PreloadFit{};
-  signals_.preload_fitted = false;
-  signals_.preload_ratio_axial = 0.0;
-  signals_.preload_ratio_circumferential = 0.0;
+  signals_.preload_shear_axial_n = 0.0;
+  signals_.preload_shear_circumferential_n = 0.0;
 }
 
 bool SlipDetector::IsAxial(int unit) const {
@@ -205,7 +193,7 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
     UpdateSensorNoise(state);
   }
 
-  UpdateRatio(state, grip_n, friction_estimate, armed, live);
+  UpdateRatio(state, grip_n, friction_estimate, live);
   // The contact's seating transient (armed, not yet settled) is not noise: the floor learns before
   // contact and once the grasp has settled.
   UpdateVibration(state, learn_noise && (!armed || signals_.settled));
@@ -254,8 +242,7 @@ void SlipDetector::UpdateSensorNoise(const TactileState& state) {
   signals_.shear_blind = config_.shear_blind_noise_n > 0.0 && signals_.sensor_shear_noise_n > config_.shear_blind_noise_n;
 }
 
-void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate, bool armed,
-                               bool live) {
+void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate, bool live) {
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   // Normal-weighted ratio per beam orientation: sum(fn ft) / sum(fn^2) equals the traction ratio
   // when shear is proportional to pressure, and gives units without contact (noise only) no weight.
@@ -318,80 +305,35 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     ratio_circumferential_ = 0.0;
   }
   // The preload: shear the contact locks in as it squeezes. On a flexing finger the pad meets the
-  // object obliquely, so this shear grows with the grip and, read as load, would drive the grip up
-  // by itself. Preload scales with the grip, load does not: over the armed frames up to the end of
-  // the reference window (the loading ramp, then the first settle_s of live frames) each set's shear
-  // S = ratio x grip is fitted as S = p grip + L, and the slope p is the preload ratio, so a load
-  // already on when the grasp closes stays load. When the grip did not ramp enough to fit a slope,
-  // the mean ratio over the window's live frames is the preload (the closing impact can leave the
-  // grip near its target from the first frame). Until the window is over there is no load
-  // estimate. Taken once per contact (RestartContact()), kept over a stale gap.
-  const bool collecting = config_.preload_reference && armed && !have_preload_ && grip_n > config_.ratio_min_grip_n;
-  if (collecting && signals_.orientation_consistent && grip_n >= kPreloadFitMinGripN) {
-    // Per set: its ratio times the grip (the load the set's ratio stands for) against the grip.
-    ++preload_fit_.frames;
-    for (int set = 0; set < 2; ++set) {
-      const double x = grip_n;
-      const double y = component[set] * grip_n;
-      preload_fit_.normal_sum[set] += x;
-      preload_fit_.normal_square_sum[set] += x * x;
-      preload_fit_.shear_sum[set] += y;
-      preload_fit_.shear_square_sum[set] += y * y;
-      preload_fit_.normal_shear_sum[set] += x * y;
-    }
-  }
-  if (collecting && live) {
+  // object obliquely and slides into place as the finger flexes, so the grasp settles with shear
+  // in it; the contact then sticks, and a sticking contact keeps that shear whatever the grip does
+  // (more squeeze adds no tangential force). So the preload is a shear [N], the mean of each
+  // set's ratio x grip over the first settle_s of live frames, and the load is the shear on top of
+  // it: load ratio = |shear - preload| / grip. (Taken as a ratio instead, a grip raised after a
+  // slip lowers the ratio under the preload ratio and reads as more load: positive feedback to the
+  // ceiling, with the flag held up.) A load already on when the grasp settles is taken as preload
+  // too. Until the window is over there is no load estimate. Taken once per contact
+  // (RestartContact()), kept over a stale gap.
+  const double grip_for_load_n = std::max(grip_n, config_.ratio_min_grip_n);
+  if (config_.preload_reference && live && !have_preload_ && grip_n > config_.ratio_min_grip_n) {
     ++preload_frames_;
-    // Until the fit, the mean ratio over the live frames of the window is the preload.
     const double weight = 1.0 / preload_frames_;
-    signals_.preload_ratio_axial += weight * (ratio_axial_ - signals_.preload_ratio_axial);
-    signals_.preload_ratio_circumferential += weight * (ratio_circumferential_ - signals_.preload_ratio_circumferential);
-    if (preload_frames_ >= std::max(settle_samples_, 1)) {
-      have_preload_ = true;
-      FitPreload();
-    }
+    signals_.preload_shear_axial_n += weight * (ratio_axial_ * grip_n - signals_.preload_shear_axial_n);
+    signals_.preload_shear_circumferential_n +=
+        weight * (ratio_circumferential_ * grip_n - signals_.preload_shear_circumferential_n);
+    have_preload_ = preload_frames_ >= std::max(settle_samples_, 1);
   }
-  // Until the preload window is over there is no load estimate: the seating shear is not load.
-  signals_.load_ratio = config_.preload_reference && !have_preload_
-                            ? 0.0
-                            : std::hypot(ratio_axial_ - signals_.preload_ratio_axial,
-                                         ratio_circumferential_ - signals_.preload_ratio_circumferential);
-  signals_.instant_load_ratio =
-      config_.preload_reference && !have_preload_
-          ? 0.0
-          : (grip_n > config_.ratio_min_grip_n ? std::hypot(component[0] - signals_.preload_ratio_axial,
-                                                            component[1] - signals_.preload_ratio_circumferential)
-                                               : 0.0);
+  const bool no_estimate = (config_.preload_reference && !have_preload_) || grip_n <= config_.ratio_min_grip_n;
+  const auto load_ratio = [&](double axial, double circumferential) {
+    return std::hypot(axial * grip_for_load_n - signals_.preload_shear_axial_n,
+                      circumferential * grip_for_load_n - signals_.preload_shear_circumferential_n) /
+           grip_for_load_n;
+  };
+  signals_.load_ratio = no_estimate ? 0.0 : load_ratio(ratio_axial_, ratio_circumferential_);
+  signals_.instant_load_ratio = no_estimate ? 0.0 : load_ratio(component[0], component[1]);
   signals_.tangential_load_n = signals_.shear_blind ? 0.0 : signals_.load_ratio * std::max(grip_n, 0.0);
+  signals_.contact_shear_n = signals_.shear_blind ? 0.0 : signals_.ratio * std::max(grip_n, 0.0);
   signals_.ratio_threshold = config_.ratio_slip_fraction * friction_estimate + config_.ratio_noise_sigmas * noise_sigma;
-}
-
-void SlipDetector::FitPreload() {
-  const PreloadFit& fit = preload_fit_;
-  signals_.preload_fitted = false;
-  if (fit.frames < kPreloadFitMinFrames) return;  // the mean ratio stays the preload
-  const double n = static_cast<double>(fit.frames);
-  double slope[2] = {0.0, 0.0};
-  for (int set = 0; set < 2; ++set) {
-    const double normal_mean = fit.normal_sum[set] / n;
-    const double normal_variance = fit.normal_square_sum[set] / n - normal_mean * normal_mean;
-    // A set that carried load but did not ramp cannot tell preload from load: no fit at all.
-    if (normal_mean > kMinSetNormalN && !(normal_variance > 0.0 && std::sqrt(normal_variance) >= kPreloadFitMinSpread * normal_mean)) {
-      return;
-    }
-    if (normal_mean <= kMinSetNormalN || normal_variance <= 0.0) continue;  // an unloaded set: no preload
-    const double shear_mean = fit.shear_sum[set] / n;
-    const double shear_variance = fit.shear_square_sum[set] / n - shear_mean * shear_mean;
-    slope[set] = (fit.normal_shear_sum[set] / n - normal_mean * shear_mean) / normal_variance;
-    // A slope within kPreloadSignificance standard errors of zero is the sensor's noise, not
-    // preload: a noisy fit would otherwise bias every later load estimate.
-    const double residual_variance = std::max(0.0, shear_variance - slope[set] * slope[set] * normal_variance);
-    const double standard_error = std::sqrt(residual_variance / (n * normal_variance));
-    if (std::abs(slope[set]) < kPreloadSignificance * standard_error) slope[set] = 0.0;
-  }
-  signals_.preload_fitted = true;
-  signals_.preload_ratio_axial = slope[0];
-  signals_.preload_ratio_circumferential = slope[1];
 }
 
 void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) {

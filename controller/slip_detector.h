@@ -80,12 +80,10 @@ struct SlipDetectorConfig {
   /// threshold: the ringing of the contact's onset has died away), at most this long after
   /// Restart() [s]. A flexing finger's pad seats with a shear transient that outlasts settle_s.
   double settle_max_s = 0.3;
-  /// 1 (default): the contact's preload ratio (a flexing finger's pad meets the object obliquely and
-  /// locks shear in as it squeezes; the contact sticks under it) is the slope of shear against grip
-  /// fitted over the loading ramp and the first settle_s of live frames (the mean ratio over those
-  /// live frames when the grip did not ramp enough to fit); the ratio cue and the tangential load
-  /// are measured from it.
-  /// 0: from zero shear (a pinch square to the object).
+  /// 1 (default): the shear locked in when the grasp settles is preload, and load is measured on
+  /// top of it (a flexing finger's pad meets the object obliquely and slides into place as it
+  /// flexes; the contact then sticks and keeps that shear whatever the grip). 0: load from zero
+  /// shear (a pinch square to the object, or a load already on when the grasp settles).
   bool preload_reference = true;
 
   /// Longest centroid window the delay line holds [samples].
@@ -98,22 +96,24 @@ struct SlipDetectorConfig {
 /// What the detector saw in the newest frame. Which cues fired is reported separately.
 struct SlipSignals {
   double ratio = 0.0;                  ///< filtered tangential/normal load ratio [-]
-  /// The filtered ratio's part from load added since the cues armed: |ratio vector - preload| [-]
-  /// (equal to ratio with preload_reference off). The ratio cue and tangential_load_n use it.
+  /// The filtered ratio's part from load added since the grasp settled: |ratio vector x grip -
+  /// preload shear| / grip [-] (equal to ratio with preload_reference off). The ratio cue and
+  /// tangential_load_n use it.
   double load_ratio = 0.0;
-  /// Preload ratio taken when the cues armed, per beam orientation (axial, circumferential) [-].
-  double preload_ratio_axial = 0.0;
-  double preload_ratio_circumferential = 0.0;
-  /// The preload came from the fit of shear against the grip (the grip ramped while it was taken);
-  /// false: it is the mean ratio over the window.
-  bool preload_fitted = false;
+  /// Shear locked in when the grasp settled, per beam orientation set (axial, circumferential):
+  /// the mean of the set's ratio x grip over the first settle_s of live frames [N].
+  double preload_shear_axial_n = 0.0;
+  double preload_shear_circumferential_n = 0.0;
   /// The same ratio from this frame alone, unfiltered [-]: at a slip onset the filtered ratio still
   /// lags a step of load, this one does not (noisier; used to learn friction, not to detect).
   double instant_ratio = 0.0;
-  /// The load's part of this frame's ratio alone, unfiltered: |instant ratio vector - preload| [-].
+  /// The same from this frame's ratio alone, unfiltered [-].
   double instant_load_ratio = 0.0;
   double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
-  double tangential_load_n = 0.0;      ///< load_ratio times measured grip: load the grip must hold [N]
+  double tangential_load_n = 0.0;      ///< load_ratio times measured grip: load added since the grasp settled [N]
+  /// The whole filtered shear the contact holds, preload included: ratio x measured grip [N]. The
+  /// friction must hold all of it, so the grip is coupled to this; the cue watches the load's part.
+  double contact_shear_n = 0.0;
   /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
   double vibration_rms_n = 0.0;
   double vibration_threshold_n = 0.0;  ///< current threshold of the vibration cue [N]
@@ -175,9 +175,7 @@ class SlipDetector {
 
   bool IsAxial(int unit) const;
   void UpdateSensorNoise(const sensor::TactileState& state);
-  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool armed, bool live);
-  /// Ends the preload window: the preload ratios from the fit, or the mean ratio kept.
-  void FitPreload();
+  void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool live);
   void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
   void UpdateCentroid(const sensor::TactileState& state, double grip_n, bool live);
 
@@ -190,19 +188,8 @@ class SlipDetector {
   SlipSignals signals_;
   int settle_remaining_ = 0;
   int settle_max_remaining_ = 0;
-  /// Sums for the preload fit S = p N + L per beam orientation set, S its shear total and N its
-  /// normal total (RestartContact() clears them).
-  struct PreloadFit {
-    long frames = 0;
-    double normal_sum[2] = {0.0, 0.0};         // [N]
-    double normal_square_sum[2] = {0.0, 0.0};  // [N^2]
-    double shear_sum[2] = {0.0, 0.0};          // [N]
-    double shear_square_sum[2] = {0.0, 0.0};   // [N^2]
-    double normal_shear_sum[2] = {0.0, 0.0};   // [N^2]
-  };
-  PreloadFit preload_fit_;
   bool have_preload_ = false;  ///< the preload window is over since the last RestartContact()
-  int preload_frames_ = 0;     ///< armed frames averaged into the preload ratio so far
+  int preload_frames_ = 0;     ///< live frames averaged into the preload shear so far
   double ratio_axial_ = 0.0;   ///< filtered ratio components of the newest frame [-]
   double ratio_circumferential_ = 0.0;
   int vibration_frames_ = 0;  ///< consecutive frames with the vibration statistic above threshold

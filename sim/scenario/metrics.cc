@@ -31,8 +31,9 @@ void MetricsTracker::OpenEvent(double time_s) {
   current_.onset_s = time_s;
   current_.end_s = time_s;
   last_above_s_ = time_s;
-  // A flag still raised at the onset (the controller reports slip as it starts) detects it.
-  if (previous_flag_) {
+  // A flag still raised at the onset detects it if it rose within the early window (the controller
+  // reports slip as it starts); a flag left up since long before says nothing about this slip.
+  if (previous_flag_ && time_s - last_rise_s_ <= config_.early_detection_window_s) {
     current_.detected = true;
     current_.latency_s = 0.0;
   }
@@ -127,6 +128,7 @@ void MetricsTracker::Update(const TickSample& sample) {
   // Slip distance, slip events and the controller's flags, all while held.
   const bool flag = sample.controller_slip;
   const bool rising_flag = flag && !previous_flag_;
+  if (rising_flag) last_rise_s_ = t;
   previous_flag_ = flag;
   if (holding_) {
     const double speed = truth.slip_speed_m_s;

@@ -137,6 +137,7 @@ class MetricsTracker {
   SlipEvent current_{};
   double last_above_s_ = 0.0;
   bool previous_flag_ = false;
+  double last_rise_s_ = -1e9;  ///< time of the flag's latest rising edge [s]
   int flags_ = 0;
   int false_flags_ = 0;
   double false_flag_s_ = 0.0;

@@ -401,6 +401,46 @@ std::string ScorecardTable(const Scorecard& scorecard) {
   return out.str();
 }
 
+std::string ScorecardBySensorTable(const Scorecard& scorecard) {
+  // Groups in order of first appearance, so the table reads in the set's order.
+  std::vector<std::string> sensors;
+  const auto sensor_of = [](const ScorecardRow& row) {
+    return row.result.config.sensor.profile + "/" + row.result.config.sensor.sensitivities;
+  };
+  for (const ScorecardRow& row : scorecard.rows) {
+    if (!row.error.empty() || !row.result.completed) continue;
+    const std::string sensor = sensor_of(row);
+    if (std::find(sensors.begin(), sensors.end(), sensor) == sensors.end()) sensors.push_back(sensor);
+  }
+  std::sort(sensors.begin(), sensors.end());
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", "sensor", "controller", "runs",
+                "detected", "latency p95", "false flags/min", "flag up", "drops", "grip ratio");
+  out << line;
+  for (const std::string& sensor : sensors) {
+    for (const ControllerScore& total : scorecard.scores) {
+      std::vector<const RunResult*> finished;
+      for (const ScorecardRow& row : scorecard.rows) {
+        if (row.controller == total.controller && row.error.empty() && row.result.completed && sensor_of(row) == sensor) {
+          finished.push_back(&row.result);
+        }
+      }
+      const ControllerScore score = ScoreRuns(total.controller, finished, 0);
+      const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" + Int(score.slip_detected) + "/" +
+                                   Int(score.slip_events) + ")";
+      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n", sensor.c_str(),
+                    score.controller.c_str(), score.runs, detected.c_str(),
+                    OptionalText(score.latency_p95_ms, "%.1f ms").c_str(),
+                    (OptionalText(score.false_per_min, "%.1f") + " (" + Int(score.false_flags) + ")").c_str(),
+                    OptionalText(score.false_flag_pct, "%.1f %%").c_str(), score.drops,
+                    OptionalText(score.grip_ratio_median, "%.2f").c_str());
+      out << line;
+    }
+  }
+  return out.str();
+}
+
 std::string ScorecardCsv(const Scorecard& scorecard) {
   std::ostringstream out;
   out << "set,version,controller";

@@ -132,6 +132,11 @@ struct Scorecard {
 /// @throws common::ConfigError for a run whose scenario or overrides are invalid, or an unknown controller
 Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options);
 
+/// The same figures per sensor (profile and sensitivity source of each run's resolved config): one
+/// line per (sensor, controller) with runs, slip events detected, latency p95, false flags per
+/// minute held, flag-up share, drops and median grip ratio. The targets are per profile.
+std::string ScorecardBySensorTable(const Scorecard& scorecard);
+
 /// Side-by-side table: one column per controller, one line per figure.
 std::string ScorecardTable(const Scorecard& scorecard);
 /// CSV: a header and one row per controller ("" for a figure that does not exist).

@@ -222,10 +222,14 @@ TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
       EXPECT_LE(false_events, 1) << "more than one false slip per minute held";
       EXPECT_FALSE(hold.plant.dropped());
 
-      // Added mass (load 0.5 -> 1.5 N at mu 0.5).
+      // Added mass (load 0.5 -> 1.5 N at mu 0.5). The object is grasped with its 0.5 N already on,
+      // which preload_reference would take as locked-in preload (docs/controller.md, "Shear
+      // preload"): here the square pinch of this plant, load from zero shear.
       HandPlant::Options slippery;
       slippery.friction = 0.5;
-      ClosedLoop added(config, slippery, sensor);
+      GripSlipConfig square = config;
+      square.slip.preload_reference = false;
+      ClosedLoop added(square, slippery, sensor);
       added.Grasp(0.5, 1.0);
       added.RunUntil(2.0, [](double t) { return t < 1.2 ? 0.5 : 1.5; });
       ASSERT_GT(added.plant.slip_onset_s(), 0.0);
