@@ -215,7 +215,7 @@ py::dict Score(const std::vector<py::object>& controllers, const std::string& se
 
 /// Wall time of one controller Update [ns], averaged over `ticks` calls from C++ (the GIL released
 /// first, as in a run) on a 20-unit state in steady contact. `controller`: a controller name or a
-/// Python controller object. For bench_controllers.py.
+/// Python controller object. For bench/python_controller_bench.py.
 double TimeControllerUpdate(const py::object& controller, int ticks) {
   std::unique_ptr<controller::GraspController> made;
   if (py::isinstance<py::str>(controller)) {

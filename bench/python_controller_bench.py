@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Python controller vs the same logic in C++: per-tick cost and the real-time factor of a scenario.
 
-    PYTHONPATH=build/python python3 python/bench_controllers.py build/tests/plugin/plugins/libthreshold_grip.so
+    PYTHONPATH=build/python python3 bench/python_controller_bench.py build/tests/plugin/plugins/libthreshold_grip.so
 
 Per tick: the controller's Update called from C++ (GIL released, as in a run) on a 20-unit state in
 contact, averaged over many ticks; for Python that includes taking the GIL, the state copy, the call
