@@ -127,6 +127,10 @@ def isolated(source_dir, build_dir, stage_dir):
     if result.returncode == 0 or "GRASPBED_DATA_DIR" not in result.stderr:
         fail("a binary with no share/graspbed above it must refuse and name GRASPBED_DATA_DIR: exit %d %s"
              % (result.returncode, result.stderr))
+    env["GRASPBED_DATA_DIR"] = os.path.join(stage_dir, "no-such-dir")
+    result = run([os.path.join(lonely, "graspbed"), "sensor", "layout"], env=env, cwd=stage_dir)
+    if result.returncode == 0 or "GRASPBED_DATA_DIR = %s: not a directory" % env["GRASPBED_DATA_DIR"] not in result.stderr:
+        fail("a GRASPBED_DATA_DIR that does not exist must be refused by name: " + result.stderr)
     env["GRASPBED_DATA_DIR"] = moved
     result = run([os.path.join(lonely, "graspbed"), "sensor", "layout"], env=env, cwd=stage_dir)
     if result.returncode != 0:
