@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -19,6 +20,7 @@
 #include "tests/support/allocation_counter.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/error_of.h"
+#include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 
 namespace graspbed::controller {
@@ -253,6 +255,43 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   EXPECT_EQ(out_of_range.exit_code, 2);
   EXPECT_THAT(out_of_range.err, HasSubstr("--set controller.params.target_grip_n=40: "));
   EXPECT_THAT(out_of_range.err, HasSubstr("controller.params.target_grip_n = 40: must be <= 10"));
+}
+
+TEST_F(PluginCliTest, SuiteSweepAndScoreRunThePlugin) {
+  // A short grasp (the default box, no lift) in a directory of its own, for the suite and the sweep.
+  const std::string scenario = dir_.Write("scenarios/short.yaml", R"(name: short
+duration_s: 0.6
+object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.8}
+controller: {name: grip_slip}
+script:
+  - {at_s: 0.05, action: close}
+expectations: {not_dropped: true}
+)");
+  const std::string plugin = " --controller plugin:" + kThreshold;
+  const CliResult suite = RunCli("suite " + dir_.Path("scenarios") + " --no-plots --out " + dir_.Path("suite") + plugin);
+  ASSERT_EQ(suite.exit_code, 0) << suite.err << suite.out;
+  EXPECT_THAT(suite.out, HasSubstr("plugin:"));
+  const nlohmann::json suite_json = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("suite/suite.json")));
+  ASSERT_EQ(suite_json.at("runs").size(), 1u);
+  EXPECT_EQ(suite_json.at("runs")[0].at("controller"), "plugin:" + kThreshold);
+  EXPECT_TRUE(suite_json.at("runs")[0].at("passed").get<bool>());
+
+  // The sweep tunes the plugin's own parameter on top of --controller.
+  const std::string spec = dir_.Write("sweep.yaml", "scenario: " + scenario +
+                                                        "\nparameters:\n  controller.params.target_grip_n: [2, 4]\n");
+  const CliResult sweep = RunCli("sweep " + spec + " --out " + dir_.Path("sweep") + plugin);
+  ASSERT_EQ(sweep.exit_code, 0) << sweep.err << sweep.out;
+  const std::string rows = graspbed::testing::ReadText(dir_.Path("sweep/results.jsonl"));
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2) << rows;
+  // A parameter only the plugin has: the sweep really ran the plugin (grip_slip would refuse it).
+  EXPECT_THAT(rows, HasSubstr("\"controller.params.target_grip_n\":4"));
+
+  const CliResult score = RunCli("score --limit 1 --out " + dir_.Path("score") + " --controller open_loop" + plugin);
+  ASSERT_EQ(score.exit_code, 0) << score.err << score.out;
+  EXPECT_THAT(score.out, HasSubstr("plugin:" + kThreshold.substr(0, 10)));
+  const nlohmann::json card = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("score/scorecard.json")));
+  ASSERT_EQ(card.at("controllers").size(), 2u);
+  EXPECT_EQ(card.at("controllers")[1].at("controller"), "plugin:" + kThreshold);
 }
 
 }  // namespace
