@@ -101,6 +101,12 @@ def isolated(source_dir, build_dir, stage_dir):
         script += ("'%s' run '%s/share/graspbed/scenarios/default.yaml' --no-plots --json --out '%s' > '%s.json'\n"
                    % (exe, prefix, out, out))
     script += "'%s' score --controller open_loop --limit 1 --out '%s.score' > '%s.score.txt'\n" % (link, out, out)
+    # The installed Python module finds the same data from its own location.
+    python_dir = os.path.join(prefix, "lib", "python3", "dist-packages")
+    if os.path.isdir(os.path.join(python_dir, "graspbed")):
+        script += ("PYTHONPATH='%s' '%s' -c 'import graspbed; r = graspbed.run(graspbed.scenario_path(\"default\")); "
+                   "print(graspbed.data_dir()); assert r[\"summary\"][\"passed\"]' > '%s.python.txt'\n"
+                   % (python_dir, sys.executable, out))
     result = run(["unshare", "--mount", "sh", "-c", script], env=clean_env())
     if result.returncode != 0:
         fail("installed graspbed with the trees hidden: exit %d\n%s%s" % (result.returncode, result.stdout,
@@ -109,6 +115,10 @@ def isolated(source_dir, build_dir, stage_dir):
         summary = json.load(f)
     if not summary["passed"] or summary["metrics"]["dropped"]:
         fail("the default scenario did not pass from the install: " + json.dumps(summary["metrics"]))
+    if os.path.isfile(out + ".python.txt"):
+        with open(out + ".python.txt") as f:
+            if f.read().strip() != os.path.join(prefix, "share", "graspbed"):
+                fail("the installed Python module used another data directory")
     with open(out + ".layout.txt") as f:
         if "20" not in f.read():
             fail("sensor layout printed no 20-unit layout")
