@@ -6,7 +6,7 @@
 Per tick: the controller's Update called from C++ (GIL released, as in a run) on a 20-unit state in
 contact, averaged over many ticks; for Python that includes taking the GIL, the state copy, the call
 into Python, reading back the command and telemetry. Real-time factor: simulated seconds per wall
-second of the whole default scenario (physics, sensor model, readout, controller), best of three.
+second of the whole default scenario (physics, sensor model, readout, controller), best of five.
 """
 import os
 import sys
@@ -22,7 +22,7 @@ def per_tick_ns(controller, ticks=200000, repeats=5):
     return min(_graspbed._time_controller_update(controller, ticks) for _ in range(repeats))
 
 
-def real_time_factor(scenario, controller, repeats=3):
+def real_time_factor(scenario, controller, repeats=5):
     best = 0.0
     for _ in range(repeats):
         controller_arg = controller() if callable(controller) else controller
@@ -43,7 +43,7 @@ def main():
     print("controller Update per tick (threshold_grip logic, 20 units):")
     print("  C++ plugin      %9.1f ns" % cpp_ns)
     print("  Python class    %9.1f ns  (%.0fx the C++)" % (py_ns, py_ns / cpp_ns))
-    print("real-time factor of %s (best of 3):" % os.path.basename(scenario))
+    print("real-time factor of %s (best of 5):" % os.path.basename(scenario))
     for label, controller in [("grip_slip (built-in)", "grip_slip"), ("threshold_grip C++ plugin", plugin),
                               ("threshold_grip Python", ThresholdGrip)]:
         print("  %-27s %6.1f" % (label, real_time_factor(scenario, controller)))

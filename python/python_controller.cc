@@ -64,6 +64,7 @@ PythonController::~PythonController() {
   update_ = py::object();
   telemetry_method_ = py::object();
   view_object_ = py::object();
+  last_phase_ = py::object();
   controller_ = py::object();
 }
 
@@ -79,6 +80,7 @@ void PythonController::Reset() {
     Fail("reset()", error.what());
   }
   telemetry_ = controller::ControllerTelemetry{};
+  last_phase_ = py::object();
 }
 
 void PythonController::SetIntent(controller::GraspIntent intent) {
@@ -144,7 +146,11 @@ void PythonController::ReadTelemetry(const py::handle& result) {
     for (const auto& [key, value] : fields) {
       const std::string name = py::str(key);
       if (name == "phase") {
-        telemetry_.phase = phases_.insert(py::str(value).cast<std::string>()).first->c_str();
+        // The same str object as last tick (the usual case: a literal) needs no lookup.
+        if (!value.is(last_phase_)) {
+          telemetry_.phase = phases_.insert(py::str(value).cast<std::string>()).first->c_str();
+          last_phase_ = py::reinterpret_borrow<py::object>(value);
+        }
       } else if (name == "grip_target_n") {
         telemetry_.grip_target_n = value.cast<double>();
       } else if (name == "friction_estimate") {

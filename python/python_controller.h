@@ -67,6 +67,7 @@ class PythonController final : public controller::GraspController {
   TactileStateView* view_ = nullptr;   ///< owned by view_object_
   controller::ControllerTelemetry telemetry_;
   std::set<std::string> phases_;  ///< phase strings seen, so telemetry_.phase stays valid
+  pybind11::object last_phase_;   ///< the phase object of the last telemetry() (skips the lookup)
 };
 
 }  // namespace graspbed::python
