@@ -106,8 +106,11 @@ controller::HandCommand PythonController::ToCommand(const py::handle& result) co
   controller::HandCommand command;
   if (py::isinstance<controller::HandCommand>(result)) {
     command = result.cast<controller::HandCommand>();
-  } else if ((PyFloat_Check(result.ptr()) || PyLong_Check(result.ptr())) && !PyBool_Check(result.ptr())) {
-    command.grip_effort = result.cast<double>();
+  } else if (PyNumber_Check(result.ptr()) && !PyBool_Check(result.ptr()) && !PyDict_Check(result.ptr())) {
+    // float, int, numpy scalars: anything with __float__.
+    const double effort = PyFloat_AsDouble(result.ptr());
+    if (effort == -1.0 && PyErr_Occurred()) throw py::error_already_set();
+    command.grip_effort = effort;
   } else if (PyDict_Check(result.ptr())) {
     const py::dict fields = py::reinterpret_borrow<py::dict>(result);
     for (const auto& [key, value] : fields) {

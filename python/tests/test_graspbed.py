@@ -52,6 +52,18 @@ def test_the_same_logic_in_python_and_in_the_cpp_plugin_grips_alike():
     np.testing.assert_allclose(py["grip_effort"], cpp["grip_effort"], atol=1e-9)
 
 
+def test_numpy_scalars_and_dicts_are_commands_too(short_grasp):
+    class NumpyEffort(ThresholdGrip):
+        def update(self, state, t):
+            effort = super().update(state, t)
+            if isinstance(effort, graspbed.HandCommand):
+                return {"grip_effort": effort.grip_effort, "brake": effort.brake}
+            return np.float32(effort)
+
+    summary = graspbed.run(short_grasp(0.5), controller=NumpyEffort())["summary"]
+    assert summary["metrics"]["grasped"] and not summary["metrics"]["dropped"]
+
+
 def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_grasp):
     seen = {}
 
