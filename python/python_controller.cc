@@ -65,6 +65,7 @@ PythonController::~PythonController() {
   telemetry_method_ = py::object();
   view_object_ = py::object();
   last_phase_ = py::object();
+  last_slip_cues_ = py::object();
   controller_ = py::object();
 }
 
@@ -81,6 +82,7 @@ void PythonController::Reset() {
   }
   telemetry_ = controller::ControllerTelemetry{};
   last_phase_ = py::object();
+  last_slip_cues_ = py::object();
 }
 
 void PythonController::SetIntent(controller::GraspIntent intent) {
@@ -140,6 +142,13 @@ controller::HandCommand PythonController::ToCommand(const py::handle& result) co
   return command;
 }
 
+const char* PythonController::Intern(const py::handle& value, py::object* last, const char* current) {
+  // The same str object as last tick (the usual case: a literal) needs no lookup.
+  if (value.is(*last)) return current;
+  *last = py::reinterpret_borrow<py::object>(value);
+  return strings_.insert(py::str(value).cast<std::string>()).first->c_str();
+}
+
 void PythonController::ReadTelemetry(const py::handle& result) {
   if (!PyDict_Check(result.ptr())) {
     Fail("telemetry()", "returned " + std::string(py::repr(result)) + ": expected a dict");
@@ -149,11 +158,9 @@ void PythonController::ReadTelemetry(const py::handle& result) {
     for (const auto& [key, value] : fields) {
       const std::string name = py::str(key);
       if (name == "phase") {
-        // The same str object as last tick (the usual case: a literal) needs no lookup.
-        if (!value.is(last_phase_)) {
-          telemetry_.phase = phases_.insert(py::str(value).cast<std::string>()).first->c_str();
-          last_phase_ = py::reinterpret_borrow<py::object>(value);
-        }
+        telemetry_.phase = Intern(value, &last_phase_, telemetry_.phase);
+      } else if (name == "slip_cues") {
+        telemetry_.slip_cues = Intern(value, &last_slip_cues_, telemetry_.slip_cues);
       } else if (name == "grip_target_n") {
         telemetry_.grip_target_n = value.cast<double>();
       } else if (name == "friction_estimate") {
@@ -166,7 +173,7 @@ void PythonController::ReadTelemetry(const py::handle& result) {
         telemetry_.safe_hold = value.cast<bool>();
       } else {
         Fail("telemetry()", "unknown key '" + name +
-                                "' (valid: phase, grip_target_n, friction_estimate, slip_detected, slip_events, "
+                                "' (valid: phase, grip_target_n, friction_estimate, slip_detected, slip_cues, slip_events, "
                                 "safe_hold)");
       }
     }

@@ -7,7 +7,7 @@
 /// The Python object: reset(), set_intent(intent: "idle" | "close" | "open"), update(state, t) ->
 /// command (a graspbed.HandCommand, a number taken as grip_effort, or a dict with grip_effort,
 /// enable, brake); optionally telemetry() -> dict (phase, grip_target_n, friction_estimate,
-/// slip_detected, slip_events, safe_hold) and set_grip_ceiling(newtons). Anything it raises, or a
+/// slip_detected, slip_cues, slip_events, safe_hold) and set_grip_ceiling(newtons). Anything it raises, or a
 /// return that is no command (wrong type, effort not finite or outside [-1, 1]), ends the run with
 /// ControllerError naming the controller and the method.
 
@@ -66,8 +66,12 @@ class PythonController final : public controller::GraspController {
   pybind11::object view_object_;       ///< the TactileStateView handed to update()
   TactileStateView* view_ = nullptr;   ///< owned by view_object_
   controller::ControllerTelemetry telemetry_;
-  std::set<std::string> phases_;  ///< phase strings seen, so telemetry_.phase stays valid
-  pybind11::object last_phase_;   ///< the phase object of the last telemetry() (skips the lookup)
+  /// A telemetry string as a pointer that stays valid (kept in strings_); `last` caches the object.
+  const char* Intern(const pybind11::handle& value, pybind11::object* last, const char* current);
+
+  std::set<std::string> strings_;  ///< telemetry strings seen, so telemetry_.phase/slip_cues stay valid
+  pybind11::object last_phase_;      ///< the phase object of the last telemetry() (skips the lookup)
+  pybind11::object last_slip_cues_;  ///< the same for slip_cues
 };
 
 }  // namespace graspbed::python

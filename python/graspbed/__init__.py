@@ -13,7 +13,8 @@ A Python controller is any object with
                                    call), t: time [s]; command: graspbed.HandCommand, a number (grip
                                    effort in [-1, 1], + closes) or a dict(grip_effort=, enable=, brake=)
     telemetry() -> dict            optional: phase, grip_target_n, friction_estimate, slip_detected,
-                                   slip_events, safe_hold (plotted and scored like a C++ controller's)
+                                   slip_cues, slip_events, safe_hold (logged and scored like a C++
+                                   controller's)
     set_grip_ceiling(newtons)      optional
 
 The C++ loop calls update() every control tick (1 kHz by default). An exception in it, or a return

@@ -64,6 +64,20 @@ def test_numpy_scalars_and_dicts_are_commands_too(short_grasp):
     assert summary["metrics"]["grasped"] and not summary["metrics"]["dropped"]
 
 
+def test_telemetry_reaches_the_signals(short_grasp):
+    class Flags(ThresholdGrip):
+        def telemetry(self):
+            flagged = self.phase == "holding"
+            return {"phase": self.phase, "slip_detected": flagged, "slip_cues": "mine" if flagged else ""}
+
+    signals = graspbed.run(short_grasp(0.4), controller=Flags())["signals"]
+    holding = signals["phase"] == "holding"
+    assert holding.any()
+    np.testing.assert_array_equal(signals["slip_cues"][holding], "mine")
+    np.testing.assert_array_equal(signals["slip_flag"][holding], 1.0)
+    np.testing.assert_array_equal(signals["slip_flag"][~holding], 0.0)
+
+
 def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_grasp):
     seen = {}
 
