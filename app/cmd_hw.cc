@@ -27,6 +27,7 @@
 #include "common/yaml_map.h"
 #include "controller/control_loop.h"
 #include "controller/grasp_controller.h"
+#include "controller/plugin_loader.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
@@ -227,8 +228,9 @@ void RunHw(const HwOptions& options) {
                                               : sensor::LoadCalibration(options.calibration, units);
   // --controller picks another controller than the config's; the config's parameters belong to its own.
   scenario::ControllerOptions& chosen = config.controller;
-  if (!options.controller.empty() && options.controller != chosen.name) {
-    chosen.name = options.controller;
+  const std::string requested = controller::ResolvePluginName(options.controller, ".");
+  if (!requested.empty() && requested != chosen.name) {
+    chosen.name = requested;
     chosen.params.clear();
     for (const auto& parameter : controller::ControllerParameters(chosen.name)) {
       chosen.params[parameter.name] = parameter.default_value;
@@ -595,7 +597,7 @@ void AddHwCommands(CLI::App& root) {
   hw->add_option("--layout", hw_options->layout, "Layout file (default: sensor/layouts/default_20.yaml)");
   hw->add_option("--calibration", hw_options->calibration, "Calibration file (default: paper values)");
   hw->add_option("--controller", hw_options->controller,
-                 "Controller name (default: controller.name of --config, else grip_slip)");
+                 "Controller: a built-in name or plugin:LIBRARY (default: the controller of --config, else grip_slip)");
   hw->add_option("--param", hw_options->params,
                  "Controller parameter NAME=VALUE, as in a scenario's controller.params (repeatable)");
   hw->add_option("--intent", hw_options->intent, "Intent once tared: close, open or idle")->capture_default_str();

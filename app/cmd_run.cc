@@ -12,6 +12,7 @@
 
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
+#include "controller/plugin_loader.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/suite.h"
@@ -46,7 +47,9 @@ struct RunCommandOptions {
 
 void RunCommand(const RunCommandOptions& options) {
   std::vector<scenario::Override> overrides;
-  if (!options.controller.empty()) overrides.push_back({"controller.name", options.controller});
+  if (!options.controller.empty()) {
+    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
+  }
   if (options.seed >= 0) overrides.push_back({"seed", std::to_string(options.seed)});
   for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
   const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
@@ -95,7 +98,8 @@ void AddRunCommand(CLI::App& root) {
   command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")->required();
   command->add_option("--out", options->out_dir, "output directory (default out/<scenario name>)");
   command->add_option("--controller", options->controller,
-                      "controller to test instead of the file's (its parameters in the file are dropped)");
+                      "controller to test instead of the file's (its parameters in the file are dropped): a "
+                      "built-in name or plugin:LIBRARY (a path, or a name on $GRASPBED_PLUGIN_PATH)");
   command->add_option("--seed", options->seed, "seed instead of the file's")->check(CLI::NonNegativeNumber);
   command->add_option("--set", options->sets, "override a key, e.g. --set object.mass_kg=0.3 (repeatable)")
       ->expected(1)
@@ -119,7 +123,9 @@ struct SuiteCommandOptions {
 
 void SuiteCommand(const SuiteCommandOptions& options) {
   std::vector<scenario::Override> overrides;
-  if (!options.controller.empty()) overrides.push_back({"controller.name", options.controller});
+  if (!options.controller.empty()) {
+    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
+  }
   for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
   const std::vector<scenario::ScenarioConfig> configs =
       scenario::LoadScenarios(scenario::ListScenarioFiles(options.dir), overrides);
@@ -173,10 +179,17 @@ struct SweepCommandOptions {
   std::string shard = "1/1";
   std::string out_dir = "out/sweep";
   int jobs = 1;
+  std::string controller;
 };
 
 void SweepCommand(const SweepCommandOptions& options) {
-  const scenario::SweepSpec spec = scenario::LoadSweepSpec(options.spec);
+  scenario::SweepSpec spec = scenario::LoadSweepSpec(options.spec);
+  if (!options.controller.empty()) {
+    // Before the spec's own `set:` (which may tune this controller); shards must agree on it to merge.
+    const std::string name = controller::ResolvePluginName(options.controller, ".");
+    spec.fixed.insert(spec.fixed.begin(), {"controller.name", name});
+    spec.fingerprint += " controller=" + name;
+  }
   scenario::SweepOptions sweep;
   sweep.shard = scenario::ParseShard(options.shard);
   sweep.jobs = options.jobs;
@@ -210,6 +223,8 @@ void AddSweepCommand(CLI::App& root) {
   command->add_option("--shard", options->shard, "run shard K of N (1-based: runs with index % N == K - 1), e.g. with sbatch --array=0-7: --shard $((SLURM_ARRAY_TASK_ID+1))/8");
   command->add_option("--out", options->out_dir, "output directory (default out/sweep)");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
+  command->add_option("--controller", options->controller,
+                      "controller for every run instead of the scenario's: a built-in name or plugin:LIBRARY");
   command->callback([options] { SweepCommand(*options); });
 
   auto dirs = std::make_shared<std::vector<std::string>>();

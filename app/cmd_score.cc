@@ -9,6 +9,8 @@
 
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
+#include "common/data_dir.h"
+#include "controller/plugin_loader.h"
 #include "sim/scenario/scorecard.h"
 
 namespace graspbed::app {
@@ -19,16 +21,22 @@ constexpr int kExitInterrupted = 130;
 
 struct ScoreCommandOptions {
   std::vector<std::string> controllers;
-  std::string set_dir = "scenarios/scorecard";
+  std::string set_dir;  ///< empty: the shipped set, scenarios/scorecard under the data directory
   int jobs = 1;
   int limit = 0;
   std::string out_dir = "out/scorecard";
 };
 
 void ScoreCommand(const ScoreCommandOptions& options) {
-  const scenario::ScorecardSet set = scenario::LoadScorecardSet(options.set_dir + "/set.yaml");
+  const std::string set_dir = options.set_dir.empty() ? common::DataPath("scenarios/scorecard") : options.set_dir;
+  const scenario::ScorecardSet set = scenario::LoadScorecardSet(set_dir + "/set.yaml");
   scenario::ScorecardOptions score;
-  if (!options.controllers.empty()) score.controllers = options.controllers;
+  if (!options.controllers.empty()) {
+    score.controllers.clear();
+    for (const std::string& name : options.controllers) {
+      score.controllers.push_back(controller::ResolvePluginName(name, "."));
+    }
+  }
   score.jobs = options.jobs;
   score.limit = options.limit;
   score.stop = &StopRequested();
@@ -55,10 +63,10 @@ void AddScoreCommand(CLI::App& root) {
                "base scenarios plus seeded variations): slip detection, latency, false flags, drops, crushes, "
                "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv, scorecard.json and scorecard.png");
   command->add_option("--controller", options->controllers,
-                      "controller to score (repeatable; default grip_slip and open_loop)")
+                      "controller to score: a built-in name or plugin:LIBRARY (repeatable; default grip_slip and open_loop)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  command->add_option("--set-dir", options->set_dir, "directory holding set.yaml (default scenarios/scorecard, the shipped set)");
+  command->add_option("--set-dir", options->set_dir, "directory holding set.yaml (default: the shipped set, share/graspbed/scenarios/scorecard)");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
   command->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
       ->check(CLI::NonNegativeNumber);

@@ -2,6 +2,7 @@
 #include <exception>
 #include <iostream>
 #include <stdexcept>
+#include <string>
 
 #include "app/command_registry.h"
 
@@ -9,7 +10,7 @@ int main(int argc, char** argv) {
   CLI::App root{"graspbed: simulation-in-the-loop grasp testbed for a prosthetic hand with a tactile "
                 "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
   root.require_subcommand(1);
-  root.set_version_flag("--version", "graspbed 0.1.0");
+  root.set_version_flag("--version", std::string("graspbed ") + GRASPBED_VERSION);
   graspbed::app::InstallCommands(root);
   try {
     root.parse(argc, argv);

@@ -6,6 +6,7 @@
 #include "controller/grasp_controller.h"
 #include "controller/grip_slip_controller.h"
 #include "controller/open_loop_controller.h"
+#include "controller/plugin_loader.h"
 
 namespace graspbed::controller {
 namespace {
@@ -17,7 +18,7 @@ struct ControllerEntry {
   std::unique_ptr<GraspController> (*make)(const ControllerParams& resolved);
 };
 
-/// Every built-in controller; a user's own controller is added here with one line.
+/// Every built-in controller. A user's own controller is a plugin (controller/plugin_loader.h).
 const std::vector<ControllerEntry>& Entries() {
   static const std::vector<ControllerEntry> entries = {
       {"open_loop", &OpenLoopController::Parameters,
@@ -43,7 +44,8 @@ const ControllerEntry& Find(const std::string& name) {
   for (const ControllerEntry& entry : Entries()) {
     if (entry.name == name) return entry;
   }
-  throw std::invalid_argument("unknown controller '" + name + "'; valid controllers: " + JoinNames());
+  throw std::invalid_argument("unknown controller '" + name + "'; valid controllers: " + JoinNames() +
+                              ", or plugin:LIBRARY for a controller plugin");
 }
 
 }  // namespace
@@ -56,12 +58,15 @@ std::vector<std::string> ControllerNames() {
 }
 
 std::vector<ControllerParameter> ControllerParameters(const std::string& name) {
+  if (IsPluginName(name)) return LoadPlugin(name).parameters;
   return Find(name).parameters();
 }
 
 std::unique_ptr<GraspController> MakeController(const std::string& name, const ControllerParams& params) {
-  const ControllerEntry& entry = Find(name);
-  const std::vector<ControllerParameter> declared = entry.parameters();
+  // A plugin is checked exactly like a built-in: its declared parameters, then its own make().
+  const LoadedPlugin* plugin = IsPluginName(name) ? &LoadPlugin(name) : nullptr;
+  const ControllerEntry* entry = plugin == nullptr ? &Find(name) : nullptr;
+  const std::vector<ControllerParameter> declared = plugin != nullptr ? plugin->parameters : entry->parameters();
   ControllerParams resolved;
   for (const ControllerParameter& parameter : declared) resolved[parameter.name] = parameter.default_value;
   for (const auto& [key, value] : params) {
@@ -81,7 +86,7 @@ std::unique_ptr<GraspController> MakeController(const std::string& name, const C
     }
     resolved[key] = value;
   }
-  return entry.make(resolved);
+  return plugin != nullptr ? MakePluginController(*plugin, resolved) : entry->make(resolved);
 }
 
 }  // namespace graspbed::controller

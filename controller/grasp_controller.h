@@ -1,7 +1,8 @@
 #pragma once
 /// GraspController: the pluggable decision maker. It sees only TactileState, time and the user's
 /// intent (close / open), never MuJoCo, serial ports or ground truth, so the same controller runs in
-/// simulation and on the hand.
+/// simulation and on the hand. Part of the controller API (controller/controller_api.h: its
+/// version, GRASPBED_CONTROLLER_API_VERSION, and how a plugin exports a controller).
 
 #include <functional>
 #include <map>
@@ -61,10 +62,11 @@ class GraspController {
   virtual std::string name() const = 0;
 };
 
-/// Names of the controllers the factory knows, sorted.
+/// Names of the built-in controllers, sorted. Any "plugin:LIBRARY" name is valid besides them
+/// (controller/plugin_loader.h). These three are graspbed's side, not part of the plugin API.
 std::vector<std::string> ControllerNames();
-/// The parameters (with defaults) of controller `name`; throws std::invalid_argument on an unknown
-/// name, listing the valid ones.
+/// The parameters (with defaults) of controller `name` (built-in or "plugin:..."); throws
+/// std::invalid_argument on an unknown name, listing the valid ones, or a plugin that does not load.
 std::vector<ControllerParameter> ControllerParameters(const std::string& name);
 /// Builds controller `name` with `params` (unknown or out-of-range parameters throw
 /// std::invalid_argument naming the parameter, value and range).

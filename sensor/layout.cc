@@ -8,6 +8,7 @@
 #include <sstream>
 #include <utility>
 
+#include "common/data_dir.h"
 #include "common/yaml_map.h"
 #include "sensor/raw_frame.h"
 
@@ -271,6 +272,6 @@ Layout LoadLayoutFromString(const std::string& text, const std::string& source_n
   return Load(YamlMap::LoadString(text, source_name));
 }
 
-std::string DefaultLayoutPath() { return std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/default_20.yaml"; }
+std::string DefaultLayoutPath() { return common::DataPath("sensor/layouts/default_20.yaml"); }
 
 }  // namespace graspbed::sensor

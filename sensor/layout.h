@@ -89,7 +89,7 @@ HolderSurfacePoint HolderPointAtArc(const HolderGeometry& holder, double axial_m
 /// "axial" / "circumferential".
 const char* ToString(BeamOrientation orientation);
 
-/// Path of the shipped default layout (sensor/layouts/default_20.yaml in the source tree).
+/// Path of the shipped default layout (sensor/layouts/default_20.yaml under common::DataDir()).
 std::string DefaultLayoutPath();
 
 }  // namespace graspbed::sensor

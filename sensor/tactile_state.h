@@ -18,8 +18,19 @@ enum class UnitValidity : uint8_t {
   kNotTared,     ///< no baseline yet
 };
 
-/// Human-readable name of a validity value ("valid", "open", ...).
-const char* ToString(UnitValidity validity);
+/// Human-readable name of a validity value ("valid", "open", ...). Inline: this header is part of
+/// the controller API, which plugins compile against without linking graspbed.
+inline const char* ToString(UnitValidity validity) {
+  switch (validity) {
+    case UnitValidity::kValid: return "valid";
+    case UnitValidity::kOpen: return "open";
+    case UnitValidity::kShort: return "short";
+    case UnitValidity::kOutOfRange: return "out_of_range";
+    case UnitValidity::kImplausible: return "implausible";
+    case UnitValidity::kNotTared: return "not_tared";
+  }
+  return "unknown";
+}
 
 /// Forces estimated for every unit at one sample time.
 struct TactileState {

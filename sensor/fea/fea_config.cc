@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/data_dir.h"
+
 namespace graspbed::fea {
 namespace {
 
@@ -178,6 +180,6 @@ FeaConfig FeaConfigFromYaml(const YamlMap& root) {
 
 FeaConfig LoadFeaConfig(const std::string& path) { return FeaConfigFromYaml(YamlMap::LoadFile(path)); }
 
-std::string DefaultFeaConfigPath() { return std::string(GRASPBED_SOURCE_DIR) + "/sensor/fea/unit_fea.yaml"; }
+std::string DefaultFeaConfigPath() { return common::DataPath("sensor/fea/unit_fea.yaml"); }
 
 }  // namespace graspbed::fea

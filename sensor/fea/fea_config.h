@@ -94,7 +94,7 @@ std::optional<ConfigIssue> FindConfigIssue(const FeaConfig& config);
 FeaConfig FeaConfigFromYaml(const common::YamlMap& root);
 /// Loads and validates the YAML file at `path`; throws common::ConfigError.
 FeaConfig LoadFeaConfig(const std::string& path);
-/// Path of the shipped default config, sensor/fea/unit_fea.yaml in the source tree.
+/// Path of the shipped default config, sensor/fea/unit_fea.yaml under common::DataDir().
 std::string DefaultFeaConfigPath();
 
 }  // namespace graspbed::fea

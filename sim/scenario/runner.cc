@@ -432,7 +432,8 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       // knows per unit (spread, drift): those show up as estimation error, as on hardware.
       rig = std::make_unique<sim::SimRig>(
           layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
-          controller::MakeController(config.controller.name, config.controller.params));
+          options.make_controller ? options.make_controller(config.controller)
+                                  : controller::MakeController(config.controller.name, config.controller.params));
     } catch (const std::invalid_argument& error) {
       throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
     }
@@ -582,6 +583,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.stale_ticks = rig->loop().counters().stale_ticks;
   result.control_ticks = rig->loop().counters().ticks;
   result.signal_rows_lost = log.lost_rows();
+  if (options.on_signals) options.on_signals(log);
 
   if (!options.out_dir.empty()) {
     WriteCsvAtomic(log, options.out_dir + "/signals.csv");

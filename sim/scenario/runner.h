@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/script_player.h"
+#include "sim/scenario/signal_log.h"
 
 namespace graspbed::sim {
 class SimRig;
@@ -28,6 +30,9 @@ class SimRig;
 }  // namespace graspbed::sim
 
 namespace graspbed::scenario {
+
+/// Builds a run's controller from its resolved controller section (RunOptions::make_controller).
+using ControllerFactory = std::function<std::unique_ptr<controller::GraspController>(const ControllerOptions&)>;
 
 /// How to run and what to write.
 struct RunOptions {
@@ -49,6 +54,14 @@ struct RunOptions {
   std::function<void(double instant_s, sim::SimRig& rig)> at_instant;
   /// End the run once every instant was served (the run then counts as stopped: completed = false).
   bool stop_after_instants = false;
+  /// Builds the run's controller instead of controller::MakeController(config.controller.name,
+  /// config.controller.params), e.g. a controller written in Python; config.controller.name is then
+  /// only its label in the outputs. Called once per run, under the rig construction lock; may be
+  /// called from several threads at once in a suite. May be empty.
+  ControllerFactory make_controller;
+  /// Called once at the end of the run with the whole per-tick signal log (the rows of signals.csv),
+  /// before the outputs are written; e.g. to hand the signals to Python without a file. May be empty.
+  std::function<void(const SignalLog&)> on_signals;
 };
 
 /// The result of one run.

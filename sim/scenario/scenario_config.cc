@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/data_dir.h"
+#include "controller/plugin_loader.h"
 #include "sensor/fea/fea_config.h"
 #include "sensor/fea/unit_analysis.h"
 #include "sensor/layout.h"
@@ -284,7 +286,7 @@ void AtMap(const YamlMap& map, Fn&& fn) {
 }
 
 std::string ShippedLayoutPath(const std::string& name) {
-  return std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/" + name + ".yaml";
+  return common::DataPath("sensor/layouts/" + name + ".yaml");
 }
 
 bool IsShippedLayout(const std::string& name) {
@@ -372,8 +374,22 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
 
 ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& default_name) {
   ControllerOptions c;
-  c.name = map.GetString("name", default_name, controller::ControllerNames());
-  const std::vector<controller::ControllerParameter> declared = controller::ControllerParameters(c.name);
+  // `plugin: LIBRARY` is `name: plugin:LIBRARY`; a relative library path is relative to this file.
+  const char* name_key = map.Has("plugin") ? "plugin" : "name";
+  if (map.Has("plugin")) {
+    if (map.Has("name")) map.Fail("plugin", "give either name or plugin, not both");
+    c.name = std::string(controller::kPluginPrefix) + map.RequireString("plugin");
+  } else {
+    c.name = map.GetString("name", default_name);
+    if (!controller::IsPluginName(c.name)) c.name = map.GetString("name", default_name, controller::ControllerNames());
+  }
+  c.name = controller::ResolvePluginName(c.name, std::filesystem::path(map.file()).parent_path().string());
+  std::vector<controller::ControllerParameter> declared;
+  try {
+    declared = controller::ControllerParameters(c.name);
+  } catch (const std::invalid_argument& error) {
+    map.Fail(name_key, error.what());
+  }
   for (const auto& parameter : declared) c.params[parameter.name] = parameter.default_value;
   if (auto params = map.GetMap("params")) {
     std::vector<std::string> valid;
@@ -404,7 +420,7 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
       }
       map.Fail("params", message);
     }
-    map.Fail("name", message);
+    map.Fail(name_key, message);
   }
   return c;
 }
@@ -918,6 +934,8 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
             root["controller"]["name"].Scalar() == o.value)) {
         root["controller"].remove("params");
       }
+      // ... and a name replaces the file's plugin (the two are one setting).
+      if (o.key == "controller.name" && root["controller"].IsMap()) root["controller"].remove("plugin");
       ApplyOverride(root, o);
     }
     try {

@@ -190,6 +190,8 @@ struct SensorOptions {
 
 /// The controller under test.
 struct ControllerOptions {
+  /// A built-in controller ("grip_slip", "open_loop") or "plugin:LIBRARY" (controller/plugin_loader.h;
+  /// relative library paths already made absolute).
   std::string name = "open_loop";
   /// Parameters by name (controller's declared parameters; unknown ones refused). Defaults of the
   /// controller fill the rest (written out in config.yaml).
@@ -200,8 +202,10 @@ struct ControllerOptions {
   double stale_timeout_s = 0.02;    ///< no frame for this long: state stale, controller holds [s]
 };
 
-/// Reads a controller section (name, params, grip_ceiling_n, rate_hz, stale_timeout_s; the same in a
-/// scenario and in `graspbed hw --config`). Unknown keys, names and parameters, out-of-range values
+/// Reads a controller section (name or plugin, params, grip_ceiling_n, rate_hz, stale_timeout_s; the
+/// same in a scenario and in `graspbed hw --config`). `plugin: LIBRARY` stands for
+/// `name: plugin:LIBRARY`; a relative library path is taken relative to the file, and a plugin that
+/// does not load is refused at that key. Unknown keys, names and parameters, out-of-range values
 /// and the controller's own cross-field checks are refused at the offending key with file and line.
 ControllerOptions LoadControllerOptions(const common::YamlMap& map, const std::string& default_name = "open_loop");
 

@@ -260,9 +260,11 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
   std::vector<ScenarioConfig> configs;
   for (const std::string& controller : options.controllers) {
     for (const ScorecardRun& run : runs) {
+      const bool custom = options.custom_controllers.contains(controller);
       std::vector<Override> overrides = run.overrides;
-      overrides.push_back({"controller.name", controller});
+      if (!custom) overrides.push_back({"controller.name", controller});
       ScenarioConfig config = LoadScenario(run.scenario_path, overrides);
+      if (custom) config.controller.name = controller;
       config.name = run.name + "@" + controller;
       configs.push_back(std::move(config));
       scorecard.rows.push_back({controller, run.name, run.overrides, "", {}});
@@ -274,6 +276,13 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
   suite_options.jobs = scorecard.jobs;
   suite_options.write_plots = false;
   suite_options.stop = options.stop;
+  if (!options.custom_controllers.empty()) {
+    suite_options.make_controller = [&options](const ControllerOptions& controller) {
+      const auto custom = options.custom_controllers.find(controller.name);
+      return custom != options.custom_controllers.end() ? custom->second(controller)
+                                                        : controller::MakeController(controller.name, controller.params);
+    };
+  }
   if (options.on_finished) {
     suite_options.on_finished = [&](int finished, int total, const SuiteRun&) { options.on_finished(finished, total); };
   }

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -103,6 +104,10 @@ struct ScorecardOptions {
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, total).
   std::function<void(int, int)> on_finished;
+  /// Controllers built by the caller (e.g. written in Python), by their label in `controllers`: such
+  /// a run keeps its scenario's controller section (rate, stale timeout, ceiling) and the factory
+  /// builds the controller (RunOptions::make_controller).
+  std::map<std::string, ControllerFactory> custom_controllers;
 };
 
 /// One row per (controller, run), for the JSON.

@@ -39,6 +39,7 @@ struct SuiteOptions {
   const std::atomic<bool>* stop = nullptr;  ///< stops the runs in flight and starts no new ones
   /// Called (under a lock) after each run with (runs finished, total, that run).
   std::function<void(int, int, const SuiteRun&)> on_finished;
+  ControllerFactory make_controller;  ///< RunOptions::make_controller for every run; may be empty
 };
 
 /// Results in the order of `configs`.

@@ -313,6 +313,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
       const size_t i = order[position];
       RunOptions run_options;
       run_options.stop = options.stop;
+      run_options.make_controller = options.make_controller;
       RunResult result;
       std::string error;
       try {

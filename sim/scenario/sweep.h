@@ -76,6 +76,7 @@ struct SweepOptions {
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, runs in this shard).
   std::function<void(int, int)> on_finished;
+  ControllerFactory make_controller;  ///< RunOptions::make_controller for every run; may be empty
 };
 
 /// What a sweep (shard) did.

@@ -1,0 +1,78 @@
+#!/usr/bin/env python3
+"""A grasp controller written in Python, run in graspbed's simulation.
+
+The same logic as examples/cpp_controller (threshold_grip): close at a fixed effort until the
+fingertip feels contact, then integrate the error between the sensed squeeze and a target into the
+motor effort; hold with the brake when the tactile data cannot be trusted; open on request.
+
+    PYTHONPATH=build/python python3 examples/python_controller.py [scenarios/default.yaml]
+
+(an installed graspbed: PYTHONPATH=<prefix>/lib/python3/dist-packages)
+"""
+import sys
+
+import graspbed
+
+
+class ThresholdGrip:
+    """Force-regulating grip: see the module docstring. Parameters as in the C++ plugin."""
+
+    def __init__(self, target_grip_n=3.0, approach_effort=0.3, contact_n=0.2, gain_per_n_s=0.3,
+                 open_effort=0.5, min_valid_units=4):
+        self.target_grip_n = target_grip_n
+        self.approach_effort = approach_effort
+        self.contact_n = contact_n
+        self.gain_per_n_s = gain_per_n_s
+        self.open_effort = open_effort
+        self.min_valid_units = min_valid_units
+        self.reset()
+
+    def reset(self):
+        self.intent = "idle"
+        self.effort = 0.0
+        self.last_t = None
+        self.phase = "idle"
+
+    def set_intent(self, intent):
+        self.intent = intent  # "idle" | "close" | "open"
+
+    def update(self, state, t):
+        dt = 0.0 if self.last_t is None else min(max(t - self.last_t, 0.0), 0.01)
+        self.last_t = t
+        if self.intent == "open":
+            self.phase, self.effort = "opening", 0.0
+            return -self.open_effort
+        if self.intent == "idle":
+            self.phase, self.effort = "idle", 0.0
+            return 0.0
+        if state.stale or state.valid_count < self.min_valid_units:
+            # Data we cannot trust: keep the grip, never open.
+            self.phase = "safe_hold"
+            return graspbed.HandCommand(grip_effort=self.effort, brake=True)
+        squeeze = state.total_fn_n
+        if squeeze < self.contact_n and self.effort <= self.approach_effort:
+            self.phase, self.effort = "closing", self.approach_effort
+        else:
+            self.phase = "holding"
+            self.effort = min(max(self.effort + self.gain_per_n_s * (self.target_grip_n - squeeze) * dt, 0.0), 1.0)
+        return self.effort
+
+    def telemetry(self):
+        return {"phase": self.phase, "grip_target_n": self.target_grip_n, "safe_hold": self.phase == "safe_hold"}
+
+
+def main():
+    scenario = sys.argv[1] if len(sys.argv) > 1 else graspbed.scenario_path("default")
+    result = graspbed.run(scenario, controller=ThresholdGrip())
+    summary, signals = result["summary"], result["signals"]
+    metrics = summary["metrics"]
+    print("%s with %s: %s" % (summary["scenario"], summary["controller"], "passed" if summary["passed"] else "FAILED"))
+    print("  dropped %s, max slip %.3f mm, peak grip %.2f N, real-time factor %.1f"
+          % (metrics["dropped"], metrics["max_slip_mm"], metrics["peak_grip_n"], summary["real_time_factor"]))
+    squeeze = signals["true_squeeze_n"]
+    print("  %d ticks; true squeeze at the end %.2f N" % (len(squeeze), squeeze[-1]))
+    return 0 if summary["passed"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

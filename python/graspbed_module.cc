@@ -1,0 +1,334 @@
+// The Python module graspbed._graspbed (wrapped by python/graspbed/__init__.py): scenario runs,
+// suites and sweeps with built-in, plugin or Python controllers; summaries as dicts, signals as numpy
+// arrays. Runs release the GIL; a Python controller takes it back for each call.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/data_dir.h"
+#include "controller/controller_api.h"
+#include "controller/grasp_controller.h"
+#include "controller/plugin_loader.h"
+#include "python/python_controller.h"
+#include "sim/scenario/runner.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/scenario/scorecard.h"
+#include "sim/scenario/signal_log.h"
+#include "sim/scenario/suite.h"
+#include "sim/scenario/sweep.h"
+
+namespace graspbed::python {
+namespace {
+
+namespace py = pybind11;
+
+py::object ToPython(const nlohmann::json& value) { return py::module_::import("json").attr("loads")(value.dump()); }
+
+std::vector<scenario::Override> ParseOverrides(const std::vector<std::string>& texts) {
+  std::vector<scenario::Override> overrides;
+  for (const std::string& text : texts) overrides.push_back(scenario::ParseOverride(text));
+  return overrides;
+}
+
+/// What a run's `controller` argument asks for.
+struct ControllerChoice {
+  std::vector<scenario::Override> overrides;  ///< controller.name for a built-in or plugin name
+  scenario::ControllerFactory factory;        ///< set for a Python controller
+  std::string label;                          ///< "python:ClassName"
+};
+
+/// None: the scenario's controller. A str: a built-in or "plugin:..." name. A Python object with
+/// update(): that controller (one run at a time). Anything else callable: a factory called once per
+/// run (suites and sweeps may run several at once).
+ControllerChoice ChooseController(const py::object& controller, bool single_run) {
+  ControllerChoice choice;
+  if (controller.is_none()) return choice;
+  if (py::isinstance<py::str>(controller)) {
+    choice.overrides.push_back({"controller.name", controller::ResolvePluginName(controller.cast<std::string>(), ".")});
+    return choice;
+  }
+  const bool instance = py::hasattr(controller, "update") && !py::isinstance<py::type>(controller);
+  if (!instance && !PyCallable_Check(controller.ptr())) {
+    throw py::type_error("controller: expected None, a controller name, a controller object (with update()) or a "
+                         "class / factory making one; got " + std::string(py::repr(controller)));
+  }
+  if (instance && !single_run) {
+    throw py::type_error("controller: runs of a suite or sweep each need their own controller: pass its class (or "
+                         "a function that makes one), not an instance");
+  }
+  const py::object type = instance ? py::reinterpret_borrow<py::object>(controller.get_type()) : controller;
+  choice.label = "python:" + std::string(py::str(py::getattr(type, "__name__", py::str("controller"))));
+  // The factory runs on the runner's threads: it takes the GIL, and keeps `controller` alive.
+  std::shared_ptr<py::object> guarded(new py::object(controller), [](py::object* object) {
+    py::gil_scoped_acquire gil;
+    delete object;
+  });
+  const std::string label = choice.label;
+  choice.factory = [guarded, instance, label](const scenario::ControllerOptions&) {
+    py::gil_scoped_acquire gil;
+    py::object made = instance ? *guarded : (*guarded)();
+    return std::unique_ptr<controller::GraspController>(new PythonController(made, label));
+  };
+  return choice;
+}
+
+/// Signals of a run, copied out of the log at its end (C++ side, no GIL needed).
+struct CollectedSignals {
+  std::vector<std::string> numeric_names;
+  std::vector<std::vector<double>> numeric;
+  std::vector<std::string> text_names;
+  std::vector<std::vector<std::string>> text;
+  void Collect(const scenario::SignalLog& log) {
+    numeric_names = log.numeric_columns();
+    text_names = log.text_columns();
+    numeric.assign(numeric_names.size(), std::vector<double>(log.rows()));
+    text.assign(text_names.size(), std::vector<std::string>(log.rows()));
+    for (size_t row = 0; row < log.rows(); ++row) {
+      for (size_t c = 0; c < numeric_names.size(); ++c) numeric[c][row] = log.At(row, c);
+      for (size_t c = 0; c < text_names.size(); ++c) text[c][row] = log.TextAt(row, c) ? log.TextAt(row, c) : "";
+    }
+  }
+  py::dict ToDict() {
+    py::dict columns;
+    for (size_t c = 0; c < numeric_names.size(); ++c) {
+      columns[py::str(numeric_names[c])] = py::array_t<double>(static_cast<py::ssize_t>(numeric[c].size()), numeric[c].data());
+    }
+    py::module_ numpy = py::module_::import("numpy");
+    for (size_t c = 0; c < text_names.size(); ++c) columns[py::str(text_names[c])] = numpy.attr("array")(text[c]);
+    return columns;
+  }
+};
+
+py::dict Run(const std::string& scenario_path, const std::vector<std::string>& overrides, const py::object& controller,
+             const std::string& out_dir, bool plots) {
+  ControllerChoice choice = ChooseController(controller, true);
+  std::vector<scenario::Override> all = choice.overrides;
+  for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
+  scenario::ScenarioConfig config = scenario::LoadScenario(scenario_path, all);
+  if (choice.factory) config.controller.name = choice.label;
+  scenario::RunOptions options;
+  options.out_dir = out_dir;
+  options.write_plots = plots;
+  options.make_controller = choice.factory;
+  CollectedSignals signals;
+  options.on_signals = [&signals](const scenario::SignalLog& log) { signals.Collect(log); };
+  scenario::RunResult result;
+  {
+    py::gil_scoped_release release;
+    result = scenario::RunScenario(config, options);
+  }
+  py::dict out;
+  out["summary"] = ToPython(scenario::SummaryJson(result));
+  out["signals"] = signals.ToDict();
+  return out;
+}
+
+py::dict Suite(const std::vector<std::string>& files, const std::vector<std::string>& overrides,
+               const py::object& controller, int jobs, const std::string& out_dir, bool plots) {
+  ControllerChoice choice = ChooseController(controller, jobs == 1);
+  std::vector<scenario::Override> all = choice.overrides;
+  for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
+  std::vector<scenario::ScenarioConfig> configs = scenario::LoadScenarios(files, all);
+  if (choice.factory) {
+    for (scenario::ScenarioConfig& config : configs) config.controller.name = choice.label;
+  }
+  scenario::SuiteOptions options;
+  options.jobs = jobs;
+  options.out_dir = out_dir;
+  options.write_plots = plots;
+  options.make_controller = choice.factory;
+  scenario::SuiteResult result;
+  {
+    py::gil_scoped_release release;
+    result = scenario::RunSuite(configs, options);
+  }
+  return ToPython(scenario::SuiteJson(result));
+}
+
+py::dict Sweep(const std::string& spec_path, const py::object& controller, int jobs, const std::string& out_dir,
+               const std::string& shard) {
+  ControllerChoice choice = ChooseController(controller, jobs == 1);
+  scenario::SweepSpec spec = scenario::LoadSweepSpec(spec_path);
+  spec.fixed.insert(spec.fixed.begin(), choice.overrides.begin(), choice.overrides.end());
+  scenario::SweepOptions options;
+  options.shard = scenario::ParseShard(shard);
+  options.jobs = jobs;
+  options.out_dir = out_dir;
+  options.make_controller = choice.factory;
+  scenario::SweepOutcome outcome;
+  {
+    py::gil_scoped_release release;
+    outcome = scenario::RunSweep(spec, options);
+  }
+  py::dict out;
+  out["runs"] = outcome.runs;
+  out["finished"] = outcome.finished;
+  out["passed"] = outcome.passed;
+  out["completed"] = outcome.completed;
+  out["wall_s"] = outcome.wall_s;
+  py::list rows;
+  std::ifstream jsonl(out_dir + "/results.jsonl");
+  for (std::string line; std::getline(jsonl, line);) {
+    if (!line.empty()) rows.append(ToPython(nlohmann::json::parse(line)));
+  }
+  out["rows"] = rows;
+  return out;
+}
+
+py::dict Score(const std::vector<py::object>& controllers, const std::string& set_dir, int jobs, int limit,
+              const std::string& out_dir) {
+  scenario::ScorecardOptions options;
+  options.controllers.clear();
+  options.jobs = jobs;
+  options.limit = limit;
+  for (const py::object& controller : controllers) {
+    ControllerChoice choice = ChooseController(controller, jobs == 1);
+    if (choice.factory) {
+      options.controllers.push_back(choice.label);
+      options.custom_controllers[choice.label] = choice.factory;
+    } else {
+      options.controllers.push_back(choice.overrides.at(0).value);
+    }
+  }
+  const scenario::ScorecardSet set =
+      scenario::LoadScorecardSet((set_dir.empty() ? common::DataPath("scenarios/scorecard") : set_dir) + "/set.yaml");
+  scenario::Scorecard scorecard;
+  {
+    py::gil_scoped_release release;
+    scorecard = scenario::RunScorecard(set, options);
+    if (!out_dir.empty()) scenario::WriteScorecard(scorecard, out_dir);
+  }
+  py::dict out = ToPython(scenario::ScorecardJson(scorecard));
+  out["table"] = scenario::ScorecardTable(scorecard);
+  return out;
+}
+
+/// Wall time of one controller Update [ns], averaged over `ticks` calls from C++ (the GIL released
+/// first, as in a run) on a 20-unit state in steady contact. `controller`: a controller name or a
+/// Python controller object. For bench/python_controller_bench.py.
+double TimeControllerUpdate(const py::object& controller, int ticks) {
+  std::unique_ptr<controller::GraspController> made;
+  if (py::isinstance<py::str>(controller)) {
+    made = controller::MakeController(controller::ResolvePluginName(controller.cast<std::string>(), "."), {});
+  } else {
+    made = std::make_unique<PythonController>(controller, "python:" + std::string(py::str(controller.get_type().attr("__name__"))));
+  }
+  sensor::TactileState state;
+  state.unit_count = 20;
+  state.valid_count = 20;
+  state.contact_count = 20;
+  for (int u = 0; u < state.unit_count; ++u) state.fn_n[u] = 0.15;
+  state.total_fn_n = 3.0;
+  made->SetIntent(controller::GraspIntent::kClose);
+  double sink = 0.0;
+  std::chrono::steady_clock::duration elapsed{};
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    for (int tick = 0; tick < ticks; ++tick) {
+      state.time_s = 1e-3 * tick;
+      sink += made->Update(state, state.time_s).grip_effort;
+    }
+    elapsed = std::chrono::steady_clock::now() - start;
+  }
+  if (!std::isfinite(sink)) throw std::runtime_error("controller returned a non-finite effort");
+  {
+    // The controller's Python references go with the GIL held (its destructor takes it anyway).
+    made.reset();
+  }
+  return std::chrono::duration<double, std::nano>(elapsed).count() / ticks;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_graspbed, m) {
+  m.doc() = "graspbed: simulation-in-the-loop grasp testbed (C++ core; see the graspbed package)";
+  m.attr("__version__") = GRASPBED_VERSION;
+  m.attr("CONTROLLER_API_VERSION") = GRASPBED_CONTROLLER_API_VERSION;
+  py::register_exception<ControllerError>(m, "ControllerError", PyExc_RuntimeError);
+  // Bad input (files, overrides, controller names): ValueError, with the file:line:key message.
+  py::register_exception<std::invalid_argument>(m, "ConfigError", PyExc_ValueError);
+
+  py::class_<controller::HandCommand>(m, "HandCommand", "One command to the grip motor.")
+      .def(py::init([](double grip_effort, bool enable, bool brake) {
+             return controller::HandCommand{grip_effort, enable, brake};
+           }),
+           py::arg("grip_effort") = 0.0, py::arg("enable") = true, py::arg("brake") = false)
+      .def_readwrite("grip_effort", &controller::HandCommand::grip_effort, "[-1, 1] of stall torque; + closes")
+      .def_readwrite("enable", &controller::HandCommand::enable, "False: motor off (coasts)")
+      .def_readwrite("brake", &controller::HandCommand::brake, "True: hold position with the brake")
+      .def("__repr__", [](const controller::HandCommand& c) {
+        return "HandCommand(grip_effort=" + std::to_string(c.grip_effort) + ", enable=" + (c.enable ? "True" : "False") +
+               ", brake=" + (c.brake ? "True" : "False") + ")";
+      });
+
+  // Read-only: the arrays are numpy views (write=False) onto the state of the current tick. Valid
+  // during update(); copy (numpy.copy) what a controller keeps across ticks.
+  py::class_<TactileStateView>(m, "TactileState",
+                               "Per-unit forces estimated from one sensor frame (read-only; valid during update())")
+      .def_property_readonly("sequence", [](const TactileStateView& v) { return v.state->sequence; })
+      .def_property_readonly("time_s", [](const TactileStateView& v) { return v.state->time_s; }, "sample time [s]")
+      .def_property_readonly("unit_count", [](const TactileStateView& v) { return v.state->unit_count; })
+      .def_property_readonly("stale", [](const TactileStateView& v) { return v.state->stale; },
+                             "no new frame within the stale timeout")
+      .def_property_readonly("valid_count", [](const TactileStateView& v) { return v.state->valid_count; })
+      .def_property_readonly("total_fn_n", [](const TactileStateView& v) { return v.state->total_fn_n; },
+                             "sum of Fn over valid units [N]")
+      .def_property_readonly("total_shear_axial_n",
+                             [](const TactileStateView& v) { return v.state->total_shear_axial_n; })
+      .def_property_readonly("total_shear_circumferential_n",
+                             [](const TactileStateView& v) { return v.state->total_shear_circumferential_n; })
+      .def_property_readonly("contact_count", [](const TactileStateView& v) { return v.state->contact_count; })
+      .def_property_readonly("noise_known", [](const TactileStateView& v) { return v.state->noise_known; })
+      .def_property_readonly("fn_n", [](TactileStateView& v) { v.Refresh(); return v.fn_n; },
+                             "normal force per unit [N], unit frame (numpy, read-only view)")
+      .def_property_readonly("ft_n", [](TactileStateView& v) { v.Refresh(); return v.ft_n; },
+                             "shear per unit along its beam axis [N] (numpy, read-only view)")
+      .def_property_readonly("validity", [](TactileStateView& v) { v.Refresh(); return v.validity; },
+                             "per unit: 0 valid, 1 open, 2 short, 3 out of range, 4 implausible, 5 not tared")
+      .def_property_readonly("fn_noise_n", [](TactileStateView& v) { v.Refresh(); return v.fn_noise_n; })
+      .def_property_readonly("ft_noise_n", [](TactileStateView& v) { v.Refresh(); return v.ft_noise_n; });
+
+  m.def("_run", &Run, py::arg("scenario"), py::arg("overrides"), py::arg("controller"), py::arg("out_dir"),
+        py::arg("plots"));
+  m.def("_suite", &Suite, py::arg("files"), py::arg("overrides"), py::arg("controller"), py::arg("jobs"),
+        py::arg("out_dir"), py::arg("plots"));
+  m.def("_sweep", &Sweep, py::arg("spec"), py::arg("controller"), py::arg("jobs"), py::arg("out_dir"),
+        py::arg("shard"));
+  m.def("_score", &Score, py::arg("controllers"), py::arg("set_dir"), py::arg("jobs"), py::arg("limit"),
+        py::arg("out_dir"));
+  m.def("list_scenarios", &scenario::ListScenarioFiles, py::arg("directory"),
+        "The scenario files of a directory, sorted.");
+  m.def("controller_names", &controller::ControllerNames, "Names of the built-in controllers.");
+  m.def(
+      "controller_parameters",
+      [](const std::string& name) {
+        py::list out;
+        for (const controller::ControllerParameter& p : controller::ControllerParameters(name)) {
+          py::dict entry;
+          entry["name"] = p.name;
+          entry["default"] = p.default_value;
+          entry["min"] = p.min;
+          entry["max"] = p.max;
+          entry["unit"] = p.unit;
+          entry["doc"] = p.doc;
+          out.append(entry);
+        }
+        return out;
+      },
+      py::arg("name"), "Declared parameters of a built-in or plugin:LIBRARY controller.");
+  m.def("_time_controller_update", &TimeControllerUpdate, py::arg("controller"), py::arg("ticks"));
+  m.def("data_dir", &common::DataDir, "Directory of the shipped data (layouts, scenarios, models).");
+}
+
+}  // namespace graspbed::python

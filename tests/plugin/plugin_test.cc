@@ -1,0 +1,298 @@
+// Controller plugins: real shared libraries (tests/plugin/CMakeLists.txt builds them) loaded through
+// the controller factory, the scenario loader and the real executable. Each way a plugin can be
+// refused (missing, not a plugin, another API version, a make() that throws) gives a message naming
+// the library and, on the command line, exit 2.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "controller/grasp_controller.h"
+#include "controller/plugin_loader.h"
+#include "sim/scenario/scenario_config.h"
+#include "tests/support/allocation_counter.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/error_of.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::controller {
+namespace {
+
+using ::testing::HasSubstr;
+using graspbed::testing::CliBinary;
+using graspbed::testing::CliResult;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
+
+const std::string kPluginDir = GRASPBED_TEST_PLUGIN_DIR;
+const std::string kThreshold = kPluginDir + "/libthreshold_grip.so";
+const std::string kWrongVersion = kPluginDir + "/libwrong_version_plugin.so";
+const std::string kThrowing = kPluginDir + "/libthrowing_plugin.so";
+const std::string kNotAPlugin = kPluginDir + "/libnot_a_plugin.so";
+const std::string kMissing = kPluginDir + "/libno_such_plugin.so";
+
+std::string ErrorOf(const std::function<void()>& action) {
+  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
+}
+
+std::string Plugin(const std::string& library) { return "plugin:" + library; }
+
+TEST(PluginLoaderTest, LoadsThePluginItsNameAndDeclaredParameters) {
+  const LoadedPlugin& plugin = LoadPlugin(Plugin(kThreshold));
+  EXPECT_EQ(plugin.name, "threshold_grip");
+  EXPECT_EQ(plugin.path, kThreshold);
+  const std::vector<ControllerParameter> parameters = ControllerParameters(Plugin(kThreshold));
+  ASSERT_EQ(parameters.size(), 6u);
+  EXPECT_EQ(parameters[0].name, "target_grip_n");
+  EXPECT_DOUBLE_EQ(parameters[0].default_value, 3.0);
+  EXPECT_EQ(parameters[0].unit, "N");
+  // Loaded once: a second name for the same file is the same plugin.
+  EXPECT_EQ(&LoadPlugin(Plugin(kPluginDir + "/../plugins/libthreshold_grip.so")), &plugin);
+}
+
+TEST(PluginLoaderTest, ParametersAreValidatedExactlyLikeABuiltIn) {
+  const std::unique_ptr<GraspController> controller = MakeController(Plugin(kThreshold), {{"target_grip_n", 5.0}});
+  EXPECT_EQ(controller->name(), "threshold_grip");
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"target_grip", 5.0}}); }),
+              HasSubstr("has no parameter 'target_grip'; valid parameters: target_grip_n, approach_effort"));
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"target_grip_n", 50.0}}); }),
+              HasSubstr("parameter target_grip_n = 50: must be in [0.2, 10] N"));
+  // The plugin's own cross-field check comes back as bad input naming the plugin.
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"contact_n", 4.0}}); }),
+              HasSubstr("('threshold_grip'): parameter contact_n = 4.000000: must be below target_grip_n"));
+}
+
+TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
+  const std::unique_ptr<GraspController> controller = MakeController(Plugin(kThreshold), {});
+  controller->Reset();
+  controller->SetIntent(GraspIntent::kClose);
+  sensor::TactileState state;
+  state.unit_count = 20;
+  state.valid_count = 20;
+  const long before = graspbed::testing::AllocationCount();
+  EXPECT_DOUBLE_EQ(controller->Update(state, 0.0).grip_effort, 0.3);  // closing at the approach effort
+  state.total_fn_n = 1.0;  // in contact, below the 3 N target: the effort rises
+  double effort = 0.0;
+  for (int tick = 1; tick <= 100; ++tick) effort = controller->Update(state, 1e-3 * tick).grip_effort;
+  EXPECT_NEAR(effort, 0.3 + 0.3 * (3.0 - 1.0) * 0.1, 1e-9);  // gain x error x 100 ms
+  state.stale = true;  // data not to be trusted: hold, never open
+  const HandCommand hold = controller->Update(state, 0.2);
+  EXPECT_TRUE(hold.brake);
+  EXPECT_TRUE(controller->telemetry().safe_hold);
+  controller->SetIntent(GraspIntent::kOpen);
+  EXPECT_LT(controller->Update(state, 0.3).grip_effort, 0.0);
+  EXPECT_EQ(graspbed::testing::AllocationCount(), before) << "Update allocated";
+}
+
+TEST(PluginLoaderTest, AMissingLibraryIsNamed) {
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kMissing), {}); }),
+              HasSubstr("controller plugin " + kMissing + ": no such file"));
+  EXPECT_THAT(ErrorOf([] { ControllerParameters(Plugin("no_such_plugin")); }),
+              HasSubstr("controller plugin 'no_such_plugin' not found (looked for no_such_plugin and "
+                        "libno_such_plugin.so in"));
+  EXPECT_THAT(ErrorOf([] { ControllerParameters("plugin:"); }), HasSubstr("no library named"));
+}
+
+TEST(PluginLoaderTest, ALibraryThatIsNoPluginIsRefused) {
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kNotAPlugin), {}); }),
+              HasSubstr("controller plugin " + kNotAPlugin +
+                        ": not a graspbed controller plugin (exports no graspbed_controller_plugin"));
+  // A file that is no shared library at all: dlopen's reason.
+  const TempDir dir("plugin");
+  const std::string text = dir.Write("libtext.so", "not an ELF file\n");
+  EXPECT_THAT(ErrorOf([&] { MakeController(Plugin(text), {}); }),
+              HasSubstr("controller plugin " + text + ": cannot load: "));
+}
+
+TEST(PluginLoaderTest, APluginOfAnotherApiVersionIsRefusedBeforeItIsCalled) {
+  EXPECT_THAT(ErrorOf([] { ControllerParameters(Plugin(kWrongVersion)); }),
+              HasSubstr(": built against controller API version " + std::to_string(GRASPBED_CONTROLLER_API_VERSION + 1) +
+                        ", this graspbed has version " + std::to_string(GRASPBED_CONTROLLER_API_VERSION) +
+                        "; rebuild the plugin"));
+}
+
+TEST(PluginLoaderTest, AFactoryThatThrowsBecomesBadInput) {
+  EXPECT_EQ(ControllerParameters(Plugin(kThrowing)).size(), 1u);
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThrowing), {}); }),
+              HasSubstr("controller plugin " + kThrowing + " ('throws_when_built'): cannot open weights.bin"));
+}
+
+TEST(PluginLoaderTest, BareNamesAreFoundOnTheSearchPath) {
+  ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", ("/nonexistent:" + kPluginDir).c_str(), 1), 0);
+  EXPECT_EQ(PluginSearchPath().at(1), kPluginDir);
+  EXPECT_EQ(LoadPlugin(Plugin("threshold_grip")).path, kThreshold);         // libNAME.so
+  EXPECT_EQ(LoadPlugin(Plugin("libthreshold_grip.so")).path, kThreshold);   // the file name itself
+  ::unsetenv("GRASPBED_PLUGIN_PATH");
+}
+
+TEST(PluginLoaderTest, RelativePathsResolveAgainstTheGivenDirectoryBareNamesStay) {
+  EXPECT_EQ(ResolvePluginName("plugin:build/libx.so", "/data/scenarios"), "plugin:/data/scenarios/build/libx.so");
+  EXPECT_EQ(ResolvePluginName("plugin:../libx.so", "/data/scenarios"), "plugin:/data/libx.so");
+  EXPECT_EQ(ResolvePluginName("plugin:/opt/libx.so", "/data"), "plugin:/opt/libx.so");
+  EXPECT_EQ(ResolvePluginName("plugin:mine", "/data"), "plugin:mine");
+  EXPECT_EQ(ResolvePluginName("grip_slip", "/data"), "grip_slip");
+}
+
+// ---- scenario files ----------------------------------------------------------------------------------
+
+constexpr char kScenarioHead[] = "name: p\nduration_s: 0.5\nscript:\n  - {at_s: 0.1, action: close}\n";
+
+TEST(PluginScenarioTest, APluginPathIsRelativeToTheScenarioFile) {
+  const TempDir dir("plugin");
+  std::filesystem::create_directories(dir.Path("lib"));
+  std::filesystem::copy_file(kThreshold, dir.Path("lib/libthreshold_grip.so"));
+  const std::string file = dir.Write("s/p.yaml", std::string(kScenarioHead) +
+                                                     "controller:\n  plugin: ../lib/libthreshold_grip.so\n"
+                                                     "  params: {target_grip_n: 4}\n");
+  const scenario::ScenarioConfig config = scenario::LoadScenario(file);
+  EXPECT_EQ(config.controller.name, "plugin:" + dir.Path("lib/libthreshold_grip.so"));
+  EXPECT_DOUBLE_EQ(config.controller.params.at("target_grip_n"), 4.0);
+  EXPECT_DOUBLE_EQ(config.controller.params.at("approach_effort"), 0.3);  // defaults filled in
+  // The resolved config (config.yaml of a run) loads again to the same controller.
+  const scenario::ScenarioConfig again =
+      scenario::LoadScenarioFromString(scenario::EmitScenarioYaml(config), dir.Path("elsewhere/config.yaml"));
+  EXPECT_EQ(again.controller.name, config.controller.name);
+  EXPECT_EQ(again.controller.params, config.controller.params);
+}
+
+TEST(PluginScenarioTest, BadPluginSectionsNameFileLineAndKey) {
+  const TempDir dir("plugin");
+  struct Case {
+    std::string controller;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {"controller:\n  plugin: " + kThreshold + "\n  params: {target_grip: 4}\n",
+       ":7: controller.params.target_grip = 4: controller 'plugin:" + kThreshold +
+           "' has no such parameter; valid parameters: target_grip_n, approach_effort"},
+      {"controller:\n  plugin: " + kThreshold + "\n  params: {target_grip_n: 40}\n",
+       ":7: controller.params.target_grip_n = 40: must be <= 10"},
+      {"controller:\n  plugin: " + kThreshold + "\n  params: {contact_n: 4}\n",
+       ":7: controller.params.contact_n = 4: controller plugin " + kThreshold + " ('threshold_grip'): parameter contact_n"},
+      {"controller:\n  plugin: " + kMissing + "\n", ":6: controller.plugin = " + kMissing + ": controller plugin " +
+                                                       kMissing + ": no such file"},
+      {"controller:\n  plugin: " + kWrongVersion + "\n", ":6: controller.plugin = " + kWrongVersion +
+                                                            ": controller plugin " + kWrongVersion + ": built against"},
+      {"controller:\n  name: plugin:" + kNotAPlugin + "\n", ":6: controller.name = plugin:" + kNotAPlugin +
+                                                               ": controller plugin " + kNotAPlugin + ": not a graspbed"},
+      {"controller:\n  plugin: " + kThrowing + "\n", ":6: controller.plugin = " + kThrowing + ": controller plugin " +
+                                                        kThrowing + " ('throws_when_built'): cannot open weights.bin"},
+      {"controller:\n  name: grip_slip\n  plugin: " + kThreshold + "\n", ":7: controller.plugin = " + kThreshold +
+                                                                            ": give either name or plugin, not both"},
+  };
+  for (const Case& c : cases) {
+    const std::string file = dir.Write("bad.yaml", std::string(kScenarioHead) + c.controller);
+    const std::string message =
+        graspbed::testing::ErrorOf<std::invalid_argument>([&] { scenario::LoadScenario(file); });
+    EXPECT_THAT(message, HasSubstr(file + c.expected)) << c.controller;
+  }
+}
+
+// ---- the command line ----------------------------------------------------------------------------------
+
+class PluginCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
+  }
+  const TempDir dir_{"plugin_cli"};
+};
+
+TEST_F(PluginCliTest, EveryRefusedPluginExitsTwoWithItsReason) {
+  struct Case {
+    std::string library;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {kMissing, "no such file"},
+      {kNotAPlugin, "not a graspbed controller plugin"},
+      {kWrongVersion, "built against controller API version"},
+      {kThrowing, "cannot open weights.bin"},
+  };
+  for (const Case& c : cases) {
+    for (const std::string& command : std::vector<std::string>{
+             "run scenarios/default.yaml --no-plots --out " + dir_.Path("run"), "suite scenarios --out " + dir_.Path("suite"),
+          "hw --port /dev/null --duration 1"}) {
+      const CliResult result = RunCli(command + " --controller plugin:" + c.library);
+      EXPECT_EQ(result.exit_code, 2) << command << " " << c.library << ": " << result.err;
+      EXPECT_THAT(result.err, HasSubstr("graspbed: error: ")) << command;
+      EXPECT_THAT(result.err, HasSubstr(c.expected)) << command << ": " << result.err;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir_.Path("run"))) << "a refused run wrote outputs";
+  EXPECT_FALSE(std::filesystem::exists(dir_.Path("suite")));
+}
+
+TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByName) {
+  // A path relative to the working directory (the source tree, where ctest runs).
+  const std::string relative = std::filesystem::relative(kThreshold).string();
+  const CliResult run = RunCli("run scenarios/default.yaml --no-plots --json --out " + dir_.Path("rel") +
+                               " --controller plugin:" + relative);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  const nlohmann::json summary = nlohmann::json::parse(run.out);
+  EXPECT_EQ(summary.at("controller"), "plugin:" + kThreshold);
+  EXPECT_TRUE(summary.at("passed").get<bool>());
+  EXPECT_FALSE(summary.at("metrics").at("dropped").get<bool>());
+  // By bare name on GRASPBED_PLUGIN_PATH (the child inherits it), with a parameter through --set.
+  ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", kPluginDir.c_str(), 1), 0);
+  const CliResult named = RunCli("run scenarios/default.yaml --no-plots --json --out " + dir_.Path("named") +
+                                 " --controller plugin:threshold_grip --set controller.params.target_grip_n=4");
+  ASSERT_EQ(named.exit_code, 0) << named.err << named.out;
+  const nlohmann::json named_summary = nlohmann::json::parse(named.out);
+  EXPECT_EQ(named_summary.at("controller"), "plugin:threshold_grip");
+  EXPECT_FALSE(named_summary.at("metrics").at("dropped").get<bool>());
+  const CliResult out_of_range = RunCli("run scenarios/default.yaml --no-plots --out " + dir_.Path("range") +
+                                        " --controller plugin:threshold_grip --set controller.params.target_grip_n=40");
+  ::unsetenv("GRASPBED_PLUGIN_PATH");
+  EXPECT_EQ(out_of_range.exit_code, 2);
+  EXPECT_THAT(out_of_range.err, HasSubstr("--set controller.params.target_grip_n=40: "));
+  EXPECT_THAT(out_of_range.err, HasSubstr("controller.params.target_grip_n = 40: must be <= 10"));
+}
+
+TEST_F(PluginCliTest, SuiteSweepAndScoreRunThePlugin) {
+  // A short grasp (the default box, no lift) in a directory of its own, for the suite and the sweep.
+  const std::string scenario = dir_.Write("scenarios/short.yaml", R"(name: short
+duration_s: 0.6
+object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.8}
+controller: {name: grip_slip}
+script:
+  - {at_s: 0.05, action: close}
+expectations: {not_dropped: true}
+)");
+  const std::string plugin = " --controller plugin:" + kThreshold;
+  const CliResult suite = RunCli("suite " + dir_.Path("scenarios") + " --no-plots --out " + dir_.Path("suite") + plugin);
+  ASSERT_EQ(suite.exit_code, 0) << suite.err << suite.out;
+  EXPECT_THAT(suite.out, HasSubstr("plugin:"));
+  const nlohmann::json suite_json = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("suite/suite.json")));
+  ASSERT_EQ(suite_json.at("runs").size(), 1u);
+  EXPECT_EQ(suite_json.at("runs")[0].at("controller"), "plugin:" + kThreshold);
+  EXPECT_TRUE(suite_json.at("runs")[0].at("passed").get<bool>());
+
+  // The sweep tunes the plugin's own parameter on top of --controller.
+  const std::string spec = dir_.Write("sweep.yaml", "scenario: " + scenario +
+                                                        "\nparameters:\n  controller.params.target_grip_n: [2, 4]\n");
+  const CliResult sweep = RunCli("sweep " + spec + " --out " + dir_.Path("sweep") + plugin);
+  ASSERT_EQ(sweep.exit_code, 0) << sweep.err << sweep.out;
+  const std::string rows = graspbed::testing::ReadText(dir_.Path("sweep/results.jsonl"));
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2) << rows;
+  // A parameter only the plugin has: the sweep really ran the plugin (grip_slip would refuse it).
+  EXPECT_THAT(rows, HasSubstr("\"controller.params.target_grip_n\":4"));
+
+  const CliResult score = RunCli("score --limit 1 --out " + dir_.Path("score") + " --controller open_loop" + plugin);
+  ASSERT_EQ(score.exit_code, 0) << score.err << score.out;
+  EXPECT_THAT(score.out, HasSubstr("plugin:" + kThreshold.substr(0, 10)));
+  const nlohmann::json card = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("score/scorecard.json")));
+  ASSERT_EQ(card.at("controllers").size(), 2u);
+  EXPECT_EQ(card.at("controllers")[1].at("controller"), "plugin:" + kThreshold);
+}
+
+}  // namespace
+}  // namespace graspbed::controller
