@@ -66,6 +66,7 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
         run_options.out_dir = options.out_dir.empty() ? "" : options.out_dir + "/" + configs[index].name;
         run_options.write_plots = options.write_plots;
         run_options.stop = options.stop;
+        if (options.prepare_run) options.prepare_run(configs[index], configs[index].name, run_options);
         run.result = RunScenario(configs[index], run_options);
       } catch (const std::exception& error) {
         run.error = error.what();

@@ -39,6 +39,8 @@ struct SuiteOptions {
   const std::atomic<bool>* stop = nullptr;  ///< stops the runs in flight and starts no new ones
   /// Called (under a lock) after each run with (runs finished, total, that run).
   std::function<void(int, int, const SuiteRun&)> on_finished;
+  /// Adds observers to each run's options (e.g. `--video`); empty: none.
+  PrepareRun prepare_run;
 };
 
 /// Results in the order of `configs`.

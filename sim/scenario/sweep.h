@@ -76,6 +76,8 @@ struct SweepOptions {
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, runs in this shard).
   std::function<void(int, int)> on_finished;
+  /// Adds observers to each run's options (e.g. `--video`); empty: none.
+  PrepareRun prepare_run;
 };
 
 /// What a sweep (shard) did.
