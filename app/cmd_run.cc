@@ -34,6 +34,7 @@ struct VideoCommandOptions {
   double fps = render::kDefaultVideoFps;
   std::string size = "640x480";
   std::string camera;
+  bool shadows = false;
 
   void Add(CLI::App* command, const std::string& where) {
     command->add_flag("--video", enabled, "render the run offscreen to " + where +
@@ -41,6 +42,7 @@ struct VideoCommandOptions {
     command->add_option("--video-fps", fps, "video frames per simulated second")->capture_default_str();
     command->add_option("--video-size", size, "video WIDTHxHEIGHT [px], even")->capture_default_str();
     command->add_option("--video-camera", camera, "grasp (default), fingertip, or a camera of the model");
+    command->add_flag("--video-shadows", shadows, "draw shadows (about 3x the rendering time on a software renderer)");
   }
 
   /// Checked before any run starts (exit 2 on a bad value).
@@ -49,6 +51,7 @@ struct VideoCommandOptions {
     video.fps = fps;
     render::ParseVideoSize(size, video.render);
     video.camera = sim::CameraByName(camera);
+    video.render.shadows = shadows;
     video.Validate();
     return video;
   }

@@ -23,6 +23,7 @@ struct ViewCommandOptions {
   bool paused = false;
   int frames = 0;
   std::string camera;
+  bool shadows = false;
   std::vector<std::string> sets;
 };
 
@@ -36,6 +37,7 @@ void ViewCommand(const ViewCommandOptions& options) {
   viewer.paused = options.paused;
   viewer.exit_after_frames = options.frames;
   viewer.camera = sim::CameraByName(options.camera);
+  viewer.render.shadows = options.shadows;
   viewer.stop = &StopRequested();
   viewer.Validate();
   StopSignalGuard guard;
@@ -77,6 +79,7 @@ void AddViewCommand(CLI::App& root) {
   command->add_option("--frames", options->frames, "close after this many frames (0: when the window is closed)")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--camera", options->camera, "grasp (default), fingertip, or a camera of the model");
+  command->add_flag("--shadows", options->shadows, "draw shadows (slow on a software renderer)");
   command->add_option("--set", options->sets, "override a scenario key (live only; repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);

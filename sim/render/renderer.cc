@@ -127,6 +127,9 @@ void RenderOptions::Validate() const {
   if (!(object_alpha >= 0.0 && object_alpha <= 1.0)) {
     throw std::invalid_argument("object_alpha = " + std::to_string(object_alpha) + ": must be in [0, 1]");
   }
+  if (multisamples < 0 || multisamples > 16) {
+    throw std::invalid_argument("multisamples = " + std::to_string(multisamples) + ": must be in 0..16");
+  }
   if (!(shear_arrow_m_per_n > 0.0) || !std::isfinite(shear_arrow_m_per_n)) {
     throw std::invalid_argument("shear_arrow_m_per_n = " + std::to_string(shear_arrow_m_per_n) + ": must be > 0");
   }
@@ -210,6 +213,7 @@ Renderer::Renderer(GlContext& gl, const Simulation& simulation, const RenderOpti
   mjModel* m = s.model.get();
   m->vis.global.offwidth = options_.width_px;
   m->vis.global.offheight = options_.height_px;
+  m->vis.quality.offsamples = options_.multisamples;
   // Arrow length = force * map.force / meanmass; width = forcewidth * meansize.
   m->vis.map.force = static_cast<float>(options_.force_arrow_m_per_n * m->stat.meanmass);
   m->vis.scale.forcewidth = static_cast<float>(0.6e-3 / m->stat.meansize);
@@ -432,6 +436,7 @@ void Renderer::Draw(Simulation& simulation, const sensor::TactileState* state, c
 
   const mjrRect viewport = {pixels[0], pixels[1], pixels[2], pixels[3]};
   mjr_setBuffer(window ? mjFB_WINDOW : mjFB_OFFSCREEN, &s.context);
+  s.scene.flags[mjRND_SHADOW] = options_.shadows ? 1 : 0;
   mjr_render(viewport, &s.scene, &s.context);
   DrawOverlays(pixels, state != nullptr, label);
 }

@@ -74,7 +74,11 @@ struct RenderOptions {
   /// the way the shear points [-].
   bool shear_arrows = true;
   double shear_arrow_m_per_n = 4e-3;  ///< shear arrow length per newton [m/N], > 0
-  bool legend = true;  ///< colour scale of the units (bottom right) when a TactileState is drawn
+  bool legend = true;  ///< colour scale of the units (bottom right) when a TactileState is drawn; left out below ~200 px height
+  /// MuJoCo's shadows. On llvmpipe (no GPU) they are most of a frame's cost (a 4096 px shadow map per
+  /// light): about 115 against 36 ms per 640 x 480 frame here; videos and the viewer leave them out.
+  bool shadows = true;
+  int multisamples = 4;  ///< anti-aliasing samples of the offscreen buffer (MuJoCo's default 4), 0..16
   /// Throws std::invalid_argument naming the field and value.
   void Validate() const;
 };

@@ -32,6 +32,7 @@ struct VideoOptions {
     options.height_px = 480;
     options.contact_forces = true;
     options.force_arrow_m_per_n = kVideoForceArrowMPerN;
+    options.shadows = false;  // a third of the frame time without them (RenderOptions::shadows)
     return options;
   }();  ///< size (even), overlays; contact-force arrows on by default
   sim::CameraSpec camera;  ///< grasp camera by default

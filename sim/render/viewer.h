@@ -33,6 +33,7 @@ struct ViewerOptions {
     sim::RenderOptions options;
     options.contact_forces = true;
     options.force_arrow_m_per_n = kVideoForceArrowMPerN;
+    options.shadows = false;  // a third of the frame time without them (RenderOptions::shadows)
     return options;
   }();
   sim::CameraSpec camera;  ///< camera at the start
