@@ -63,6 +63,17 @@ double ParseNumber(const std::string& field, const std::string& whole, const cha
   return value;
 }
 
+// A decoration from point a to point b (an arrow or a bar) in the scene, which must have room.
+void AddConnector(mjvScene& scene, int type, double width_m, const double a[3], const double b[3],
+                  const float rgba[4]) {
+  mjvGeom* geom = scene.geoms + scene.ngeom;
+  mjv_initGeom(geom, type, nullptr, nullptr, nullptr, rgba);
+  mjv_makeConnector(geom, type, width_m, a[0], a[1], a[2], b[0], b[1], b[2]);
+  geom->category = mjCAT_DECOR;
+  geom->emission = kUnitEmission;
+  ++scene.ngeom;
+}
+
 void SetRgba(float rgba[4], const std::array<float, 4>& color) {
   for (int k = 0; k < 4; ++k) rgba[k] = color[k];
 }
@@ -464,12 +475,7 @@ void Renderer::AddUnitMarks(const Simulation& simulation, const sensor::TactileS
         a[k] = c[k] + kShearArrowLiftM * normal[k] + start * beam[k];
         b[k] = c[k] + kShearArrowLiftM * normal[k] + end * beam[k];
       }
-      mjvGeom* arrow = s.scene.geoms + s.scene.ngeom;
-      mjv_initGeom(arrow, mjGEOM_ARROW, nullptr, nullptr, nullptr, kShearArrowRgba);
-      mjv_makeConnector(arrow, mjGEOM_ARROW, kShearArrowWidthM, a[0], a[1], a[2], b[0], b[1], b[2]);
-      arrow->category = mjCAT_DECOR;
-      arrow->emission = kUnitEmission;
-      ++s.scene.ngeom;
+      AddConnector(s.scene, mjGEOM_ARROW, kShearArrowWidthM, a, b, kShearArrowRgba);
       continue;
     }
     if (state.validity[i] == sensor::UnitValidity::kOutOfRange) continue;  // magenta says enough
@@ -482,12 +488,7 @@ void Renderer::AddUnitMarks(const Simulation& simulation, const sensor::TactileS
         a[k] = c[k] + 2.0 * kPatchLiftM * normal[k] - half_diagonal;
         b[k] = c[k] + 2.0 * kPatchLiftM * normal[k] + half_diagonal;
       }
-      mjvGeom* bar = s.scene.geoms + s.scene.ngeom;
-      mjv_initGeom(bar, mjGEOM_CAPSULE, nullptr, nullptr, nullptr, kInvalidCrossRgba);
-      mjv_makeConnector(bar, mjGEOM_CAPSULE, kInvalidCrossWidthM, a[0], a[1], a[2], b[0], b[1], b[2]);
-      bar->category = mjCAT_DECOR;
-      bar->emission = kUnitEmission;
-      ++s.scene.ngeom;
+      AddConnector(s.scene, mjGEOM_CAPSULE, kInvalidCrossWidthM, a, b, kInvalidCrossRgba);
     }
   }
 }

@@ -38,14 +38,8 @@ struct Recorder {
     sim::SimRig& rig = frame.rig;
     if (!renderer) renderer = std::make_unique<sim::Renderer>(gl, rig.simulation(), options.render);
     const controller::ControllerTelemetry telemetry = rig.controller().telemetry();
-    sim::PanelInfo panel;
-    panel.title = title;
-    panel.time_s = frame.time_s;
-    panel.telemetry = &telemetry;
-    panel.state = &rig.loop().state();
-    panel.last_action = LastActionText(config, frame.player, frame.time_s);
-    const image::RgbImage& picture =
-        renderer->Render(rig.simulation(), &rig.loop().state(), options.camera, sim::PanelText(panel));
+    const image::RgbImage& picture = renderer->Render(rig.simulation(), &rig.loop().state(), options.camera,
+                                                      sim::PanelText(LivePanel(config, title, frame, telemetry)));
     cost->render_ms += MsSince(start);
     const auto encode_start = std::chrono::steady_clock::now();
     writer.Write(picture);
@@ -125,6 +119,17 @@ std::string LastActionText(const scenario::ScenarioConfig& config, const scenari
   std::snprintf(text, sizeof(text), "%s at %.3f s (line %d)", scenario::ActionName(config.script[last].kind),
                 timings[last].fired_s, config.script[last].line);
   return text;
+}
+
+sim::PanelInfo LivePanel(const scenario::ScenarioConfig& config, const std::string& title,
+                         const scenario::FrameContext& frame, const controller::ControllerTelemetry& telemetry) {
+  sim::PanelInfo panel;
+  panel.title = title;
+  panel.time_s = frame.time_s;
+  panel.telemetry = &telemetry;
+  panel.state = &frame.rig.loop().state();
+  panel.last_action = LastActionText(config, frame.player, frame.time_s);
+  return panel;
 }
 
 std::shared_ptr<const VideoCost> AttachVideo(const scenario::ScenarioConfig& config, const VideoOptions& options,

@@ -57,6 +57,11 @@ int VideoFrameCount(double duration_s, double fps);
 std::string LastActionText(const scenario::ScenarioConfig& config, const scenario::ScriptPlayer& player,
                            double time_s);
 
+/// The panel of a frame of a live run (videos, the viewer): `title`, time, the controller's
+/// `telemetry` (kept by the caller while the panel is used), the rig's estimate, the last script action.
+sim::PanelInfo LivePanel(const scenario::ScenarioConfig& config, const std::string& title,
+                         const scenario::FrameContext& frame, const controller::ControllerTelemetry& telemetry);
+
 /// Time spent on a video, filled in as it is made.
 struct VideoCost {
   int frames = 0;

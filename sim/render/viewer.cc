@@ -257,13 +257,7 @@ ViewerResult ViewLive(const scenario::ScenarioConfig& config, const ViewerOption
       const bool last_tick = frame.time_s >= config.duration_s - 1.0 / config.controller.rate_hz;
       const auto display = [&] {
         const controller::ControllerTelemetry telemetry = rig.controller().telemetry();
-        sim::PanelInfo panel;
-        panel.title = title;
-        panel.time_s = frame.time_s;
-        panel.telemetry = &telemetry;
-        panel.state = &rig.loop().state();
-        panel.last_action = LastActionText(config, frame.player, frame.time_s);
-        core.Display(rig.simulation(), &rig.loop().state(), panel);
+        core.Display(rig.simulation(), &rig.loop().state(), LivePanel(config, title, frame, telemetry));
         last_display = Clock::now();
       };
       while (true) {
