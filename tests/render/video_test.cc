@@ -78,6 +78,30 @@ TEST(VideoCliTest, DefaultScenarioVideoHasTheFrameCountAndSizeAskedFor) {
   }
 }
 
+TEST(VideoCliTest, SuiteAndSweepWriteOneVideoPerRun) {
+  TempDir dir("video_suite");
+  fs::create_directories(dir.Path("suite"));
+  for (const char* name : {"default.yaml", "wide_box.yaml"}) {
+    fs::copy_file(SourcePath(std::string("scenarios/") + name), dir.Path(std::string("suite/") + name));
+  }
+  const std::string video = " --video --video-fps 10 --video-size 160x120";
+  // 1 s of each at 10 fps: frames at 0, 0.1, ..., 1 s (the lift starts at 0.8 s).
+  const CliResult suite =
+      RunCli("suite " + dir.Path("suite") + " -j 2 --no-plots --set duration_s=1 --out " + dir.Path("out") + video);
+  EXPECT_NE(suite.exit_code, kExitBadInput) << suite.out << suite.err;
+  for (const char* name : {"default", "wide_box"}) {
+    EXPECT_EQ(Probe(dir.Path("out/") + name + "/video.mp4"), "160,120,11") << name;
+    EXPECT_TRUE(fs::exists(dir.Path("out/") + name + "/video_strip.png")) << name;
+  }
+  std::ofstream(dir.Path("grid.yaml")) << "scenario: " << SourcePath("scenarios/default.yaml")
+                                        << "\nset: {duration_s: 1}\nparameters:\n  object.mass_kg: [0.1, 0.2]\n";
+  const CliResult sweep = RunCli("sweep " + dir.Path("grid.yaml") + " --out " + dir.Path("sweep") + video);
+  ASSERT_EQ(sweep.exit_code, kExitOk) << sweep.out << sweep.err;
+  for (const char* run : {"run_0", "run_1"}) {
+    EXPECT_EQ(Probe(dir.Path("sweep/videos/") + run + "/video.mp4"), "160,120,11") << run;
+  }
+}
+
 TEST(VideoCliTest, RefusesBadVideoOptionsBeforeRunning) {
   TempDir dir("video_cli_bad");
   const std::string run = "run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + dir.Path("run") + " --video";
