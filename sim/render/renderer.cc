@@ -184,9 +184,14 @@ std::string PanelText(const PanelInfo& info) {
   if (info.telemetry != nullptr) {
     const controller::ControllerTelemetry& t = *info.telemetry;
     const bool stale = info.state != nullptr && info.state->stale;
-    std::string flags = std::string(t.slip_detected ? "SLIP " : "") + (t.safe_hold ? "SAFE-HOLD " : "") +
-                        (stale ? "STALE " : "");
-    if (flags.empty()) flags = "- ";
+    std::string flags;
+    if (t.slip_detected) {
+      flags.append("SLIP ");
+      if (t.slip_cues != nullptr && t.slip_cues[0] != '\0') flags.append("(").append(t.slip_cues).append(") ");
+    }
+    if (t.safe_hold) flags.append("SAFE-HOLD ");
+    if (stale) flags.append("STALE ");
+    if (flags.empty()) flags.append("- ");
     flags.pop_back();
     std::snprintf(line, sizeof(line), "friction est.\t%.2f\n", t.friction_estimate);
     text += line;

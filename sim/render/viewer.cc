@@ -344,6 +344,12 @@ ViewerResult ViewReplay(const std::string& run_dir, const ViewerOptions& options
     c_ft[u] = signals.Column("ft_est_n_" + std::to_string(u));
     c_validity[u] = signals.Column("validity_" + std::to_string(u));
   }
+  // Runs from before the controllers named their cues have no slip_cues column.
+  const auto has_column = [&](const std::string& name) {
+    return std::find(signals.header.begin(), signals.header.end(), name) != signals.header.end();
+  };
+  constexpr size_t kNoColumn = static_cast<size_t>(-1);
+  const size_t c_cues = has_column("slip_cues") ? signals.Column("slip_cues") : kNoColumn;
   std::vector<double> signal_times(signals.rows.size());
   for (size_t r = 0; r < signals.rows.size(); ++r) signal_times[r] = signals.Number(r, c_time);
 
@@ -379,6 +385,7 @@ ViewerResult ViewReplay(const std::string& run_dir, const ViewerOptions& options
   state.unit_count = units;
   controller::ControllerTelemetry telemetry;
   std::string phase;
+  std::string slip_cues;
   auto last_frame = Clock::now();
   while (!core.Done()) {
     core.Poll();
@@ -425,6 +432,8 @@ ViewerResult ViewReplay(const std::string& run_dir, const ViewerOptions& options
     state.stale = signals.Number(s, c_stale) != 0.0;
     phase = signals.rows[s][c_phase];
     telemetry.phase = phase.c_str();
+    slip_cues = c_cues != kNoColumn ? signals.rows[s][c_cues] : "";
+    telemetry.slip_cues = slip_cues.c_str();
     telemetry.grip_target_n = signals.Number(s, c_target);
     telemetry.friction_estimate = signals.Number(s, c_friction);
     telemetry.slip_detected = signals.Number(s, c_slip) != 0.0;

@@ -277,6 +277,7 @@ TEST(PanelTextTest, SaysTimePhaseGripFrictionFlagsAndTheLastAction) {
   telemetry.grip_target_n = 2.5;
   telemetry.friction_estimate = 0.42;
   telemetry.slip_detected = true;
+  telemetry.slip_cues = "ratio";
   sensor::TactileState state;
   state.total_fn_n = 3.25;
   state.contact_count = 4;
@@ -289,7 +290,7 @@ TEST(PanelTextTest, SaysTimePhaseGripFrictionFlagsAndTheLastAction) {
   panel.last_action = "lift at 0.800 s (line 17)";
   EXPECT_EQ(PanelText(panel),
             "default (grip_slip)\t\ntime\t1.234 s\nphase\tholding\ngrip target\t2.50 N\n"
-            "measured grip\t3.25 N on 4 units (19 valid)\nfriction est.\t0.42\nslip flags\tSLIP\n"
+            "measured grip\t3.25 N on 4 units (19 valid)\nfriction est.\t0.42\nslip flags\tSLIP (ratio)\n"
             "last action\tlift at 0.800 s (line 17)");
   telemetry.slip_detected = false;
   panel.last_action = "";
