@@ -159,6 +159,18 @@ TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
   EXPECT_EQ(a, b);
 }
 
+TEST(VideoCliTest, WithoutFfmpegSaysSoBeforeSimulating) {
+  TempDir dir("video_no_ffmpeg");
+  const CliResult result = testing::RunCliUnder(
+      "env PATH=/nonexistent ", "run " + SourcePath("scenarios/default.yaml") + " --out " + dir.Path("run") + " --video");
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_NE(result.err.find("video: the ffmpeg program ('ffmpeg') is not installed or not on PATH (on Debian: "
+                            "apt-get install ffmpeg)"),
+            std::string::npos)
+      << result.err;
+  EXPECT_FALSE(fs::exists(dir.Path("run/signals.csv")));
+}
+
 TEST(VideoWriterTest, MissingEncoderAndOddSizesAreRefusedWithAMessage) {
   TempDir dir("video_writer");
   image::VideoWriter::Options options;
