@@ -13,6 +13,7 @@
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
 #include "controller/plugin_loader.h"
+#include "sim/render/video.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
 #include "sim/scenario/suite.h"
@@ -27,6 +28,46 @@ namespace fs = std::filesystem;
 constexpr int kExitInterrupted = 130;
 
 bool StderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+/// --video and its settings, shared by run, suite and sweep.
+struct VideoCommandOptions {
+  bool enabled = false;
+  double fps = render::kDefaultVideoFps;
+  std::string size = "640x480";
+  std::string camera;
+  bool shadows = false;
+
+  void Add(CLI::App* command, const std::string& where) {
+    command->add_flag("--video", enabled, "render the run offscreen to " + where +
+                                              " (MP4 by ffmpeg, H.264) and a PNG strip of 6 frames beside it");
+    command->add_option("--video-fps", fps, "video frames per simulated second")->capture_default_str();
+    command->add_option("--video-size", size, "video WIDTHxHEIGHT [px], even")->capture_default_str();
+    command->add_option("--video-camera", camera, "grasp (default), fingertip, or a camera of the model");
+    command->add_flag("--video-shadows", shadows, "draw shadows (about 3x the rendering time on a software renderer)");
+  }
+
+  /// Checked before any run starts (exit 2 on a bad value).
+  render::VideoOptions Resolve() const {
+    render::VideoOptions video;
+    video.fps = fps;
+    render::ParseVideoSize(size, video.render);
+    video.camera = sim::CameraByName(camera);
+    video.render.shadows = shadows;
+    video.Validate();
+    return video;
+  }
+
+  /// For suites and sweeps: each run gets its video in `dir`/<run name>/ ("" = the run's own out_dir).
+  scenario::PrepareRun Preparer(const std::string& dir) const {
+    if (!enabled) return {};
+    const render::VideoOptions video = Resolve();
+    return [video, dir](const scenario::ScenarioConfig& config, const std::string& name, scenario::RunOptions& run) {
+      const std::string out = dir.empty() ? run.out_dir : dir + "/" + name;
+      fs::create_directories(out);
+      render::AttachVideo(config, video, out + "/video.mp4", out + "/video_strip.png", run);
+    };
+  }
+};
 
 /// Throws CLI::RuntimeError(code) for a non-zero exit, which main() returns silently.
 void ExitWith(int code) {
@@ -43,6 +84,7 @@ struct RunCommandOptions {
   std::vector<std::string> sets;
   bool json = false;
   bool no_plots = false;
+  VideoCommandOptions video;
 };
 
 void RunCommand(const RunCommandOptions& options) {
@@ -65,9 +107,21 @@ void RunCommand(const RunCommandOptions& options) {
       std::fflush(stderr);
     };
   }
+  std::shared_ptr<const render::VideoCost> video_cost;
+  if (options.video.enabled) {
+    const render::VideoOptions video = options.video.Resolve();
+    std::error_code error;
+    fs::create_directories(run.out_dir, error);  // the encoder writes there from the first frame
+    video_cost = render::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
+  }
   StopSignalGuard guard;
   const scenario::RunResult result = scenario::RunScenario(config, run);
   if (terminal) std::fprintf(stderr, "\r\033[K");
+  if (video_cost && video_cost->frames > 0) {
+    std::fprintf(stderr, "graspbed run: video %s/video.mp4, %d frames, rendering %.1f ms/frame, encoding %.1f ms/frame\n",
+                 run.out_dir.c_str(), video_cost->frames, video_cost->render_ms / video_cost->frames,
+                 video_cost->encode_ms / video_cost->frames);
+  }
 
   if (options.json) {
     std::cout << scenario::SummaryJson(result).dump(2) << '\n';
@@ -75,7 +129,7 @@ void RunCommand(const RunCommandOptions& options) {
     std::cout << scenario::SummaryTable(result);
     std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
               << (options.no_plots ? "" : ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, taxels_fn.png, taxels_ft.png")
-              << ")\n";
+              << ", states.csv" << (options.video.enabled ? ", video.mp4, video_strip.png" : "") << ")\n";
   }
   if (!result.completed) {
     std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in " << run.out_dir
@@ -106,6 +160,7 @@ void AddRunCommand(CLI::App& root) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->add_flag("--json", options->json, "print the summary JSON on stdout instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  options->video.Add(command, "OUT/video.mp4");
   command->callback([options] { RunCommand(*options); });
 }
 
@@ -119,6 +174,7 @@ struct SuiteCommandOptions {
   std::vector<std::string> sets;
   bool json = false;
   bool no_plots = false;
+  VideoCommandOptions video;
 };
 
 void SuiteCommand(const SuiteCommandOptions& options) {
@@ -135,6 +191,7 @@ void SuiteCommand(const SuiteCommandOptions& options) {
   suite.out_dir = options.out_dir;
   suite.write_plots = !options.no_plots;
   suite.stop = &StopRequested();
+  suite.prepare_run = options.video.Preparer("");
   const bool terminal = StderrIsTerminal();
   suite.on_finished = [terminal](int done, int total, const scenario::SuiteRun& run) {
     if (!terminal) return;
@@ -169,6 +226,7 @@ void AddSuiteCommand(CLI::App& root) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->add_flag("--json", options->json, "print the combined JSON instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  options->video.Add(command, "each scenario's OUT/<name>/video.mp4");
   command->callback([options] { SuiteCommand(*options); });
 }
 
@@ -180,6 +238,7 @@ struct SweepCommandOptions {
   std::string out_dir = "out/sweep";
   int jobs = 1;
   std::string controller;
+  VideoCommandOptions video;
 };
 
 void SweepCommand(const SweepCommandOptions& options) {
@@ -195,6 +254,7 @@ void SweepCommand(const SweepCommandOptions& options) {
   sweep.jobs = options.jobs;
   sweep.out_dir = options.out_dir;
   sweep.stop = &StopRequested();
+  sweep.prepare_run = options.video.Preparer(options.out_dir + "/videos");
   const bool terminal = StderrIsTerminal();
   sweep.on_finished = [terminal](int done, int total) {
     if (!terminal) return;
@@ -225,6 +285,7 @@ void AddSweepCommand(CLI::App& root) {
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
   command->add_option("--controller", options->controller,
                       "controller for every run instead of the scenario's: a built-in name or plugin:LIBRARY");
+  options->video.Add(command, "OUT/videos/run_<index>/video.mp4");
   command->callback([options] { SweepCommand(*options); });
 
   auto dirs = std::make_shared<std::vector<std::string>>();

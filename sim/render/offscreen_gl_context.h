@@ -13,19 +13,27 @@
 
 namespace graspbed::sim {
 
+/// An OpenGL context the renderer draws with: offscreen (OffscreenGlContext) or a window's (the viewer).
+class GlContext {
+ public:
+  virtual ~GlContext() = default;
+  /// Makes the context current on the calling thread. Throws std::runtime_error on failure.
+  virtual void MakeCurrent() = 0;
+};
+
 /// Owns an EGL display and an OpenGL (desktop, compatibility) context. Not copyable, not movable.
 /// Use it from one thread at a time.
-class OffscreenGlContext {
+class OffscreenGlContext : public GlContext {
  public:
   /// Creates the context and makes it current on this thread. Throws std::runtime_error saying what
   /// was tried and which package provides it when no EGL platform gives an OpenGL context.
   OffscreenGlContext();
-  ~OffscreenGlContext();
+  ~OffscreenGlContext() override;
   OffscreenGlContext(const OffscreenGlContext&) = delete;
   OffscreenGlContext& operator=(const OffscreenGlContext&) = delete;
 
   /// Makes the context current on the calling thread. Throws std::runtime_error on failure.
-  void MakeCurrent();
+  void MakeCurrent() override;
   /// What was opened, e.g. "EGL 1.5 (Mesa Project, surfaceless), OpenGL 4.5 (compatibility) llvmpipe".
   const std::string& description() const { return description_; }
 

@@ -30,6 +30,19 @@ constexpr double kFingertipSideAngleDeg = 30.0;
 constexpr double kFingertipElevationDeg = -20.0;
 constexpr double kFingertipDistanceM = 0.05;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+// Shear arrows: smaller estimates are noise at rest and would clutter every frame [N]; width [m]; lift
+// above the holder surface so they clear the mesas [m].
+constexpr double kMinShearArrowN = 0.05;
+constexpr double kShearArrowWidthM = 0.35e-3;
+constexpr double kShearArrowLiftM = 0.7e-3;
+constexpr float kShearArrowRgba[4] = {0.1f, 0.45f, 1.0f, 1.0f};
+// Unusable units: a yellow cross over the (black) footprint, bar width [m].
+constexpr float kInvalidCrossRgba[4] = {1.0f, 0.85f, 0.0f, 1.0f};
+constexpr double kInvalidCrossWidthM = 0.25e-3;
+// Legend: colour bar steps, size and margin [px].
+constexpr int kLegendSteps = 24;
+constexpr int kLegendBarWidthPx = 16;
+constexpr int kLegendMarginPx = 8;
 
 struct ModelDeleter {
   void operator()(mjModel* model) const { mj_deleteModel(model); }
@@ -50,6 +63,17 @@ double ParseNumber(const std::string& field, const std::string& whole, const cha
   return value;
 }
 
+// A decoration from point a to point b (an arrow or a bar) in the scene, which must have room.
+void AddConnector(mjvScene& scene, int type, double width_m, const double a[3], const double b[3],
+                  const float rgba[4]) {
+  mjvGeom* geom = scene.geoms + scene.ngeom;
+  mjv_initGeom(geom, type, nullptr, nullptr, nullptr, rgba);
+  mjv_makeConnector(geom, type, width_m, a[0], a[1], a[2], b[0], b[1], b[2]);
+  geom->category = mjCAT_DECOR;
+  geom->emission = kUnitEmission;
+  ++scene.ngeom;
+}
+
 void SetRgba(float rgba[4], const std::array<float, 4>& color) {
   for (int k = 0; k < 4; ++k) rgba[k] = color[k];
 }
@@ -62,6 +86,7 @@ struct Renderer::Scene {
   mjvOption option;
   mjrContext context;
   mjvGLCamera camera;  // of the last picture (both eyes averaged)
+  mjvCamera free_camera;  // the last orbit camera used (built-in cameras are orbit cameras)
 };
 
 FreeView ParseFreeView(const std::string& text) {
@@ -113,6 +138,12 @@ void RenderOptions::Validate() const {
   if (!(object_alpha >= 0.0 && object_alpha <= 1.0)) {
     throw std::invalid_argument("object_alpha = " + std::to_string(object_alpha) + ": must be in [0, 1]");
   }
+  if (multisamples < 0 || multisamples > 16) {
+    throw std::invalid_argument("multisamples = " + std::to_string(multisamples) + ": must be in 0..16");
+  }
+  if (!(shear_arrow_m_per_n > 0.0) || !std::isfinite(shear_arrow_m_per_n)) {
+    throw std::invalid_argument("shear_arrow_m_per_n = " + std::to_string(shear_arrow_m_per_n) + ": must be > 0");
+  }
   if (!(rated_force_n > 0.0) || !std::isfinite(rated_force_n)) {
     throw std::invalid_argument("rated_force_n = " + std::to_string(rated_force_n) + ": must be > 0");
   }
@@ -134,7 +165,45 @@ std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, doubl
   }
 }
 
-Renderer::Renderer(OffscreenGlContext& gl, const Simulation& simulation, const RenderOptions& options)
+std::string PanelText(const PanelInfo& info) {
+  char line[160];
+  std::string text;
+  if (!info.title.empty()) text += info.title + "\t\n";
+  std::snprintf(line, sizeof(line), "time\t%.3f s\n", info.time_s);
+  text += line;
+  if (info.telemetry != nullptr) {
+    const controller::ControllerTelemetry& t = *info.telemetry;
+    std::snprintf(line, sizeof(line), "phase\t%s\ngrip target\t%.2f N\n", t.phase, t.grip_target_n);
+    text += line;
+  }
+  if (info.state != nullptr) {
+    std::snprintf(line, sizeof(line), "measured grip\t%.2f N on %d units (%d valid)\n", info.state->total_fn_n,
+                  info.state->contact_count, info.state->valid_count);
+    text += line;
+  }
+  if (info.telemetry != nullptr) {
+    const controller::ControllerTelemetry& t = *info.telemetry;
+    const bool stale = info.state != nullptr && info.state->stale;
+    std::string flags;
+    if (t.slip_detected) {
+      flags.append("SLIP ");
+      if (t.slip_cues != nullptr && t.slip_cues[0] != '\0') flags.append("(").append(t.slip_cues).append(") ");
+    }
+    if (t.safe_hold) flags.append("SAFE-HOLD ");
+    if (stale) flags.append("STALE ");
+    if (flags.empty()) flags.append("- ");
+    flags.pop_back();
+    std::snprintf(line, sizeof(line), "friction est.\t%.2f\n", t.friction_estimate);
+    text += line;
+    text += "slip flags\t" + flags + "\n";
+  }
+  if (info.last_action) text += "last action\t" + (info.last_action->empty() ? std::string("-") : *info.last_action) + "\n";
+  text += info.extra;
+  while (!text.empty() && text.back() == '\n') text.pop_back();
+  return text;
+}
+
+Renderer::Renderer(GlContext& gl, const Simulation& simulation, const RenderOptions& options)
     : gl_(gl), options_((options.Validate(), options)), scene_(std::make_unique<Scene>()) {
   const mjModel* source = simulation.model();
   const sensor::Layout& layout = simulation.layout();
@@ -160,10 +229,12 @@ Renderer::Renderer(OffscreenGlContext& gl, const Simulation& simulation, const R
   mjModel* m = s.model.get();
   m->vis.global.offwidth = options_.width_px;
   m->vis.global.offheight = options_.height_px;
+  m->vis.quality.offsamples = options_.multisamples;
   // Arrow length = force * map.force / meanmass; width = forcewidth * meansize.
   m->vis.map.force = static_cast<float>(options_.force_arrow_m_per_n * m->stat.meanmass);
   m->vis.scale.forcewidth = static_cast<float>(0.6e-3 / m->stat.meansize);
 
+  mjv_defaultCamera(&s.free_camera);
   mjv_defaultScene(&s.scene);
   mjv_defaultOption(&s.option);
   mjr_defaultContext(&s.context);
@@ -217,6 +288,52 @@ std::array<double, 3> Renderer::UnitCenter(const Simulation& simulation, int uni
 
 const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::TactileState* state,
                                         const CameraSpec& camera, const std::string& label) {
+  const std::array<int, 4> pixels = {0, 0, options_.width_px, options_.height_px};
+  Draw(simulation, state, camera, label, pixels, /*window=*/false);
+  ReadPixels(pixels);
+  return image_;
+}
+
+void Renderer::RenderToWindow(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
+                              const std::string& label, int width_px, int height_px) {
+  Draw(simulation, state, camera, label, {0, 0, width_px, height_px}, /*window=*/true);
+}
+
+FreeView Renderer::LastView() const {
+  const mjvCamera& cam = scene_->free_camera;
+  FreeView view;
+  view.azimuth_deg = cam.azimuth;
+  view.elevation_deg = cam.elevation;
+  view.distance_m = cam.distance;
+  for (int k = 0; k < 3; ++k) view.lookat_m[k] = cam.lookat[k];
+  return view;
+}
+
+void Renderer::MoveCamera(CameraMove move, double dx, double dy, FreeView& view) const {
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  cam.type = mjCAMERA_FREE;
+  cam.azimuth = view.azimuth_deg;
+  cam.elevation = view.elevation_deg;
+  cam.distance = view.distance_m;
+  for (int k = 0; k < 3; ++k) cam.lookat[k] = view.lookat_m[k];
+  int action = mjMOUSE_ZOOM;
+  switch (move) {
+    case CameraMove::kRotateVertical: action = mjMOUSE_ROTATE_V; break;
+    case CameraMove::kRotateHorizontal: action = mjMOUSE_ROTATE_H; break;
+    case CameraMove::kMoveVertical: action = mjMOUSE_MOVE_V; break;
+    case CameraMove::kMoveHorizontal: action = mjMOUSE_MOVE_H; break;
+    case CameraMove::kZoom: action = mjMOUSE_ZOOM; break;
+  }
+  mjv_moveCamera(scene_->model.get(), action, dx, dy, &scene_->scene, &cam);
+  view.azimuth_deg = cam.azimuth;
+  view.elevation_deg = cam.elevation;
+  view.distance_m = cam.distance;
+  for (int k = 0; k < 3; ++k) view.lookat_m[k] = cam.lookat[k];
+}
+
+void Renderer::Draw(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
+                    const std::string& label, const std::array<int, 4>& pixels, bool window) {
   Scene& s = *scene_;
   mjModel* m = s.model.get();
   mjData* d = simulation.mutable_data();
@@ -285,6 +402,7 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
     }
   }
 
+  if (cam.type == mjCAMERA_FREE) s.free_camera = cam;
   mjv_updateScene(m, d, &s.option, nullptr, &cam, mjCAT_ALL, &s.scene);
 
   // Units coloured by their estimate; the object made see-through (or left out).
@@ -330,10 +448,59 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
     patch->specular = 0.0f;
     ++s.scene.ngeom;
   }
+  if (state != nullptr) AddUnitMarks(simulation, *state);
 
-  const mjrRect viewport = {0, 0, options_.width_px, options_.height_px};
-  mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
+  const mjrRect viewport = {pixels[0], pixels[1], pixels[2], pixels[3]};
+  mjr_setBuffer(window ? mjFB_WINDOW : mjFB_OFFSCREEN, &s.context);
+  s.scene.flags[mjRND_SHADOW] = options_.shadows ? 1 : 0;
   mjr_render(viewport, &s.scene, &s.context);
+  DrawOverlays(pixels, state != nullptr, label);
+}
+
+void Renderer::AddUnitMarks(const Simulation& simulation, const sensor::TactileState& state) {
+  Scene& s = *scene_;
+  const mjData* d = simulation.data();
+  const int units = std::min(static_cast<int>(unit_geoms_.size()), state.unit_count);
+  for (int i = 0; i < units; ++i) {
+    const std::array<double, 3> c = UnitCenter(simulation, i);
+    const mjtNum* frame = d->geom_xmat + 9 * unit_geoms_[i];  // columns: beam, cross, outward normal
+    const double beam[3] = {frame[0], frame[3], frame[6]};
+    const double cross[3] = {frame[1], frame[4], frame[7]};
+    const double normal[3] = {frame[2], frame[5], frame[8]};
+    if (state.validity[i] == sensor::UnitValidity::kValid) {
+      const double ft = state.ft_n[i];
+      if (!options_.shear_arrows || !std::isfinite(ft) || std::abs(ft) < kMinShearArrowN) continue;
+      if (s.scene.ngeom >= s.scene.maxgeom) return;
+      // From the footprint's edge outwards, so the unit's colour stays visible under its arrow.
+      const double sign = ft > 0.0 ? 1.0 : -1.0;
+      const double start = sign * 0.5 * unit_footprint_m_[0];
+      const double end = start + ft * options_.shear_arrow_m_per_n;
+      double a[3], b[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = c[k] + kShearArrowLiftM * normal[k] + start * beam[k];
+        b[k] = c[k] + kShearArrowLiftM * normal[k] + end * beam[k];
+      }
+      AddConnector(s.scene, mjGEOM_ARROW, kShearArrowWidthM, a, b, kShearArrowRgba);
+      continue;
+    }
+    if (state.validity[i] == sensor::UnitValidity::kOutOfRange) continue;  // magenta says enough
+    // Unusable: a cross corner to corner over the footprint.
+    for (const double across : {1.0, -1.0}) {
+      if (s.scene.ngeom >= s.scene.maxgeom) return;
+      double a[3], b[3];
+      for (int k = 0; k < 3; ++k) {
+        const double half_diagonal = 0.5 * unit_footprint_m_[0] * beam[k] + across * 0.5 * unit_footprint_m_[1] * cross[k];
+        a[k] = c[k] + 2.0 * kPatchLiftM * normal[k] - half_diagonal;
+        b[k] = c[k] + 2.0 * kPatchLiftM * normal[k] + half_diagonal;
+      }
+      AddConnector(s.scene, mjGEOM_CAPSULE, kInvalidCrossWidthM, a, b, kInvalidCrossRgba);
+    }
+  }
+}
+
+void Renderer::DrawOverlays(const std::array<int, 4>& pixels, bool units_coloured, const std::string& label) {
+  const mjrRect viewport = {pixels[0], pixels[1], pixels[2], pixels[3]};
+  Scene& s = *scene_;
   if (!label.empty()) {
     std::string names;
     std::string values;
@@ -349,6 +516,65 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
     }
     mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, viewport, names.c_str(), values.c_str(), &s.context);
   }
+  if (options_.legend && units_coloured) DrawLegend(pixels);
+}
+
+void Renderer::DrawLegend(const std::array<int, 4>& pixels) {
+  const mjrRect viewport = {pixels[0], pixels[1], pixels[2], pixels[3]};
+  Scene& s = *scene_;
+  // Bottom right: a vertical bar grey (0 N) to red (rated), on the colour map's square-root scale,
+  // ticks at 0, a quarter and the full rated force; swatches for saturated and unusable units.
+  const int line_px = s.context.charHeight + 4;
+  const int bar_height_px = std::clamp(viewport.height / 3, 3 * line_px, 12 * line_px);
+  const int label_width_px = 7 * s.context.charWidth[static_cast<unsigned char>('0')] + 4;
+  const int panel_width_px = kLegendBarWidthPx + label_width_px + 3 * kLegendMarginPx;
+  const int panel_height_px = bar_height_px + 4 * line_px + 3 * kLegendMarginPx;
+  const int left = viewport.left + viewport.width - panel_width_px - kLegendMarginPx;
+  const int bottom = viewport.bottom + kLegendMarginPx;
+  if (left < viewport.left || bottom + panel_height_px > viewport.bottom + viewport.height) return;  // too small
+  mjr_rectangle({left, bottom, panel_width_px, panel_height_px}, 0.0f, 0.0f, 0.0f, 0.55f);
+  const int bar_left = left + kLegendMarginPx;
+  const int bar_bottom = bottom + 2 * line_px + 2 * kLegendMarginPx;
+  for (int step = 0; step < kLegendSteps; ++step) {
+    // Colour at the force whose square-root fraction is the step's middle.
+    const double fraction = (step + 0.5) / kLegendSteps;
+    const std::array<float, 4> color =
+        UnitColor(fraction * fraction * options_.rated_force_n, sensor::UnitValidity::kValid, options_.rated_force_n);
+    const int y0 = bar_bottom + step * bar_height_px / kLegendSteps;
+    const int y1 = bar_bottom + (step + 1) * bar_height_px / kLegendSteps;
+    mjr_rectangle({bar_left, y0, kLegendBarWidthPx, y1 - y0}, color[0], color[1], color[2], 1.0f);
+  }
+  // Left-aligned text at a pixel position: mjr_label centres its text in a rectangle sized to it
+  // (drawn fully transparent).
+  const auto text_at = [&](const std::string& text, int x_px, int y_px) {
+    int width_px = 2;
+    for (const char c : text) width_px += s.context.charWidth[static_cast<unsigned char>(c)];
+    mjr_label({x_px, y_px, width_px, s.context.charHeight + 2}, mjFONT_NORMAL, text.c_str(), 0.0f, 0.0f, 0.0f, 0.0f,
+              0.95f, 0.95f, 0.95f, &s.context);
+  };
+  const int label_left = bar_left + kLegendBarWidthPx + kLegendMarginPx;
+  char tick[32];
+  for (const double fraction : {0.0, 0.25, 1.0}) {
+    std::snprintf(tick, sizeof(tick), "%g N", fraction * options_.rated_force_n);
+    // Square-root scale: a quarter of the force sits half way up.
+    const int y = bar_bottom + static_cast<int>(std::sqrt(fraction) * bar_height_px) - s.context.charHeight / 2;
+    text_at(tick, label_left, std::clamp(y, bar_bottom, bar_bottom + bar_height_px - s.context.charHeight));
+  }
+  text_at("est. Fn", bar_left, bar_bottom + bar_height_px + kLegendMarginPx);
+  const std::array<float, 4> saturated = UnitColor(0.0, sensor::UnitValidity::kOutOfRange, options_.rated_force_n);
+  mjr_rectangle({bar_left, bottom + line_px + kLegendMarginPx, kLegendBarWidthPx, s.context.charHeight}, saturated[0],
+                saturated[1], saturated[2], 1.0f);
+  text_at("sat.", label_left, bottom + line_px + kLegendMarginPx);
+  mjr_rectangle({bar_left, bottom + kLegendMarginPx / 2, kLegendBarWidthPx, s.context.charHeight}, 0.05f, 0.05f, 0.05f,
+                1.0f);
+  mjr_rectangle({bar_left + kLegendBarWidthPx / 2 - 1, bottom + kLegendMarginPx / 2, 3, s.context.charHeight},
+                kInvalidCrossRgba[0], kInvalidCrossRgba[1], kInvalidCrossRgba[2], 1.0f);
+  text_at("invalid", label_left, bottom + kLegendMarginPx / 2);
+}
+
+void Renderer::ReadPixels(const std::array<int, 4>& pixels) {
+  const mjrRect viewport = {pixels[0], pixels[1], pixels[2], pixels[3]};
+  Scene& s = *scene_;
   mjr_readPixels(bottom_up_.data(), nullptr, viewport, &s.context);
   const size_t row_bytes = static_cast<size_t>(options_.width_px) * 3;
   for (int row = 0; row < options_.height_px; ++row) {
@@ -357,7 +583,6 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
   }
   s.camera = mjv_averageCamera(&s.scene.camera[0], &s.scene.camera[1]);
   rendered_ = true;
-  return image_;
 }
 
 std::optional<std::array<double, 2>> Renderer::Project(const std::array<double, 3>& point_m) const {

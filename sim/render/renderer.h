@@ -2,8 +2,10 @@
 /// Renderer: pictures of a Simulation's current state with MuJoCo's own renderer (mjv/mjr), offscreen
 /// (OffscreenGlContext: EGL, no display, no GPU needed). The sensing units are drawn coloured by their
 /// estimated normal force -- each mesa (geom unit_i) and a patch the size of the unit's footprint on the
-/// holder surface under it -- from a TactileState: grey unloaded, red at the rated force. Optional
-/// contact-force arrows, an optionally see-through object (the units face it), a text label. Sites
+/// holder surface under it -- from a TactileState: grey unloaded, red at the rated force, with a legend
+/// of that colour map. Each valid unit's estimated Ft is an arrow along its beam axis; an unusable unit
+/// is black with a yellow cross. Optional contact-force arrows, an optionally see-through object (the
+/// units face it), a text panel (PanelText() composes the one of videos and the viewer). Sites
 /// (markers for code) are not drawn.
 ///
 /// The renderer draws from its own copy of the model (visual settings only), so the simulation's
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "common/rgb_image.h"
+#include "controller/grasp_controller.h"
 #include "sensor/tactile_state.h"
 #include "sim/render/offscreen_gl_context.h"
 #include "sim/simulation.h"
@@ -31,6 +34,10 @@ struct FreeView {
   double distance_m = 0.3;      ///< camera to lookat point [m], > 0
   std::array<double, 3> lookat_m{};  ///< point at the image centre, world frame [m]
 };
+
+/// A mouse camera motion (mujoco-simulate: left drag rotates, right drag moves, wheel zooms; with
+/// shift the horizontal variants).
+enum class CameraMove { kRotateVertical, kRotateHorizontal, kMoveVertical, kMoveHorizontal, kZoom };
 
 /// Parses "azimuth,elevation,distance,lookat_x,lookat_y,lookat_z" (deg, deg, m, m, m, m). Throws
 /// std::invalid_argument quoting the text and saying what is wrong.
@@ -63,6 +70,15 @@ struct RenderOptions {
   /// Opacity of the object [0, 1]: below 1 the units it covers show through; 0 leaves it out.
   double object_alpha = 0.3;
   double rated_force_n = 10.0;  ///< estimated Fn drawn full red [N], > 0 (the paper's range)
+  /// An arrow per valid unit for its estimated Ft, along its beam axis, from the edge of its footprint
+  /// the way the shear points [-].
+  bool shear_arrows = true;
+  double shear_arrow_m_per_n = 4e-3;  ///< shear arrow length per newton [m/N], > 0
+  bool legend = true;  ///< colour scale of the units (bottom right) when a TactileState is drawn; left out below ~200 px height
+  /// MuJoCo's shadows. On llvmpipe (no GPU) they are most of a frame's cost (a 4096 px shadow map per
+  /// light): about 115 against 36 ms per 640 x 480 frame here; videos and the viewer leave them out.
+  bool shadows = true;
+  int multisamples = 4;  ///< anti-aliasing samples of the offscreen buffer (MuJoCo's default 4), 0..16
   /// Throws std::invalid_argument naming the field and value.
   void Validate() const;
 };
@@ -72,13 +88,30 @@ struct RenderOptions {
 /// short, implausible, not tared).
 std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, double rated_force_n);
 
+/// What the text panel of a video frame or the viewer says (PanelText()).
+struct PanelInfo {
+  std::string title;  ///< first line, e.g. "default (grip_slip)"
+  double time_s = 0.0;  ///< simulated time [s]
+  const controller::ControllerTelemetry* telemetry = nullptr;  ///< phase, grip target, friction, slip; may be null
+  const sensor::TactileState* state = nullptr;  ///< measured grip (sum of valid Fn), units in contact; may be null
+  /// The script action that last fired, e.g. "lift at 1.000 s" ("" none yet: shown as "-"; nullopt:
+  /// no such line).
+  std::optional<std::string> last_action;
+  std::string extra;        ///< more "name\tvalue" lines appended (e.g. the viewer's speed)
+};
+
+/// The panel as Render()'s `label`: "name\tvalue" lines for time, controller phase, grip target,
+/// measured grip (estimated total Fn and units in contact), friction estimate, slip flags (the
+/// controller's slip flag, safe hold, stale data) and the last script action.
+std::string PanelText(const PanelInfo& info);
+
 /// Renders one simulation's scene. Owns its model copy, mjvScene and mjrContext; not copyable, not
 /// movable. Use it on the thread that owns `gl`, which must outlive it.
 class Renderer {
  public:
   /// Throws std::invalid_argument for bad options, std::runtime_error when MuJoCo cannot set up its
   /// GL resources (e.g. a size beyond the GL implementation's limit).
-  Renderer(OffscreenGlContext& gl, const Simulation& simulation, const RenderOptions& options);
+  Renderer(GlContext& gl, const Simulation& simulation, const RenderOptions& options);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -89,6 +122,18 @@ class Renderer {
   /// for a model camera the model lacks (naming those it has).
   const image::RgbImage& Render(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
                                 const std::string& label = "");
+
+  /// Renders like Render() into the window whose context `gl` is (the viewer), `width_px` x
+  /// `height_px` framebuffer pixels, without reading the pixels back.
+  void RenderToWindow(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
+                      const std::string& label, int width_px, int height_px);
+
+  /// The last orbit camera rendered with (the built-in cameras are orbit cameras; a model camera
+  /// leaves it unchanged), to start a mouse camera from.
+  FreeView LastView() const;
+  /// Moves orbit camera `view` as mujoco-simulate does for a mouse drag by (`dx`, `dy`), fractions of
+  /// the window height (mjv_moveCamera).
+  void MoveCamera(CameraMove move, double dx, double dy, FreeView& view) const;
 
   /// Pixel where world point `point_m` [m] appears in the last picture: {column, row}, from the top
   /// left, in pixels (may lie outside the picture); nullopt when it is behind the camera or no
@@ -101,7 +146,19 @@ class Renderer {
  private:
   struct Scene;  // model copy and MuJoCo's visualisation state, kept out of this header
 
-  OffscreenGlContext& gl_;
+  /// Shear arrows of valid units, crosses over unusable ones, added to the scene.
+  void AddUnitMarks(const Simulation& simulation, const sensor::TactileState& state);
+  /// The text panel and the colour legend over the rendered scene, in pixels of `viewport`
+  /// (left, bottom, width, height).
+  void DrawOverlays(const std::array<int, 4>& viewport, bool units_coloured, const std::string& label);
+  void DrawLegend(const std::array<int, 4>& viewport);
+  /// The scene and overlays into the offscreen buffer or the window, in `pixels` (left, bottom, width, height).
+  void Draw(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
+            const std::string& label, const std::array<int, 4>& pixels, bool window);
+  /// Reads the offscreen buffer into image_ (rows from the top).
+  void ReadPixels(const std::array<int, 4>& viewport);
+
+  GlContext& gl_;
   RenderOptions options_;
   double mesa_height_m_ = 0.0;
   std::array<double, 2> unit_footprint_m_{};  ///< beam length, beam width [m]

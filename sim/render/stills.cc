@@ -27,12 +27,13 @@ std::string Format(const char* format, double value) {
 }
 
 std::string Label(const scenario::ScenarioConfig& config, sim::SimRig& rig) {
-  const sensor::TactileState& state = rig.loop().state();
   const controller::ControllerTelemetry telemetry = rig.controller().telemetry();
-  return "scenario\t" + config.name + "\ntime\t" + Format("%.3f s", rig.time_s()) + "\ncontroller\t" +
-         config.controller.name + ", " + telemetry.phase + "\ngrip target\t" +
-         Format("%.2f N", telemetry.grip_target_n) + "\nestimated Fn\t" + Format("%.2f N", state.total_fn_n) +
-         " on " + std::to_string(state.contact_count) + " units";
+  sim::PanelInfo panel;
+  panel.title = config.name + " (" + config.controller.name + ")";
+  panel.time_s = rig.time_s();
+  panel.telemetry = &telemetry;
+  panel.state = &rig.loop().state();
+  return sim::PanelText(panel);
 }
 
 }  // namespace

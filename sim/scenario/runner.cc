@@ -22,6 +22,7 @@
 #include "sensor/layout.h"
 #include "sim/scenario/script_player.h"
 #include "sim/scenario/signal_log.h"
+#include "sim/scenario/state_log.h"
 #include "sim/sim_rig.h"
 
 namespace graspbed::scenario {
@@ -33,7 +34,8 @@ constexpr const char* kIncompleteMarker = "INCOMPLETE";
 // Files a run writes; removed at the start so an old result never sits next to a new run.
 constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
                                         "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png",
-                                        "taxels_fn.png",         "taxels_ft.png"};
+                                        "taxels_fn.png",         "taxels_ft.png", "states.csv",
+                                        "video.mp4",             "video_strip.png"};
 // Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
 constexpr double kTaxelScaleFloorN = 0.5;
 // Simulated time between progress callbacks [s].
@@ -456,6 +458,8 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
                                    (MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
                                    config.controller.rate_hz)) + 8;
   TruthRing truth_ring(ring_capacity, units, config.controller.rate_hz);
+  StateRecorder states(rig->simulation(), options.out_dir.empty() ? 0.0 : config.duration_s);
+  size_t next_frame = 0;
 
   double next_progress_s = 0.0;
   size_t next_instant = 0;
@@ -551,6 +555,13 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       options.progress(t, config.duration_s);
       next_progress_s = t + kProgressPeriodS;
     }
+    if (!options.out_dir.empty()) states.Record(t, simulation);
+    if (options.on_frame && options.frame_period_s > 0.0 &&
+        t >= static_cast<double>(next_frame) * options.frame_period_s - 1e-9) {
+      options.on_frame({t, static_cast<double>(next_frame) * options.frame_period_s, *rig, player});
+      // One frame per tick: a period shorter than the control period repeats no tick.
+      while (static_cast<double>(next_frame) * options.frame_period_s <= t + 1e-9) ++next_frame;
+    }
     // Same slack as the rig's control clock, so an instant on a tick is served at that tick.
     while (next_instant < options.instants_s.size() && t >= options.instants_s[next_instant] - 1e-9) {
       if (options.at_instant) options.at_instant(options.instants_s[next_instant], *rig);
@@ -585,8 +596,10 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.signal_rows_lost = log.lost_rows();
   if (options.on_signals) options.on_signals(log);
 
+  if (options.on_finished) options.on_finished(result);
   if (!options.out_dir.empty()) {
     WriteCsvAtomic(log, options.out_dir + "/signals.csv");
+    states.WriteCsv(options.out_dir + "/states.csv");
     if (options.write_plots) WritePlots(result, log, layout, options.out_dir);
     WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
     if (result.completed) fs::remove(fs::path(options.out_dir) / kIncompleteMarker);

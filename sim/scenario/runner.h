@@ -4,6 +4,7 @@
 ///   DIR/config.yaml   the fully resolved configuration (loads again to reproduce the run)
 ///   DIR/signals.csv   one row per control tick (docs/scenarios.md, "Outputs")
 ///   DIR/summary.json  metrics, every expectation with its outcome, and `passed`
+///   DIR/states.csv    the simulation state (qpos, qvel, ctrl) every 5 ms, for replays (docs/scenarios.md)
 ///   DIR/*.png         forces, estimate vs truth, grip, slip, height
 /// Every file is written to a temporary name and renamed; while a run is in progress, or after it
 /// was interrupted, DIR/INCOMPLETE exists and summary.json (if any) says "completed": false.
@@ -25,14 +26,20 @@ namespace graspbed::sim {
 class SimRig;
 }  // namespace graspbed::sim
 
-namespace graspbed::sim {
-class SimRig;
-}  // namespace graspbed::sim
-
 namespace graspbed::scenario {
 
 /// Builds a run's controller from its resolved controller section (RunOptions::make_controller).
 using ControllerFactory = std::function<std::unique_ptr<controller::GraspController>(const ControllerOptions&)>;
+struct RunResult;
+
+/// What a per-frame observer (RunOptions::on_frame) sees: the rig at a control tick, after that
+/// tick's row is logged, and the script played so far. Observers only read.
+struct FrameContext {
+  double time_s = 0.0;          ///< simulated time of the control tick [s]
+  double frame_time_s = 0.0;    ///< the frame's nominal time, index * frame_period_s [s]
+  sim::SimRig& rig;
+  const ScriptPlayer& player;
+};
 
 /// How to run and what to write.
 struct RunOptions {
@@ -62,7 +69,21 @@ struct RunOptions {
   /// Called once at the end of the run with the whole per-tick signal log (the rows of signals.csv),
   /// before the outputs are written; e.g. to hand the signals to Python without a file. May be empty.
   std::function<void(const SignalLog&)> on_signals;
+  /// Per-frame observer (videos): called at the first control tick at or after each multiple of
+  /// frame_period_s [s] (0, period, 2 period, ... up to duration_s), one call per frame. It may
+  /// allocate and do I/O; it must not change the rig, so a run gives the same results with or without
+  /// it. Empty (the default): nothing is done per step.
+  double frame_period_s = 0.0;
+  std::function<void(const FrameContext&)> on_frame;
+  /// Called once after the loop with the result, before summary.json is written and the INCOMPLETE
+  /// marker removed (a video is finished there). An exception from it propagates.
+  std::function<void(const RunResult&)> on_finished;
 };
+
+/// Lets a suite or sweep add observers (e.g. a video) to the options of each run it starts: called on
+/// the worker thread that then runs `config`, with a name for the run's files ("<scenario>" in
+/// suites, "run_<index>" in sweeps).
+using PrepareRun = std::function<void(const ScenarioConfig& config, const std::string& run_name, RunOptions& run)>;
 
 /// The result of one run.
 struct RunResult {

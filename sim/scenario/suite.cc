@@ -67,6 +67,7 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
         run_options.write_plots = options.write_plots;
         run_options.stop = options.stop;
         run_options.make_controller = options.make_controller;
+        if (options.prepare_run) options.prepare_run(configs[index], configs[index].name, run_options);
         run.result = RunScenario(configs[index], run_options);
       } catch (const std::exception& error) {
         run.error = error.what();

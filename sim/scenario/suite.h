@@ -40,6 +40,8 @@ struct SuiteOptions {
   /// Called (under a lock) after each run with (runs finished, total, that run).
   std::function<void(int, int, const SuiteRun&)> on_finished;
   ControllerFactory make_controller;  ///< RunOptions::make_controller for every run; may be empty
+  /// Adds observers to each run's options (e.g. `--video`); empty: none.
+  PrepareRun prepare_run;
 };
 
 /// Results in the order of `configs`.

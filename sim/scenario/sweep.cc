@@ -317,6 +317,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
       RunResult result;
       std::string error;
       try {
+        if (options.prepare_run) options.prepare_run(configs[i], "run_" + std::to_string(runs[i].index), run_options);
         result = RunScenario(configs[i], run_options);
       } catch (const std::exception& e) {
         result.config = configs[i];

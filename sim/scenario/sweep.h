@@ -77,6 +77,8 @@ struct SweepOptions {
   /// Called (under a lock) after each run with (runs finished, runs in this shard).
   std::function<void(int, int)> on_finished;
   ControllerFactory make_controller;  ///< RunOptions::make_controller for every run; may be empty
+  /// Adds observers to each run's options (e.g. `--video`); empty: none.
+  PrepareRun prepare_run;
 };
 
 /// What a sweep (shard) did.

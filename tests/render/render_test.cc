@@ -36,6 +36,9 @@ constexpr int kRegionHalfPx = 1;
 // A loaded unit for the colour check [N] (the default pinch puts several N on the busiest unit).
 constexpr double kPressedFnN = 1.0;
 constexpr double kProjectionTolPx = 0.75;
+// The legend needs about 200 px of height: checked at a size that has room for it.
+constexpr int kLegendWidthPx = 320;
+constexpr int kLegendHeightPx = 240;
 
 struct Color {
   double r = 0.0, g = 0.0, b = 0.0;
@@ -202,6 +205,100 @@ TEST_F(RenderTest, PressedUnitTurnsFromGreyToRedWhereProjectSays) {
   EXPECT_GT(grey.r, 80.0) << "unit " << pressed << " before contact: " << Describe(grey) << " (not lit or hidden)";
   EXPECT_GT(Redness(during), Redness(grey) + 40.0)
       << "unit " << pressed << " at " << pressed_fn << " N: " << Describe(during) << ", before " << Describe(grey);
+}
+
+bool IsCrossYellow(const uint8_t* p) { return p[0] > 170 && p[1] > 140 && p[2] < 100; }
+bool IsLegendRed(const uint8_t* p) { return p[0] > 200 && p[1] < 50 && p[2] < 50; }
+bool IsLegendMagenta(const uint8_t* p) { return p[0] > 200 && p[1] < 50 && p[2] > 200; }
+
+/// Pixels of `picture` in the box [c0, c1) x [r0, r1) for which `test` holds.
+int CountPixels(const image::RgbImage& picture, int c0, int c1, int r0, int r1, bool (*test)(const uint8_t*)) {
+  int count = 0;
+  for (int r = std::max(r0, 0); r < std::min(r1, picture.height_px); ++r) {
+    for (int c = std::max(c0, 0); c < std::min(c1, picture.width_px); ++c) count += test(picture.At(c, r)) ? 1 : 0;
+  }
+  return count;
+}
+
+TEST_F(RenderTest, UnusableUnitIsCrossedAndTheLegendShowsTheScale) {
+  // The pinch, with the pressed unit's estimate declared unusable (as an open circuit would make it).
+  int pressed = -1;
+  int yellow_on_unit = 0;
+  int yellow_before = 0;
+  int legend_red = 0;
+  int legend_magenta = 0;
+  int legend_off_red = 0;
+  RunDefault([&](double instant_s, SimRig& rig) {
+    if (instant_s != kPinchS) return;
+    Simulation& simulation = rig.simulation();
+    sensor::TactileState state = rig.loop().state();
+    pressed = MostLoadedUnit(state);
+    Renderer& renderer = RendererFor(rig, 0.0);
+    const CameraSpec camera = CameraByName("fingertip");
+    const auto yellow_near_unit = [&](const image::RgbImage& picture) {
+      const std::optional<std::array<double, 2>> pixel = renderer.Project(renderer.UnitCenter(simulation, pressed));
+      if (!pixel) return -1;
+      const int c = static_cast<int>((*pixel)[0]);
+      const int r = static_cast<int>((*pixel)[1]);
+      return CountPixels(picture, c - 4, c + 5, r - 4, r + 5, IsCrossYellow);
+    };
+    yellow_before = yellow_near_unit(renderer.Render(simulation, &state, camera));
+    state.validity[pressed] = sensor::UnitValidity::kOpen;
+    const image::RgbImage& crossed = renderer.Render(simulation, &state, camera);
+    yellow_on_unit = yellow_near_unit(crossed);
+    // The legend sits in the bottom-right third: its bar reaches full red, its swatch is magenta
+    // (a picture of 240 x 180 is too small for it: left out).
+    RenderOptions legend;
+    legend.width_px = kLegendWidthPx;
+    legend.height_px = kLegendHeightPx;
+    legend.object_alpha = 0.0;
+    const auto corner = [](const image::RgbImage& picture, bool (*test)(const uint8_t*)) {
+      return CountPixels(picture, 2 * kLegendWidthPx / 3, kLegendWidthPx, kLegendHeightPx / 3, kLegendHeightPx, test);
+    };
+    Renderer with_legend(gl_, simulation, legend);
+    const image::RgbImage& shown = with_legend.Render(simulation, &state, camera);
+    legend_red = corner(shown, IsLegendRed);
+    legend_magenta = corner(shown, IsLegendMagenta);
+    legend.legend = false;
+    Renderer without_legend(gl_, simulation, legend);
+    legend_off_red = corner(without_legend.Render(simulation, &state, camera), IsLegendRed);
+  });
+  ASSERT_GE(pressed, 0);
+  EXPECT_EQ(yellow_before, 0) << "unit " << pressed << " crossed while valid";
+  EXPECT_GT(yellow_on_unit, 2) << "no yellow cross on unusable unit " << pressed;
+  EXPECT_GT(legend_red, 4);
+  EXPECT_GT(legend_magenta, 4);
+  EXPECT_EQ(legend_off_red, 0);
+}
+
+TEST(PanelTextTest, SaysTimePhaseGripFrictionFlagsAndTheLastAction) {
+  controller::ControllerTelemetry telemetry;
+  telemetry.phase = "holding";
+  telemetry.grip_target_n = 2.5;
+  telemetry.friction_estimate = 0.42;
+  telemetry.slip_detected = true;
+  telemetry.slip_cues = "ratio";
+  sensor::TactileState state;
+  state.total_fn_n = 3.25;
+  state.contact_count = 4;
+  state.valid_count = 19;
+  PanelInfo panel;
+  panel.title = "default (grip_slip)";
+  panel.time_s = 1.2345;
+  panel.telemetry = &telemetry;
+  panel.state = &state;
+  panel.last_action = "lift at 0.800 s (line 17)";
+  EXPECT_EQ(PanelText(panel),
+            "default (grip_slip)\t\ntime\t1.234 s\nphase\tholding\ngrip target\t2.50 N\n"
+            "measured grip\t3.25 N on 4 units (19 valid)\nfriction est.\t0.42\nslip flags\tSLIP (ratio)\n"
+            "last action\tlift at 0.800 s (line 17)");
+  telemetry.slip_detected = false;
+  panel.last_action = "";
+  panel.title.clear();
+  const std::string quiet = PanelText(panel);
+  EXPECT_NE(quiet.find("slip flags\t-\nlast action\t-"), std::string::npos) << quiet;
+  panel.last_action.reset();
+  EXPECT_EQ(PanelText(panel).find("last action"), std::string::npos);
 }
 
 TEST(UnitColorTest, GreyUnloadedRedAtRatedMagentaSaturatedBlackUnusable) {

@@ -101,7 +101,7 @@ TEST_F(CliTest, RunExitsZeroWhenEveryExpectationHoldsAndWritesEveryOutput) {
   EXPECT_NE(result.out.find("[pass] not_dropped"), std::string::npos) << result.out;
   // Off a terminal there is no progress line: stderr stays empty.
   EXPECT_EQ(result.err, "");
-  const std::set<std::string> expected = {"config.yaml", "signals.csv", "summary.json", "forces.png",
+  const std::set<std::string> expected = {"config.yaml", "signals.csv", "states.csv", "summary.json", "forces.png",
                                           "estimate_vs_truth.png", "grip.png", "slip.png", "height.png",
                                           "taxels_fn.png", "taxels_ft.png"};
   EXPECT_EQ(FilesUnder(out), expected);
@@ -128,7 +128,7 @@ TEST_F(CliTest, RunExitsOneWhenAnExpectationFailsAndJsonGoesToStdout) {
   EXPECT_EQ(table.exit_code, kExitFailed) << table.out << table.err;
   EXPECT_NE(table.out.find("FAILED"), std::string::npos);
   EXPECT_NE(table.out.find("[FAIL] max_peak_grip_n"), std::string::npos) << table.out;
-  EXPECT_EQ(FilesUnder(out), (std::set<std::string>{"config.yaml", "signals.csv", "summary.json"}));
+  EXPECT_EQ(FilesUnder(out), (std::set<std::string>{"config.yaml", "signals.csv", "states.csv", "summary.json"}));
 
   const CliResult json = RunCli("run " + file + " --out " + out + " --no-plots --json");
   EXPECT_EQ(json.exit_code, kExitFailed);

@@ -28,4 +28,7 @@ CliResult RunCli(const std::string& arguments);
 /// time; then `timed_out` is set. A process that dies of a signal gets exit code 128 + signal.
 CliResult RunCliWithin(const std::string& arguments, double limit_s);
 
+/// RunCli with `prefix` (shell-safe words ending in a space) before the binary, e.g. "xvfb-run -a ".
+CliResult RunCliUnder(const std::string& prefix, const std::string& arguments);
+
 }  // namespace graspbed::testing
