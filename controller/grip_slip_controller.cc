@@ -177,8 +177,8 @@ const std::vector<Binding>& Bindings() {
                     "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
                     "at most this long after contact onset or stale data"),
       GRASPBED_BIND("preload_reference", slip.preload_reference, 0, 1, "",
-                    "1: the preload ratio (slope of shear against grip over the loading ramp) is subtracted; the "
-                    "ratio cue and the tangential load are measured from it"),
+                    "1: the shear locked in when the grasp settles is preload; the ratio cue measures the load on "
+                    "top of it"),
   };
   return bindings;
 }

@@ -151,11 +151,11 @@ class SlipDetector {
 
   /// Forgets everything, the learned noise floor included.
   void Reset();
-  /// Restarts filters and histories (keeps the noise floor and the preload ratio) and silences the
+  /// Restarts filters and histories (keeps the noise floor and the preload shear) and silences the
   /// cues until the contact settles (settle_s, settle_max_s); call when data come back after a
   /// stale period.
   void Restart();
-  /// Restart() for a new contact: the preload ratio is taken afresh when the cues arm.
+  /// Restart() for a new contact: the preload shear is taken afresh when the cues arm.
   void RestartContact();
 
   /// Processes one new frame. `grip_n` is the measured grip force [N]; `friction_estimate` the
