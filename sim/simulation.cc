@@ -70,16 +70,19 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   const int file = mj_findFileVFS(vfs.get(), kFileName);
   std::memcpy(vfs->filedata[file], mjcf_.data(), mjcf_.size());
   char error[1000] = {0};
-  model_ = mj_loadXML(kFileName, vfs.get(), error, sizeof(error));
+  {
+    // MuJoCo's XML parser keeps global state while it loads: one model at a time, process-wide.
+    // Runs then step in parallel on their own mjModel/mjData.
+    static std::mutex xml_loader;
+    std::lock_guard<std::mutex> lock(xml_loader);
+    model_.reset(mj_loadXML(kFileName, vfs.get(), error, sizeof(error)));
+  }
   mj_deleteVFS(vfs.get());
   if (model_ == nullptr) throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
-  data_ = mj_makeData(model_);
-  if (data_ == nullptr) {
-    mj_deleteModel(model_);
-    throw std::runtime_error("MuJoCo could not allocate mjData");
-  }
+  data_.reset(mj_makeData(model_.get()));
+  if (data_ == nullptr) throw std::runtime_error("MuJoCo could not allocate mjData");
 
-  const mjModel* m = model_;
+  const mjModel* m = model_.get();
   object_body_ = RequireId(m, mjOBJ_BODY, "object");
   object_geom_ = RequireId(m, mjOBJ_GEOM, "object_geom");
   holder_body_ = RequireId(m, mjOBJ_BODY, "holder");
@@ -149,14 +152,14 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   for (int k = 0; k < 3; ++k) object_inertia_[k] = m->body_inertia[3 * object_body_ + k];
   hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
   for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
-  mj_forward(model_, data_);
+  mj_forward(model_.get(), data_.get());
   initial_aperture_m_ = mju_dist3(data_->site_xpos + 3 * finger_pad_site_, data_->site_xpos + 3 * thumb_pad_site_);
 }
 
-Simulation::~Simulation() {
-  if (data_ != nullptr) mj_deleteData(data_);
-  if (model_ != nullptr) mj_deleteModel(model_);
-}
+void Simulation::ModelDeleter::operator()(mjModel_* model) const { mj_deleteModel(model); }
+void Simulation::DataDeleter::operator()(mjData_* data) const { mj_deleteData(data); }
+
+Simulation::~Simulation() = default;
 
 double Simulation::time_s() const { return data_->time; }
 double Simulation::timestep_s() const { return model_->opt.timestep; }
@@ -230,7 +233,7 @@ void Simulation::Step() {
   }
   ApplyControls();
   tls_last_warning[0] = '\0';
-  mj_step(model_, data_);
+  mj_step(model_.get(), data_.get());
   CheckFault();
   if (fault_.occurred || !(data_->time > step_start_time_s_)) {
     if (!(next_time_s > step_start_time_s_)) RecordFault("simulation time does not advance");
@@ -295,7 +298,7 @@ void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
     if (unit1 < 0 && unit2 < 0) continue;
     if (unit1 >= 0 && unit2 >= 0) continue;  // mesa on mesa: internal to the finger
     mjtNum local[6];
-    mj_contactForce(model_, data_, c, local);
+    mj_contactForce(model_.get(), data_.get(), c, local);
     // Rows of contact.frame are the contact axes (normal from geom1 to geom2, then the tangents);
     // the force acts on geom2 along +normal, on geom1 opposite.
     mjtNum world[3];
@@ -322,8 +325,8 @@ void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
 }
 
 GroundTruth Simulation::truth() const {
-  const mjModel* m = model_;
-  const mjData* d = data_;
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
   GroundTruth t;
   t.time_s = d->time;
   mjtNum object_vel[6];

@@ -145,10 +145,10 @@ class Simulation {
   const std::string& mjcf() const { return mjcf_; }
 
   /// Raw MuJoCo handles, for sim/ internals and sim tests only (controllers never see them).
-  const mjModel_* model() const { return model_; }
-  mjModel_* mutable_model() { return model_; }
-  const mjData_* data() const { return data_; }
-  mjData_* mutable_data() { return data_; }
+  const mjModel_* model() const { return model_.get(); }
+  mjModel_* mutable_model() { return model_.get(); }
+  const mjData_* data() const { return data_.get(); }
+  mjData_* mutable_data() { return data_.get(); }
 
  private:
   void ApplyControls();
@@ -158,8 +158,15 @@ class Simulation {
   sensor::Layout layout_;
   SceneConfig scene_;
   std::string mjcf_;
-  mjModel_* model_ = nullptr;
-  mjData_* data_ = nullptr;
+  struct ModelDeleter {
+    void operator()(mjModel_* model) const;
+  };
+  struct DataDeleter {
+    void operator()(mjData_* data) const;
+  };
+  /// Owned: released by their deleters, also when the constructor throws half-way.
+  std::unique_ptr<mjModel_, ModelDeleter> model_;
+  std::unique_ptr<mjData_, DataDeleter> data_;
 
   // Ids resolved once at construction.
   int object_body_ = -1;

@@ -11,7 +11,6 @@
 #include <fstream>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -41,12 +40,6 @@ constexpr double kTaxelScaleFloorN = 0.5;
 // Simulated time between progress callbacks [s].
 constexpr double kProgressPeriodS = 0.1;
 
-// MuJoCo's XML parser keeps global state while loading; models are built one at a time, runs then
-// step in parallel on their own mjModel/mjData.
-std::mutex& ConstructionMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
 
 const char* IntentName(controller::GraspIntent intent) {
   switch (intent) {
@@ -427,18 +420,15 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
   // The rig first: a scene it refuses (bodies that start inside each other) leaves no output behind.
   std::unique_ptr<sim::SimRig> rig;
-  {
-    std::lock_guard<std::mutex> lock(ConstructionMutex());
-    try {
-      // The host inverts with the sensor's nominal constants, not with anything the simulation
-      // knows per unit (spread, drift): those show up as estimation error, as on hardware.
-      rig = std::make_unique<sim::SimRig>(
-          layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
-          options.make_controller ? options.make_controller(config.controller)
-                                  : controller::MakeController(config.controller.name, config.controller.params));
-    } catch (const std::invalid_argument& error) {
-      throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
-    }
+  try {
+    // The host inverts with the sensor's nominal constants, not with anything the simulation
+    // knows per unit (spread, drift): those show up as estimation error, as on hardware.
+    rig = std::make_unique<sim::SimRig>(
+        layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
+        options.make_controller ? options.make_controller(config.controller)
+                                : controller::MakeController(config.controller.name, config.controller.params));
+  } catch (const std::invalid_argument& error) {
+    throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
   if (!options.out_dir.empty()) {
     PrepareOutputDir(options.out_dir);

@@ -63,7 +63,7 @@ struct RunOptions {
   bool stop_after_instants = false;
   /// Builds the run's controller instead of controller::MakeController(config.controller.name,
   /// config.controller.params), e.g. a controller written in Python; config.controller.name is then
-  /// only its label in the outputs. Called once per run, under the rig construction lock; may be
+  /// only its label in the outputs. Called once per run, before the rig is built; may be
   /// called from several threads at once in a suite. May be empty.
   ControllerFactory make_controller;
   /// Called once at the end of the run with the whole per-tick signal log (the rows of signals.csv),
