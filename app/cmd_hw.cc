@@ -32,8 +32,8 @@
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
 #include "sensor/readout.h"
-#include "sensor/serial/device_emulator.h"
-#include "sensor/serial/hardware_backend.h"
+#include "hardware/device_emulator.h"
+#include "hardware/hardware_backend.h"
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
@@ -53,7 +53,7 @@ double SecondsSince(Clock::time_point start) {
 
 /// Everything `hw --config FILE` can set (docs/hardware.md "Configuration").
 struct HwRunConfig {
-  serial::HardwareConfig serial;
+  hardware::HardwareConfig serial;
   /// The controller section exactly as in a scenario (name, params, grip_ceiling_n, rate_hz,
   /// stale_timeout_s), so a controller tuned in simulation runs with the same numbers on the hand.
   /// rate_hz: control ticks per second when frames do not arrive (ticks also follow every frame).
@@ -67,7 +67,7 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
   const common::YamlMap root = path.empty() ? common::YamlMap(no_file, "(no --config)", "")
                                             : common::YamlMap::LoadFile(path);
   HwRunConfig config;
-  if (const auto section = root.GetMap("serial")) config.serial = serial::HardwareConfigFromYaml(*section);
+  if (const auto section = root.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*section);
   if (const auto section = root.GetMap("controller")) {
     config.controller = scenario::LoadControllerOptions(*section, "grip_slip");
   } else {
@@ -90,7 +90,7 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
 /// even when the loop took only the newest. The file is written as PATH.partial and renamed at the end.
 class FrameLogger {
  public:
-  FrameLogger(std::string path, serial::SerialLink& link, const sensor::Layout& layout,
+  FrameLogger(std::string path, hardware::SerialLink& link, const sensor::Layout& layout,
               const sensor::Calibration& calibration, const controller::ControlLoopConfig& config,
               double nominal_r0_ohm)
       : path_(std::move(path)),
@@ -174,11 +174,11 @@ class FrameLogger {
   }
 
   std::string path_;
-  serial::SerialLink& link_;
+  hardware::SerialLink& link_;
   int unit_count_;
   sensor::Readout readout_;
   sensor::Inversion inversion_;
-  serial::TappedFrame entry_;
+  hardware::TappedFrame entry_;
   sensor::ReadoutFrame readout_frame_;
   sensor::TactileState state_;
   uint64_t session_ = 1;
@@ -254,9 +254,9 @@ void RunHw(const HwOptions& options) {
     throw std::invalid_argument("--log " + options.log + ": cannot write this file");
   }
 
-  serial::HardwareBackend backend(config.serial, units, layout.name);
-  serial::HardwareActuator actuator(backend, config.serial);
-  serial::SerialLink& link = *backend.link();
+  hardware::HardwareBackend backend(config.serial, units, layout.name);
+  hardware::HardwareActuator actuator(backend, config.serial);
+  hardware::SerialLink& link = *backend.link();
   if (!options.log.empty()) link.EnableTap(16384);
   // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
   StopSignalGuard signals;
@@ -439,7 +439,7 @@ class SimulatedDevice {
   }
 
   /// Emulator thread: the motor state the device drives.
-  void Motor(const serial::EmulatedMotor& motor) {
+  void Motor(const hardware::EmulatedMotor& motor) {
     rig_.actuator().Write({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
     // What the host means, as far as the motor shows it: closing effort = grasp, opening effort =
     // release. The motor going off (watchdog, stream loss) is no decision of the host's.
@@ -523,15 +523,15 @@ void RunEmulate(const EmulateOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(scenario::ResolveLayoutPath(config));
   SimulatedDevice device(config, layout);
 
-  serial::EmulatorConfig emulator_config;
+  hardware::EmulatorConfig emulator_config;
   emulator_config.link_path = options.link;
   emulator_config.unit_count = layout.unit_count();
   emulator_config.frame_rate_hz = static_cast<int>(std::lround(config.sensor.sample_rate_hz));
   emulator_config.nominal_r0_ohm = config.sensor.strain_model.nominal.r0_ohm;
-  serial::DeviceEmulator emulator(
+  hardware::DeviceEmulator emulator(
       emulator_config,
       [&device](double, bool streaming, sensor::RawFrame* frame) { device.Frame(streaming, frame); },
-      [&device](const serial::EmulatedMotor& motor) { device.Motor(motor); });
+      [&device](const hardware::EmulatedMotor& motor) { device.Motor(motor); });
   StopSignalGuard signals;
   emulator.Start();
   std::cerr << "emulate: device '" << config.name << "' (" << layout.unit_count() << " units) at "
@@ -552,7 +552,7 @@ void RunEmulate(const EmulateOptions& options) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  const serial::EmulatorStats stats = emulator.stats();
+  const hardware::EmulatorStats stats = emulator.stats();
   emulator.Stop();
 
   nlohmann::json summary = device.Summary();

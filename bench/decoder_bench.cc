@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "sensor/raw_frame.h"
-#include "sensor/serial/protocol.h"
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/protocol.h"
+#include "hardware/stream_decoder.h"
 
 namespace {
 
-using namespace graspbed::serial;
+using namespace graspbed::hardware;
 
 // A stream of `count` frames of `units` units with realistic resistances (~3.4 kOhm in mOhm).
 std::vector<uint8_t> MakeStream(int count, int units) {

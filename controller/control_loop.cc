@@ -16,7 +16,7 @@ void ControlLoopConfig::Validate() const {
 }
 
 ControlLoop::ControlLoop(sensor::TactileBackend& backend, GraspController& controller,
-                         HandActuator& actuator, const sensor::Layout& layout,
+                         hand::HandActuator& actuator, const sensor::Layout& layout,
                          const sensor::Calibration& calibration, const ControlLoopConfig& config)
     : backend_(backend),
       controller_(controller),
@@ -66,7 +66,7 @@ sensor::ReadStatus ControlLoop::Tick(double time_s) {
   if (stale) ++counters_.stale_ticks;
 
   command_ = controller_.Update(state_, time_s);
-  if (actuator_.Write(command_) != WriteStatus::kOk) ++counters_.actuator_failures;
+  if (actuator_.Write(command_) != hand::WriteStatus::kOk) ++counters_.actuator_failures;
   return status;
 }
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "controller/grasp_controller.h"
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
@@ -42,7 +42,7 @@ struct LoopCounters {
 /// that must outlive it. Tick() allocates nothing and does no I/O of its own.
 class ControlLoop {
  public:
-  ControlLoop(sensor::TactileBackend& backend, GraspController& controller, HandActuator& actuator,
+  ControlLoop(sensor::TactileBackend& backend, GraspController& controller, hand::HandActuator& actuator,
               const sensor::Layout& layout, const sensor::Calibration& calibration,
               const ControlLoopConfig& config);
   ControlLoop(const ControlLoop&) = delete;
@@ -60,7 +60,7 @@ class ControlLoop {
   /// dR/R of the newest frame.
   const sensor::ReadoutFrame& readout_frame() const { return readout_frame_; }
   /// Command written at the last tick.
-  const HandCommand& command() const { return command_; }
+  const hand::HandCommand& command() const { return command_; }
   const LoopCounters& counters() const { return counters_; }
   /// Forgets the tare baseline; the next frames are averaged into a new one.
   void Retare();
@@ -70,7 +70,7 @@ class ControlLoop {
  private:
   sensor::TactileBackend& backend_;
   GraspController& controller_;
-  HandActuator& actuator_;
+  hand::HandActuator& actuator_;
   ControlLoopConfig config_;
   sensor::Readout readout_;
   sensor::Inversion inversion_;
@@ -78,7 +78,7 @@ class ControlLoop {
   sensor::RawFrame frame_;
   sensor::ReadoutFrame readout_frame_;
   sensor::TactileState state_;
-  HandCommand command_;
+  hand::HandCommand command_;
   LoopCounters counters_;
   double last_frame_time_s_ = -1.0;  ///< loop time of the newest frame; < 0 before the first
   uint64_t session_ = 0;

@@ -4,7 +4,7 @@
 /// exports so that `controller: {plugin: libmine.so}` or `--controller plugin:libmine.so` loads it.
 ///
 /// Stability: the headers a controller sees (this one, controller/grasp_controller.h,
-/// controller/hand_command.h, sensor/tactile_state.h, sensor/raw_frame.h) form the controller API.
+/// hand/hand_command.h, sensor/tactile_state.h, sensor/raw_frame.h) form the controller API.
 /// Any change a compiled plugin could notice (a virtual added to GraspController, a field added to
 /// TactileState, HandCommand or ControllerTelemetry, a change to GraspbedControllerPlugin after its
 /// first field) raises GRASPBED_CONTROLLER_API_VERSION, and graspbed refuses a plugin built against

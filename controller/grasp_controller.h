@@ -10,10 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sensor/tactile_state.h"
 
 namespace graspbed::controller {
+
+/// The controller's output. It is defined below controller/ (hand/hand_command.h) so that sim/ and
+/// hardware/ carry it without linking the controller library; this name keeps the controller API's
+/// spelling (plugins, the Python module) unchanged.
+using HandCommand = hand::HandCommand;
 
 /// What the user (EMG, a button, a scenario script) currently asks the hand to do.
 enum class GraspIntent { kIdle, kClose, kOpen };
@@ -55,7 +60,7 @@ class GraspController {
   virtual void SetIntent(GraspIntent intent) = 0;
   /// One control tick at `time_s` [s] with the newest state; returns the motor command.
   /// Must not allocate.
-  virtual HandCommand Update(const sensor::TactileState& state, double time_s) = 0;
+  virtual hand::HandCommand Update(const sensor::TactileState& state, double time_s) = 0;
   /// Grip force ceiling for this task [N] (fragile objects); never exceeded on purpose.
   virtual void SetGripCeiling(double ceiling_n) = 0;
   virtual ControllerTelemetry telemetry() const = 0;

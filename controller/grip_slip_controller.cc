@@ -275,7 +275,7 @@ void GripSlipController::Reset() {
   target_n_ = 0.0;
   integrator_ = 0.0;
   refractory_until_s_ = 0.0;
-  last_good_command_ = HandCommand{.grip_effort = 0.0};
+  last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
   diagnostics_ = GripSlipDiagnostics{};
@@ -358,7 +358,7 @@ void GripSlipController::RespondToSlip(double time_s) {
   Enter(Phase::kSlip, time_s);
 }
 
-HandCommand GripSlipController::Update(const TactileState& state, double time_s) {
+hand::HandCommand GripSlipController::Update(const TactileState& state, double time_s) {
   const double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxStepS) : 0.0;
   have_time_ = true;
   last_time_s_ = time_s;
@@ -375,7 +375,7 @@ HandCommand GripSlipController::Update(const TactileState& state, double time_s)
     integrator_ = 0.0;
   }
 
-  HandCommand command;
+  hand::HandCommand command;
   const bool releasing = phase_ == Phase::kReleasing || phase_ == Phase::kOpen;
   const bool data_ok = !state.stale && state.valid_count >= config_.min_valid_units;
   if (!data_ok && !releasing) {

@@ -100,7 +100,7 @@ class GripSlipController final : public GraspController {
 
   void Reset() override;
   void SetIntent(GraspIntent intent) override;
-  HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  hand::HandCommand Update(const sensor::TactileState& state, double time_s) override;
   /// Per-task ceiling [N]; the effective ceiling is min(this, max_grip_n). A value <= 0 or +inf
   /// removes the task ceiling; NaN throws std::invalid_argument. Survives Reset().
   void SetGripCeiling(double ceiling_n) override;
@@ -148,7 +148,7 @@ class GripSlipController final : public GraspController {
   double target_n_ = 0.0;
   double integrator_ = 0.0;
   double refractory_until_s_ = 0.0;
-  HandCommand last_good_command_;
+  hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;
   GripSlipDiagnostics diagnostics_;

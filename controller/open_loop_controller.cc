@@ -21,8 +21,8 @@ void OpenLoopController::SetIntent(GraspIntent intent) { intent_ = intent; }
 
 void OpenLoopController::SetGripCeiling(double /*ceiling_n*/) {}
 
-HandCommand OpenLoopController::Update(const sensor::TactileState& /*state*/, double /*time_s*/) {
-  HandCommand command;
+hand::HandCommand OpenLoopController::Update(const sensor::TactileState& /*state*/, double /*time_s*/) {
+  hand::HandCommand command;
   switch (intent_) {
     case GraspIntent::kIdle:
       telemetry_.phase = "idle";

@@ -11,11 +11,11 @@
 #include <span>
 
 #include "sensor/raw_frame.h"
-#include "sensor/serial/framing.h"
-#include "sensor/serial/protocol.h"
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/framing.h"
+#include "hardware/protocol.h"
+#include "hardware/stream_decoder.h"
 
-using namespace graspbed::serial;
+using namespace graspbed::hardware;
 
 namespace {
 

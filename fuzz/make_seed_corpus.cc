@@ -12,38 +12,38 @@
 #include <string>
 #include <vector>
 
-#include "sensor/serial/protocol.h"
+#include "hardware/protocol.h"
 
 namespace {
 
-using graspbed::serial::EncodeBody;
-using graspbed::serial::EncodePacket;
+using graspbed::hardware::EncodeBody;
+using graspbed::hardware::EncodePacket;
 using Bytes = std::vector<uint8_t>;
 
 template <typename Packet>
 Bytes Wire(const Packet& packet) {
-  std::array<uint8_t, graspbed::serial::kMaxWirePacketSize> out{};
+  std::array<uint8_t, graspbed::hardware::kMaxWirePacketSize> out{};
   const size_t size = EncodePacket(packet, out);
   return Bytes(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(size));
 }
 
 /// A body this protocol version does not define (unknown type, foreign version), framed validly.
 Bytes WireBody(const Bytes& body) {
-  std::array<uint8_t, graspbed::serial::kMaxWirePacketSize> out{};
+  std::array<uint8_t, graspbed::hardware::kMaxWirePacketSize> out{};
   const size_t size = EncodeBody(body, out);
   return Bytes(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(size));
 }
 
 /// A frame of `units` units: unit 0 open, unit 1 shorted, the rest near 3.4 kOhm.
 Bytes Frame(uint16_t sequence, int units, uint32_t time_us, uint8_t flags = 0) {
-  graspbed::serial::TactileFramePacket packet;
+  graspbed::hardware::TactileFramePacket packet;
   packet.sequence = sequence;
   packet.device_time_us = time_us;
   packet.unit_count = static_cast<uint8_t>(units);
   packet.flags = flags;
   for (int k = 0; k < units; ++k) {
     const auto index = static_cast<size_t>(k);
-    packet.r1_milliohm[index] = k == 0 ? graspbed::serial::kOpenCircuitMilliohm
+    packet.r1_milliohm[index] = k == 0 ? graspbed::hardware::kOpenCircuitMilliohm
                                        : (k == 1 ? 0u : 3'400'000u + 1000u * static_cast<uint32_t>(k));
     packet.r2_milliohm[index] = 3'400'000u - 1000u * static_cast<uint32_t>(k);
   }
@@ -51,7 +51,7 @@ Bytes Frame(uint16_t sequence, int units, uint32_t time_us, uint8_t flags = 0) {
 }
 
 Bytes Hello(uint16_t sequence, int units) {
-  graspbed::serial::HelloPacket packet;
+  graspbed::hardware::HelloPacket packet;
   packet.sequence = sequence;
   packet.firmware_version = 0x0100;
   packet.unit_count = static_cast<uint8_t>(units);
@@ -76,11 +76,11 @@ int main(int argc, char** argv) {
   const std::filesystem::path dir = argv[1];
   std::filesystem::create_directories(dir);
 
-  graspbed::serial::MotorCommandPacket motor;
+  graspbed::hardware::MotorCommandPacket motor;
   motor.sequence = 5;
   motor.effort = -12345;
-  motor.flags = graspbed::serial::kMotorEnable | graspbed::serial::kMotorBrake;
-  graspbed::serial::StreamControlPacket stream;
+  motor.flags = graspbed::hardware::kMotorEnable | graspbed::hardware::kMotorBrake;
+  graspbed::hardware::StreamControlPacket stream;
   stream.sequence = 1;
   stream.start = true;
   Bytes foreign_version(16, 0);
@@ -89,8 +89,8 @@ int main(int argc, char** argv) {
 
   const std::map<std::string, Bytes> seeds = {
       {"hello_then_frames_20", Join({Hello(0, 20), Frame(0, 20, 0), Frame(1, 20, 1000), Frame(2, 20, 2000)})},
-      {"frame_1_unit", Frame(7, 1, 7000, graspbed::serial::kFlagAdcOverrun)},
-      {"frame_62_units", Frame(9, 62, 9000, graspbed::serial::kFlagAdcOverrun | graspbed::serial::kFlagSupplyFault)},
+      {"frame_1_unit", Frame(7, 1, 7000, graspbed::hardware::kFlagAdcOverrun)},
+      {"frame_62_units", Frame(9, 62, 9000, graspbed::hardware::kFlagAdcOverrun | graspbed::hardware::kFlagSupplyFault)},
       {"frames_9_units_gap", Join({Frame(1, 9, 1000), Frame(3, 9, 3000), Frame(2, 9, 2000)})},
       {"motor_and_stream", Join({Wire(motor), Wire(stream)})},
       {"unknown_type_and_version", Join({WireBody({0x33, 1, 0, 0, 0xab, 0xcd}), WireBody(foreign_version)})},

@@ -4,28 +4,28 @@
 
 #include <string>
 
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sim/simulation.h"
 
 namespace graspbed::sim {
 
 /// Carries HandCommands to the simulated motor. Holds a reference to the Simulation.
-class SimActuator : public controller::HandActuator {
+class SimActuator : public hand::HandActuator {
  public:
   explicit SimActuator(Simulation& simulation) : simulation_(simulation) {}
 
   /// enable = false: effort 0 (coasts); brake: holds the current closure; otherwise the effort,
   /// clamped to [-1, 1]. Never fails in simulation.
-  controller::WriteStatus Write(const controller::HandCommand& command) override;
+  hand::WriteStatus Write(const hand::HandCommand& command) override;
   /// Motor off (effort 0, brake released).
   void Stop() override;
   std::string name() const override { return "sim"; }
   /// Last command written.
-  const controller::HandCommand& last_command() const { return last_command_; }
+  const hand::HandCommand& last_command() const { return last_command_; }
 
  private:
   Simulation& simulation_;
-  controller::HandCommand last_command_;
+  hand::HandCommand last_command_;
 };
 
 }  // namespace graspbed::sim

@@ -474,7 +474,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     const sensor::TactileState& state = rig->loop().state();
     const std::span<const sensor::UnitLoad> true_loads = truth_ring.Near(state.time_s);
     const controller::ControllerTelemetry telemetry = rig->controller().telemetry();
-    const controller::HandCommand& command = rig->loop().command();
+    const hand::HandCommand& command = rig->loop().command();
 
     TickSample sample;
     sample.time_s = t;

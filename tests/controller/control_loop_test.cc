@@ -52,16 +52,16 @@ class ScriptedBackend final : public sensor::TactileBackend {
 };
 
 /// Records every command; can be told to report a disconnected motor.
-class RecordingActuator final : public HandActuator {
+class RecordingActuator final : public hand::HandActuator {
  public:
-  WriteStatus Write(const HandCommand& command) override {
+  hand::WriteStatus Write(const hand::HandCommand& command) override {
     last = command;
     ++writes;
-    return disconnected ? WriteStatus::kDisconnected : WriteStatus::kOk;
+    return disconnected ? hand::WriteStatus::kDisconnected : hand::WriteStatus::kOk;
   }
   std::string name() const override { return "recording"; }
 
-  HandCommand last;
+  hand::HandCommand last;
   int writes = 0;
   bool disconnected = false;
 };
@@ -71,11 +71,11 @@ class RecordingController final : public GraspController {
  public:
   void Reset() override {}
   void SetIntent(GraspIntent) override {}
-  HandCommand Update(const sensor::TactileState& state, double) override {
+  hand::HandCommand Update(const sensor::TactileState& state, double) override {
     last_stale = state.stale;
     last_total_fn_n = state.total_fn_n;
     ++updates;
-    HandCommand command;
+    hand::HandCommand command;
     command.grip_effort = 0.25;
     return command;
   }

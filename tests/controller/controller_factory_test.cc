@@ -104,7 +104,7 @@ TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
   std::vector<double> loads;
   for (int i = 0; i < 3000; ++i) loads.push_back(i < 2000 ? 0.5 : 2.5);  // ends in a slip
   controller->SetIntent(GraspIntent::kClose);
-  HandCommand command;
+  hand::HandCommand command;
   long allocations = 0;
   for (int i = 0; i < 3000; ++i) {
     const double t = (i + 1) * 1e-3;

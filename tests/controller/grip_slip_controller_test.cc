@@ -77,7 +77,7 @@ class ClosedLoop {
   GripSlipController controller;
   HandPlant plant;
   SyntheticTactile sensor;
-  HandCommand command;
+  hand::HandCommand command;
   double time_s = 0.0;
   double max_grip_n = 0.0;
   double first_slip_s = -1.0;
@@ -449,14 +449,14 @@ TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
 TEST(GripSlipControllerTest, SafeHoldOnStaleDataKeepsCommandAndNeverOpens) {
   ClosedLoop loop(DefaultConfig(), {}, {});
   loop.Grasp(0.8, 1.0);
-  const HandCommand before = loop.command;
+  const hand::HandCommand before = loop.command;
   ASSERT_GT(before.grip_effort, 0.0);
   // Stale frames whose forces read zero, as if the object were gone: the controller must not react.
   sensor::TactileState stale = loop.sensor.Frame(SyntheticContact{}, loop.time_s);
   stale.stale = true;
   for (int i = 0; i < 300; ++i) {
     loop.time_s += kPeriodS;
-    const HandCommand command = loop.controller.Update(stale, loop.time_s);
+    const hand::HandCommand command = loop.controller.Update(stale, loop.time_s);
     ASSERT_DOUBLE_EQ(command.grip_effort, before.grip_effort) << "tick " << i;
     ASSERT_GE(command.grip_effort, 0.0);
     ASSERT_TRUE(command.enable);

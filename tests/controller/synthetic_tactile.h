@@ -12,7 +12,7 @@
 #include <numbers>
 #include <random>
 
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sensor/tactile_state.h"
 
 namespace graspbed::controller::testing {
@@ -138,7 +138,7 @@ class HandPlant {
   explicit HandPlant(const Options& options) : options_(options), gap_(options.start_gap) {}
 
   /// Advances the plant by `dt_s` under `command` with tangential load `load_n` (axial) [N].
-  void Step(const HandCommand& command, double load_n, double dt_s) {
+  void Step(const hand::HandCommand& command, double load_n, double dt_s) {
     time_s_ += dt_s;
     load_n_ = load_n;
     const double effort = std::clamp(command.grip_effort, -1.0, 1.0);

@@ -1,10 +1,10 @@
-#include "sensor/serial/hardware_config.h"
+#include "hardware/hardware_config.h"
 
 #include <sstream>
 
-#include "sensor/serial/serial_port.h"
+#include "hardware/serial_port.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 void Require(bool ok, const std::string& field, double value, const std::string& reason) {
@@ -57,4 +57,4 @@ HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map) {
   return config;
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

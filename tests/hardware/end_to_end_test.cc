@@ -30,14 +30,14 @@
 
 extern char** environ;
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 using graspbed::testing::CliBinary;
 using graspbed::testing::ReadText;
 using graspbed::testing::TempDir;
 
-constexpr char kScenario[] = "tests/serial/data/e2e_lift.yaml";
+constexpr char kScenario[] = "tests/hardware/data/e2e_lift.yaml";
 constexpr int kUnits = 20;                 // the scenario's layout (default_20)
 constexpr double kLiftHeightM = 0.05;      // the scenario's lift
 constexpr double kLiftEndS = 1.6;          // lift at 0.8 s over 0.8 s
@@ -353,4 +353,4 @@ TEST_F(EndToEndTest, HwRefusesAMissingPortWithAClearMessage) {
 }
 
 }  // namespace
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

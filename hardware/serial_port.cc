@@ -1,4 +1,4 @@
-#include "sensor/serial/serial_port.h"
+#include "hardware/serial_port.h"
 
 #include <cerrno>
 #include <chrono>
@@ -12,7 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 struct BaudEntry {
@@ -197,4 +197,4 @@ void SerialPort::Drain(int timeout_ms) {
   }
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

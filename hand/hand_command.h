@@ -1,11 +1,13 @@
 #pragma once
 /// HandCommand and the HandActuator interface: what a controller asks of the grip motor, and who
-/// carries it out (the simulated motor or the serial link to the hand electronics).
+/// carries it out (sim/'s simulated motor or hardware/'s serial link to the hand electronics). This
+/// sits below controller/, sim/ and hardware/ (which all speak it) and depends on nothing, as
+/// sensor/tactile_backend.h does for the other direction of the loop.
 
 #include <cstdint>
 #include <string>
 
-namespace graspbed::controller {
+namespace graspbed::hand {
 
 /// One command to the single grip motor that closes thumb and finger through the linkage.
 struct HandCommand {
@@ -32,4 +34,4 @@ class HandActuator {
   virtual std::string name() const = 0;
 };
 
-}  // namespace graspbed::controller
+}  // namespace graspbed::hand

@@ -14,15 +14,15 @@
 #include <thread>
 #include <vector>
 
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_backend.h"
-#include "sensor/serial/hardware_config.h"
-#include "sensor/serial/protocol.h"
-#include "sensor/serial/serial_port.h"
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/hardware_config.h"
+#include "hardware/protocol.h"
+#include "hardware/serial_port.h"
+#include "hardware/stream_decoder.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 /// What a link carries.
 enum class LinkRole {
@@ -85,7 +85,7 @@ class SerialLink {
 
   /// Queues `command` as the next MOTOR_COMMAND (the newest wins). kDisconnected, and nothing is
   /// queued, while no HELLO has been seen on the current connection. Never blocks.
-  controller::WriteStatus SendMotor(const controller::HandCommand& command);
+  hand::WriteStatus SendMotor(const hand::HandCommand& command);
   /// Queues motor off and waits up to `timeout_s` until it has been written.
   void MotorOff(double timeout_s);
   /// MOTOR_COMMAND packets written since Start().
@@ -168,4 +168,4 @@ class SerialLink {
   std::atomic<uint64_t> tap_overflows_{0};
 };
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

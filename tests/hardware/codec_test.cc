@@ -9,11 +9,11 @@
 #include <string_view>
 #include <vector>
 
-#include "sensor/serial/framing.h"
-#include "sensor/serial/protocol.h"
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/framing.h"
+#include "hardware/protocol.h"
+#include "hardware/stream_decoder.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 std::vector<uint8_t> Bytes(std::string_view text) { return {text.begin(), text.end()}; }
@@ -376,4 +376,4 @@ TEST_F(DecoderResync, ByteByByteFeedingMatchesBulk) {
 }
 
 }  // namespace
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

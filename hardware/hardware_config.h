@@ -6,7 +6,7 @@
 
 #include "common/yaml_map.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 struct HardwareConfig {
   /// Serial device of the tactile readout (and of the motor, unless motor_port is set), e.g.
@@ -31,4 +31,4 @@ struct HardwareConfig {
 /// `graspbed hw --config` file, docs/hardware.md "Configuration"); unknown keys are refused.
 HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map);
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

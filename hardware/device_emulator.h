@@ -14,10 +14,10 @@
 #include <thread>
 
 #include "sensor/raw_frame.h"
-#include "sensor/serial/protocol.h"
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/protocol.h"
+#include "hardware/stream_decoder.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 struct EmulatorConfig {
   std::string link_path;            ///< where the symlink to the pty slave is created (removed on Stop)
@@ -161,4 +161,4 @@ class DeviceEmulator {
   int frame_unit_count_ = 0;
 };
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

@@ -10,7 +10,7 @@
 #include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 using ::testing::HasSubstr;
@@ -121,4 +121,4 @@ TEST_F(HwCliTest, EverySectionTheHelpNamesIsAccepted) {
 }
 
 }  // namespace
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

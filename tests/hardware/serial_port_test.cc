@@ -13,10 +13,10 @@
 #include <fstream>
 #include <string>
 
-#include "sensor/serial/serial_port.h"
-#include "tests/serial/serial_test_util.h"
+#include "hardware/serial_port.h"
+#include "tests/hardware/serial_test_util.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 // A pty pair kept open for the test's lifetime.
@@ -166,4 +166,4 @@ TEST(SerialPort, HangupWhenTheOtherSideCloses) {
 }
 
 }  // namespace
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

@@ -1,9 +1,9 @@
-#include "sensor/serial/protocol.h"
+#include "hardware/protocol.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 void PutU16(uint8_t* p, uint16_t v) {
@@ -204,4 +204,4 @@ double EffortFromWire(int16_t effort) {
   return std::clamp(static_cast<double>(effort) / 32767.0, -1.0, 1.0);
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

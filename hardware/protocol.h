@@ -8,9 +8,9 @@
 #include <span>
 
 #include "sensor/raw_frame.h"
-#include "sensor/serial/framing.h"
+#include "hardware/framing.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 /// The protocol version this code speaks (header byte 1).
 inline constexpr uint8_t kProtocolVersion = 1;
@@ -144,4 +144,4 @@ void FromRawFrame(const sensor::RawFrame& frame, uint16_t sequence, uint32_t dev
 int16_t EffortToWire(double effort);
 double EffortFromWire(int16_t effort);
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

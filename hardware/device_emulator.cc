@@ -1,4 +1,4 @@
-#include "sensor/serial/device_emulator.h"
+#include "hardware/device_emulator.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -14,7 +14,7 @@
 #include <termios.h>
 #include <unistd.h>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 int64_t NowNs() {
@@ -397,4 +397,4 @@ std::string DeviceEmulator::slave_path() const {
   return slave_path_;
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

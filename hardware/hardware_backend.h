@@ -1,5 +1,5 @@
 #pragma once
-/// HardwareBackend (sensor::TactileBackend) and HardwareActuator (controller::HandActuator) on the
+/// HardwareBackend (sensor::TactileBackend) and HardwareActuator (hand::HandActuator) on the
 /// serial link to the real readout and hand electronics: one port for both, or a second port for
 /// the motor (HardwareConfig::motor_port). All port I/O happens on the links' own threads; Read()
 /// and Write() only exchange data with them and never block.
@@ -7,12 +7,12 @@
 #include <memory>
 #include <string>
 
-#include "controller/hand_command.h"
+#include "hand/hand_command.h"
 #include "sensor/tactile_backend.h"
-#include "sensor/serial/hardware_config.h"
-#include "sensor/serial/serial_link.h"
+#include "hardware/hardware_config.h"
+#include "hardware/serial_link.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 class HardwareBackend : public sensor::TactileBackend {
  public:
@@ -47,7 +47,7 @@ class HardwareBackend : public sensor::TactileBackend {
   uint64_t frame_session_ = 0;
 };
 
-class HardwareActuator : public controller::HandActuator {
+class HardwareActuator : public hand::HandActuator {
  public:
   /// Shares `backend`'s port when config.motor_port is empty, else uses a link of its own on
   /// motor_port (opened by Start()).
@@ -58,7 +58,7 @@ class HardwareActuator : public controller::HandActuator {
   /// the port is shared.
   void Start();
   /// Queues a MOTOR_COMMAND; kDisconnected while the device has not said HELLO on this connection.
-  controller::WriteStatus Write(const controller::HandCommand& command) override;
+  hand::WriteStatus Write(const hand::HandCommand& command) override;
   /// Motor off (waits up to 0.1 s for it to be written); closes a separate motor port.
   void Stop() override;
   std::string name() const override { return "serial"; }
@@ -70,4 +70,4 @@ class HardwareActuator : public controller::HandActuator {
   bool owns_link_;
 };
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

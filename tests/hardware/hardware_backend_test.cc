@@ -17,12 +17,12 @@
 #include <thread>
 
 #include "sensor/readout.h"
-#include "sensor/serial/device_emulator.h"
-#include "sensor/serial/hardware_backend.h"
-#include "sensor/serial/stream_decoder.h"
-#include "tests/serial/serial_test_util.h"
+#include "hardware/device_emulator.h"
+#include "hardware/hardware_backend.h"
+#include "hardware/stream_decoder.h"
+#include "tests/hardware/serial_test_util.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 using testing::WaitFor;
@@ -212,7 +212,7 @@ TEST_F(HardwareTest, NoCommandBeforeHello) {
   StartEmulator(kUnits, /*connect_delay_s=*/0.3);
   backend_ = std::make_unique<HardwareBackend>(hw_config_, kUnits, "test_20");
   actuator_ = std::make_unique<HardwareActuator>(*backend_, hw_config_);
-  EXPECT_EQ(actuator_->Write({.grip_effort = 0.5}), controller::WriteStatus::kDisconnected);
+  EXPECT_EQ(actuator_->Write({.grip_effort = 0.5}), hand::WriteStatus::kDisconnected);
   std::atomic<bool> started{false};
   std::thread starter([&] {
     backend_->Start();
@@ -221,7 +221,7 @@ TEST_F(HardwareTest, NoCommandBeforeHello) {
   // Hammer the actuator during the handshake: nothing may reach the device before its HELLO.
   int refused = 0;
   while (!started) {
-    if (actuator_->Write({.grip_effort = 0.5}) == controller::WriteStatus::kDisconnected) ++refused;
+    if (actuator_->Write({.grip_effort = 0.5}) == hand::WriteStatus::kDisconnected) ++refused;
     std::this_thread::sleep_for(std::chrono::microseconds(500));
   }
   starter.join();
@@ -238,7 +238,7 @@ TEST_F(HardwareTest, NoCommandBeforeHello) {
 TEST_F(HardwareTest, MotorWatchdogStopsTheMotorWhenCommandsStop) {
   StartEmulator();
   StartHost();
-  ASSERT_EQ(actuator_->Write({.grip_effort = 0.8}), controller::WriteStatus::kOk);
+  ASSERT_EQ(actuator_->Write({.grip_effort = 0.8}), hand::WriteStatus::kOk);
   ASSERT_TRUE(WaitFor([&] { return emulator_->motor().enable; }));
   // Commands every 10 ms keep it running for 300 ms. A loaded machine can stall a thread beyond the
   // watchdog; the emulator records the longest gap it saw, and the watchdog must agree with it.
@@ -345,7 +345,7 @@ TEST_F(HardwareTest, DeviceVanishesAndReturns) {
   emulator_->Vanish();
   ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kDisconnected; }));
   EXPECT_FALSE(backend_->link()->connected());
-  EXPECT_EQ(actuator_->Write({.grip_effort = 0.3}), controller::WriteStatus::kDisconnected);
+  EXPECT_EQ(actuator_->Write({.grip_effort = 0.3}), hand::WriteStatus::kDisconnected);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few failed reopen attempts
   emulator_->Return();
   ASSERT_TRUE(WaitFor([&] { return backend_->link()->connected(); }));
@@ -520,7 +520,7 @@ TEST_F(HardwareTest, CleanShutdownStopsStreamMotorAndRestoresThePort) {
     return s;
   }();
   StartHost();
-  ASSERT_EQ(actuator_->Write({.grip_effort = 0.6}), controller::WriteStatus::kOk);
+  ASSERT_EQ(actuator_->Write({.grip_effort = 0.6}), hand::WriteStatus::kOk);
   ASSERT_TRUE(WaitFor([&] { return emulator_->motor().enable; }));
   actuator_->Stop();
   backend_->Stop();
@@ -561,4 +561,4 @@ TEST_F(HardwareTest, SeparateMotorPort) {
 }
 
 }  // namespace
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

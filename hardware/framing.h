@@ -7,7 +7,7 @@
 #include <optional>
 #include <span>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, init 0xFFFF, no reflection, no final xor.
 /// Check value: Crc16CcittFalse("123456789") == 0x29B1.
@@ -26,4 +26,4 @@ std::optional<size_t> CobsEncode(std::span<const uint8_t> input, std::span<uint8
 /// that runs past the end) or when `output` is too small.
 std::optional<size_t> CobsDecode(std::span<const uint8_t> input, std::span<uint8_t> output);
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

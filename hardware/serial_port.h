@@ -11,7 +11,7 @@
 
 #include <termios.h>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 /// Why a port could not be opened.
 enum class PortErrorKind { kMissing, kPermission, kBusy, kNotATty, kBadBaud, kOther };
@@ -79,4 +79,4 @@ class SerialPort {
 /// The message for a permission error on `path` (names its group and the usermod command).
 std::string PermissionMessage(const std::string& path);
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

@@ -1,8 +1,8 @@
-#include "sensor/serial/framing.h"
+#include "hardware/framing.h"
 
 #include <array>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 // Table-driven CRC (one lookup per byte): the decoder checks ~175 bytes per frame at up to 100 kHz.
@@ -74,4 +74,4 @@ std::optional<size_t> CobsDecode(std::span<const uint8_t> input, std::span<uint8
   return out;
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

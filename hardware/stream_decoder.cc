@@ -1,6 +1,6 @@
-#include "sensor/serial/stream_decoder.h"
+#include "hardware/stream_decoder.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 void StreamDecoder::StartPacket() {
   size_ = 0;
@@ -98,4 +98,4 @@ FeedResult StreamDecoder::Feed(std::span<const uint8_t> input, DecodedPacket* pa
   return result;
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

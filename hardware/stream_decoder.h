@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <span>
 
-#include "sensor/serial/protocol.h"
+#include "hardware/protocol.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 /// What the decoder has seen since construction (or Reset()).
 struct DecoderStats {
@@ -67,4 +67,4 @@ class StreamDecoder {
   PacketError last_error_ = PacketError::kNone;
 };
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

@@ -1,6 +1,6 @@
-#include "sensor/serial/hardware_backend.h"
+#include "hardware/hardware_backend.h"
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 
 HardwareBackend::HardwareBackend(const HardwareConfig& config, int unit_count, std::string layout_name)
     : link_(std::make_shared<SerialLink>(config.port, config,
@@ -41,7 +41,7 @@ void HardwareActuator::Start() {
   if (owns_link_) link_->Start();
 }
 
-controller::WriteStatus HardwareActuator::Write(const controller::HandCommand& command) {
+hand::WriteStatus HardwareActuator::Write(const hand::HandCommand& command) {
   return link_->SendMotor(command);
 }
 
@@ -50,4 +50,4 @@ void HardwareActuator::Stop() {
   if (owns_link_) link_->Stop();
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware

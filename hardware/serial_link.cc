@@ -1,4 +1,4 @@
-#include "sensor/serial/serial_link.h"
+#include "hardware/serial_link.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,14 +10,14 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
-namespace graspbed::serial {
+namespace graspbed::hardware {
 namespace {
 
 constexpr uint32_t kPendingBit = 1u << 31;
 
 int Milliseconds(double seconds) { return std::max(1, static_cast<int>(std::lround(seconds * 1e3))); }
 
-uint32_t PackMotor(const controller::HandCommand& command) {
+uint32_t PackMotor(const hand::HandCommand& command) {
   uint8_t flags = 0;
   if (command.enable) flags |= kMotorEnable;
   if (command.brake) flags |= kMotorBrake;
@@ -157,11 +157,11 @@ bool SerialLink::PopTap(TappedFrame* out) {
   return true;
 }
 
-controller::WriteStatus SerialLink::SendMotor(const controller::HandCommand& command) {
-  if (!connected_.load(std::memory_order_acquire)) return controller::WriteStatus::kDisconnected;
+hand::WriteStatus SerialLink::SendMotor(const hand::HandCommand& command) {
+  if (!connected_.load(std::memory_order_acquire)) return hand::WriteStatus::kDisconnected;
   pending_motor_.store(PackMotor(command), std::memory_order_release);
   Wake();
-  return controller::WriteStatus::kOk;
+  return hand::WriteStatus::kOk;
 }
 
 void SerialLink::MotorOff(double timeout_s) {
@@ -399,4 +399,4 @@ void SerialLink::Shutdown() {
   handshake_ = false;
 }
 
-}  // namespace graspbed::serial
+}  // namespace graspbed::hardware
