@@ -33,12 +33,11 @@
 #include "sensor/layout.h"
 #include "sensor/readout.h"
 #include "hardware/device_emulator.h"
+#include "hardware/frame_logger.h"
 #include "hardware/hardware_backend.h"
-#include "sim/scenario/metrics.h"
+#include "sim/scenario/emulated_hand.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
-#include "sim/scenario/script_player.h"
-#include "sim/sim_rig.h"
 
 namespace graspbed::app {
 namespace {
@@ -83,111 +82,6 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
   root.RejectUnknownKeys();
   return config;
 }
-
-/// Writes one CSV row per decoded frame, off the control loop's thread: frames come from the link's
-/// tap; this thread runs its own readout and inversion on every one of them (the same configuration
-/// and the same re-tare on a new device session as the loop), so no frame is missing from the log
-/// even when the loop took only the newest. The file is written as PATH.partial and renamed at the end.
-class FrameLogger {
- public:
-  FrameLogger(std::string path, hardware::SerialLink& link, const sensor::Layout& layout,
-              const sensor::Calibration& calibration, const controller::ControlLoopConfig& config,
-              double nominal_r0_ohm)
-      : path_(std::move(path)),
-        link_(link),
-        unit_count_(layout.unit_count()),
-        readout_(config.readout, layout.unit_count(), nominal_r0_ohm),
-        inversion_(layout, calibration, config.inversion) {
-    out_.open(path_ + ".partial", std::ios::trunc);
-    if (!out_) throw std::invalid_argument("--log " + path_ + ": cannot write this file");
-    out_ << "seq,device_time_s";
-    for (int k = 0; k < unit_count_; ++k) {
-      // Column names as docs/hardware.md gives them; units: r [Ohm], fn/ft [N], valid 0/1 (docs/hardware.md).
-      out_ << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
-    }
-    out_ << '\n';
-    thread_ = std::thread([this] { Run(); });
-  }
-  /// Stops the writer thread; a log that was not Finish()ed stays PATH.partial (never looks complete).
-  ~FrameLogger() { StopThread(); }
-  FrameLogger(const FrameLogger&) = delete;
-  FrameLogger& operator=(const FrameLogger&) = delete;
-
-  /// Writes what is left, closes and renames the file. Call after the link has stopped. On a write
-  /// or rename failure the file stays PATH.partial and error() says why.
-  void Finish() {
-    if (!StopThread()) return;
-    out_.flush();
-    out_.close();
-    if (out_.fail()) {
-      error_ = "writing " + path_ + ".partial failed (disk full?); left as .partial";
-      return;
-    }
-    std::error_code rename_error;
-    std::filesystem::rename(path_ + ".partial", path_, rename_error);
-    if (rename_error) error_ = "renaming " + path_ + ".partial failed: " + rename_error.message();
-  }
-  uint64_t rows() const { return rows_; }
-  /// Empty unless Finish() could not complete the file.
-  const std::string& error() const { return error_; }
-
- private:
-  /// Joins the writer thread once it has drained the tap; false when it was already stopped.
-  bool StopThread() {
-    if (!thread_.joinable()) return false;
-    done_ = true;
-    thread_.join();
-    return true;
-  }
-
-  void Run() {
-    for (;;) {
-      const bool last_round = done_.load();
-      bool any = false;
-      while (link_.PopTap(&entry_)) {
-        Write();
-        any = true;
-      }
-      if (last_round) return;
-      if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-  }
-
-  void Write() {
-    if (entry_.session != session_) {
-      session_ = entry_.session;
-      readout_.Reset();
-    }
-    readout_.Process(entry_.frame, &readout_frame_);
-    inversion_.Invert(readout_frame_, &state_);
-    char buffer[96];
-    std::snprintf(buffer, sizeof(buffer), "%u,%.6f", entry_.frame.sequence, entry_.frame.time_s);
-    out_ << buffer;
-    for (int k = 0; k < unit_count_; ++k) {
-      std::snprintf(buffer, sizeof(buffer), ",%.3f,%.3f,%.5f,%.5f,%d", entry_.frame.r1_ohm[k],
-                    entry_.frame.r2_ohm[k], state_.fn_n[k], state_.ft_n[k],
-                    state_.validity[k] == sensor::UnitValidity::kValid ? 1 : 0);
-      out_ << buffer;
-    }
-    out_ << '\n';
-    ++rows_;
-  }
-
-  std::string path_;
-  hardware::SerialLink& link_;
-  int unit_count_;
-  sensor::Readout readout_;
-  sensor::Inversion inversion_;
-  hardware::TappedFrame entry_;
-  sensor::ReadoutFrame readout_frame_;
-  sensor::TactileState state_;
-  uint64_t session_ = 1;
-  std::ofstream out_;
-  std::thread thread_;
-  std::atomic<bool> done_{false};
-  std::atomic<uint64_t> rows_{0};
-  std::string error_;
-};
 
 struct HwOptions {
   std::string port;
@@ -269,10 +163,11 @@ void RunHw(const HwOptions& options) {
     throw std::invalid_argument(error.what());
   }
   controller::ControlLoop loop(backend, *grasp, actuator, layout, calibration, config.loop);
-  std::unique_ptr<FrameLogger> logger;
+  std::unique_ptr<hardware::FrameLogger> logger;
   if (!options.log.empty()) {
-    logger = std::make_unique<FrameLogger>(options.log, link, layout, calibration, config.loop,
-                                           backend.nominal_r0_ohm());
+    logger = std::make_unique<hardware::FrameLogger>(
+        options.log, [&link](hardware::TappedFrame* entry) { return link.PopTap(entry); }, layout, calibration,
+        config.loop.readout, config.loop.inversion, backend.nominal_r0_ohm());
   }
 
   // Tick on every frame arrival, and at rate_hz when frames stop (stale detection, commands).
@@ -361,157 +256,6 @@ struct EmulateOptions {
   bool json = false;
 };
 
-/// The simulated hand behind the emulator's callbacks. The scenario's script moves the wrist and the
-/// object; grasp intent belongs to the host's controller, so close/open actions are not played
-/// (ScriptPlayer gives them to a controller nobody ticks). Simulated time starts with the first
-/// STREAM_CONTROL start and advances one sensor period per emulator tick. The outcome is scored as
-/// `graspbed run` scores it (MetricsTracker on the ground truth, once per frame) while the host is in
-/// control, and frozen when the host first stops streaming (stream stop or closing the port).
-class SimulatedDevice {
- public:
-  SimulatedDevice(const scenario::ScenarioConfig& config, const sensor::Layout& layout)
-      : config_(config),
-        rig_(layout, sensor::PaperCalibration(layout.unit_count()), RigConfig(config),
-             controller::MakeController("open_loop", {})),
-        player_(config),
-        tracker_(config.metrics, config.scene.object.crush_limit_n, config.sensor.inversion.contact_threshold_n),
-        period_s_(1.0 / config.sensor.sample_rate_hz),
-        wall_start_(Clock::now()) {
-    player_.Start(rig_);
-    initial_object_z_m_ = rig_.simulation().truth().object_position_m[2];
-    // The tracker sees no estimates (the host has them): a stale state keeps it to ground truth.
-    no_estimate_.stale = true;
-  }
-
-  static sim::SimRigConfig RigConfig(const scenario::ScenarioConfig& config) {
-    sim::SimRigConfig rig;
-    rig.scene = config.scene;
-    rig.backend.sample_rate_hz = config.sensor.sample_rate_hz;
-    rig.backend.latency_s = config.sensor.latency_s;
-    rig.backend.max_latency_s = scenario::MaxLatencyS(config);  // add_latency actions in the script
-    rig.backend.drop_probability = 0.0;  // link faults are the emulator's business here
-    rig.backend.strain_model = config.sensor.strain_model;
-    rig.loop.readout = config.sensor.readout;
-    rig.loop.inversion = config.sensor.inversion;
-    rig.seed = config.seed;
-    return rig;
-  }
-
-  /// Emulator thread: advances the simulation by one sensor period once streaming has begun.
-  void Frame(bool streaming, sensor::RawFrame* frame) {
-    if (streaming) started_ = true;
-    if (started_ && !streaming) host_done_ = true;
-    if (started_) {
-      target_s_ += period_s_;
-      sim::Simulation& simulation = rig_.simulation();
-      while (simulation.time_s() < target_s_) {
-        player_.Update(simulation.time_s(), rig_);
-        simulation.Step();
-        rig_.backend().Poll();
-      }
-      const sim::GroundTruth truth = simulation.truth();
-      std::lock_guard lock(mutex_);
-      sim_time_s_ = simulation.time_s();
-      if (!host_done_) {
-        scenario::TickSample sample;
-        sample.time_s = sim_time_s_;
-        sample.intent = host_intent_;  // the host's controller closes and opens, not the script
-        sample.truth = &truth;
-        sample.state = &no_estimate_;
-        tracker_.Update(sample);
-        outcome_time_s_ = sim_time_s_;
-        outcome_wall_s_ = SecondsSince(wall_start_);
-        peak_squeeze_n_ = std::max(peak_squeeze_n_, truth.object_squeeze_n);
-        last_truth_ = truth;
-        physics_fault_ = rig_.simulation().fault();
-      }
-    }
-    sensor::RawFrame fresh;
-    while (rig_.backend().Read(&fresh) == sensor::ReadStatus::kOk) latest_ = fresh;
-    if (latest_.unit_count == 0) {  // nothing sampled yet: unloaded gauges
-      latest_.unit_count = frame->unit_count;
-      latest_.r1_ohm.fill(rig_.backend().nominal_r0_ohm());
-      latest_.r2_ohm.fill(rig_.backend().nominal_r0_ohm());
-    }
-    frame->flags = latest_.flags;
-    std::copy_n(latest_.r1_ohm.begin(), frame->unit_count, frame->r1_ohm.begin());
-    std::copy_n(latest_.r2_ohm.begin(), frame->unit_count, frame->r2_ohm.begin());
-  }
-
-  /// Emulator thread: the motor state the device drives.
-  void Motor(const hardware::EmulatedMotor& motor) {
-    rig_.actuator().Write({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
-    // What the host means, as far as the motor shows it: closing effort = grasp, opening effort =
-    // release. The motor going off (watchdog, stream loss) is no decision of the host's.
-    if (motor.enable && motor.effort > 0.0) host_intent_ = controller::GraspIntent::kClose;
-    if (motor.enable && motor.effort < 0.0) host_intent_ = controller::GraspIntent::kOpen;
-    if (host_intent_ == controller::GraspIntent::kClose) {
-      std::lock_guard lock(mutex_);
-      if (host_close_s_ < 0.0) host_close_s_ = rig_.simulation().time_s();
-    }
-  }
-
-  /// Ground truth and the metrics of `graspbed run` (same keys) as the host left the hand.
-  nlohmann::json Summary() const {
-    std::lock_guard lock(mutex_);
-    scenario::RunResult result;
-    result.config = config_;
-    result.metrics = tracker_.Finish(outcome_time_s_, outcome_wall_s_, player_.first_close_time_s());
-    result.metrics.physics_fault = physics_fault_.occurred;
-    result.metrics.physics_fault_cause = physics_fault_.occurred ? physics_fault_.cause_text() : "";
-    result.metrics.physics_fault_time_s = physics_fault_.time_s;
-    nlohmann::json metrics = scenario::SummaryJson(result)["metrics"];
-    // The host's controller, not the emulator, sees slip flags and estimates: leave out what it
-    // cannot score.
-    for (const char* key : {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n",
-                            "missed_slip_events", "controller_slip_flags", "false_slip_flags",
-                            "estimation_samples"}) {
-      metrics.erase(key);
-    }
-    return {
-        {"sim_time_s", outcome_time_s_},
-        {"host_close_time_s", host_close_s_ >= 0.0 ? nlohmann::json(host_close_s_) : nlohmann::json(nullptr)},
-        {"object_lift_m", last_truth_.object_position_m[2] - initial_object_z_m_},
-        {"object_height_above_table_m", last_truth_.object_height_above_table_m},
-        {"peak_squeeze_n", peak_squeeze_n_},
-        {"final_squeeze_n", last_truth_.object_squeeze_n},
-        {"finger_contacts", last_truth_.finger_contacts},
-        {"thumb_contacts", last_truth_.thumb_contacts},
-        {"metrics", metrics},
-    };
-  }
-  bool started() const { return started_.load(); }
-  /// True once a host that streamed has stopped (the outcome is frozen).
-  bool host_done() const { return host_done_.load(); }
-  double sim_time_s() const {
-    std::lock_guard lock(mutex_);
-    return sim_time_s_;
-  }
-
- private:
-  scenario::ScenarioConfig config_;
-  sim::SimRig rig_;
-  scenario::ScriptPlayer player_;
-  scenario::MetricsTracker tracker_;
-  sensor::TactileState no_estimate_;
-  double period_s_;
-  Clock::time_point wall_start_;
-  double target_s_ = 0.0;
-  std::atomic<bool> started_{false};
-  std::atomic<bool> host_done_{false};
-  controller::GraspIntent host_intent_ = controller::GraspIntent::kIdle;  ///< emulator thread only
-  sensor::RawFrame latest_;
-  double initial_object_z_m_ = 0.0;
-  mutable std::mutex mutex_;  // guards the values below, read by the main thread
-  double sim_time_s_ = 0.0;
-  double outcome_time_s_ = 0.0;
-  double outcome_wall_s_ = 0.0;
-  double peak_squeeze_n_ = 0.0;
-  double host_close_s_ = -1.0;  // simulated time of the host's first closing command; < 0 none
-  sim::GroundTruth last_truth_;
-  sim::PhysicsFault physics_fault_;
-};
-
 void RunEmulate(const EmulateOptions& options) {
   scenario::ScenarioConfig config;
   if (!options.scenario.empty()) {
@@ -521,7 +265,7 @@ void RunEmulate(const EmulateOptions& options) {
     config.duration_s = 0.0;  // no scenario: until stopped
   }
   const sensor::Layout layout = sensor::LoadLayout(scenario::ResolveLayoutPath(config));
-  SimulatedDevice device(config, layout);
+  scenario::EmulatedHand device(config, layout);
 
   hardware::EmulatorConfig emulator_config;
   emulator_config.link_path = options.link;
@@ -531,7 +275,9 @@ void RunEmulate(const EmulateOptions& options) {
   hardware::DeviceEmulator emulator(
       emulator_config,
       [&device](double, bool streaming, sensor::RawFrame* frame) { device.Frame(streaming, frame); },
-      [&device](const hardware::EmulatedMotor& motor) { device.Motor(motor); });
+      [&device](const hardware::EmulatedMotor& motor) {
+        device.Motor({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
+      });
   StopSignalGuard signals;
   emulator.Start();
   std::cerr << "emulate: device '" << config.name << "' (" << layout.unit_count() << " units) at "

@@ -396,6 +396,22 @@ void WriteFileAtomic(const std::string& path, const std::string& content) {
   }
 }
 
+sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
+  sim::SimRigConfig rig;
+  rig.scene = config.scene;
+  rig.backend.sample_rate_hz = config.sensor.sample_rate_hz;
+  rig.backend.latency_s = config.sensor.latency_s;
+  rig.backend.max_latency_s = MaxLatencyS(config);
+  rig.backend.drop_probability = config.sensor.drop_probability;
+  rig.backend.strain_model = config.sensor.strain_model;
+  rig.loop.stale_timeout_s = config.controller.stale_timeout_s;
+  rig.loop.readout = config.sensor.readout;
+  rig.loop.inversion = config.sensor.inversion;
+  rig.control_rate_hz = config.controller.rate_hz;
+  rig.seed = config.seed;
+  return rig;
+}
+
 RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   RunResult result;
@@ -404,18 +420,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
   const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
   const int units = layout.unit_count();
-  sim::SimRigConfig rig_config;
-  rig_config.scene = config.scene;
-  rig_config.backend.sample_rate_hz = config.sensor.sample_rate_hz;
-  rig_config.backend.latency_s = config.sensor.latency_s;
-  rig_config.backend.max_latency_s = MaxLatencyS(config);
-  rig_config.backend.drop_probability = config.sensor.drop_probability;
-  rig_config.backend.strain_model = config.sensor.strain_model;
-  rig_config.loop.stale_timeout_s = config.controller.stale_timeout_s;
-  rig_config.loop.readout = config.sensor.readout;
-  rig_config.loop.inversion = config.sensor.inversion;
-  rig_config.control_rate_hz = config.controller.rate_hz;
-  rig_config.seed = config.seed;
+  const sim::SimRigConfig rig_config = RigConfigFor(config);
   rig_config.Validate();
 
   // The rig first: a scene it refuses (bodies that start inside each other) leaves no output behind.

@@ -24,6 +24,7 @@
 
 namespace graspbed::sim {
 class SimRig;
+struct SimRigConfig;
 }  // namespace graspbed::sim
 
 namespace graspbed::scenario {
@@ -110,6 +111,11 @@ struct RunResult {
 /// MuJoCo warning) is a result, not an exception: it ends the run at once, the outputs so far are
 /// written, and the run fails (metrics.physics_fault with its cause and time).
 RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options = {});
+
+/// The simulated rig `config` describes: scene, simulated sensor (rate, latency up to the script's
+/// add_latency actions, frame drops, strain model), the loop's readout, inversion and stale timeout,
+/// the control rate and the seed. RunScenario and the emulator (EmulatedHand) build their rigs from it.
+sim::SimRigConfig RigConfigFor(const ScenarioConfig& config);
 
 /// summary.json content for `result`.
 nlohmann::json SummaryJson(const RunResult& result);
