@@ -85,10 +85,21 @@ struct RunCommandOptions {
   bool json = false;
   bool no_plots = false;
   VideoCommandOptions video;
+  // Backend (docs/hardware.md, "One runner, three backends").
+  std::string backend;
+  std::string port;
+  std::string log;
+  bool prompt_actions = false;
+  std::string intent_fifo;
+  bool no_stdin_intent = false;
 };
 
 void RunCommand(const RunCommandOptions& options) {
   std::vector<scenario::Override> overrides;
+  // The port and the log before the backend that needs them (each override is checked as applied).
+  if (!options.port.empty()) overrides.push_back({"serial.port", options.port});
+  if (!options.log.empty()) overrides.push_back({"log", options.log});
+  if (!options.backend.empty()) overrides.push_back({"backend", options.backend});
   if (!options.controller.empty()) {
     overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
   }
@@ -100,7 +111,11 @@ void RunCommand(const RunCommandOptions& options) {
   run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
   run.write_plots = !options.no_plots;
   run.stop = &StopRequested();
-  const bool terminal = StderrIsTerminal();
+  run.prompt_actions = options.prompt_actions;
+  run.intent_stdin = config.backend == scenario::Backend::kSerial && !options.no_stdin_intent;
+  run.intent_fifo = options.intent_fifo;
+  // The progress line would run into the bench's prompts and intent echoes.
+  const bool terminal = StderrIsTerminal() && config.backend == scenario::Backend::kSim;
   if (terminal) {
     run.progress = [&config](double sim_s, double duration_s) {
       std::fprintf(stderr, "\r  %s: %.2f / %.2f s simulated ", config.name.c_str(), sim_s, duration_s);
@@ -127,9 +142,12 @@ void RunCommand(const RunCommandOptions& options) {
     std::cout << scenario::SummaryJson(result).dump(2) << '\n';
   } else {
     std::cout << scenario::SummaryTable(result);
+    const bool sim = config.backend == scenario::Backend::kSim;
     std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
-              << (options.no_plots ? "" : ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, taxels_fn.png, taxels_ft.png")
-              << ", states.csv" << (options.video.enabled ? ", video.mp4, video_strip.png" : "") << ")\n";
+              << (options.no_plots ? ""
+                  : sim ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, taxels_fn.png, taxels_ft.png"
+                        : ", forces.png, grip.png, taxels_fn.png, taxels_ft.png")
+              << (sim ? ", states.csv" : "") << (options.video.enabled ? ", video.mp4, video_strip.png" : "") << ")\n";
   }
   if (!result.completed) {
     std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in " << run.out_dir
@@ -161,6 +179,22 @@ void AddRunCommand(CLI::App& root) {
   command->add_flag("--json", options->json, "print the summary JSON on stdout instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
   options->video.Add(command, "OUT/video.mp4");
+  command->add_option("--backend", options->backend,
+                      "sim (default), serial (the hand or `graspbed emulate` on --port) or replay (the recording "
+                      "at --log)")
+      ->check(CLI::IsMember({"sim", "serial", "replay"}));
+  command->add_option("--port", options->port, "backend serial: serial device (serial.port)");
+  command->add_option("--log", options->log,
+                      "backend serial: also write every decoded frame to this CSV; backend replay: the recording "
+                      "(a run's signals.csv or a frame log)");
+  command->add_flag("--prompt-actions", options->prompt_actions,
+                    "backend serial: print script actions that need the simulator (lift, pull, add_mass, ...) as "
+                    "prompts at their times instead of refusing them");
+  command->add_option("--intent-fifo", options->intent_fifo,
+                      "backend serial: read intent lines (close/open/idle/quit) from this FIFO, e.g. from an EMG "
+                      "pipeline (created when missing)");
+  command->add_flag("--no-stdin-intent", options->no_stdin_intent,
+                    "backend serial: do not read intent from stdin (keys c/o/i/q on a terminal, lines otherwise)");
   command->callback([options] { RunCommand(*options); });
 }
 

@@ -44,6 +44,7 @@ void ControlLoop::SetBaseline(std::span<const double> r1_ohm, std::span<const do
 sensor::ReadStatus ControlLoop::Tick(double time_s) {
   ++counters_.ticks;
   const sensor::ReadStatus status = backend_.Read(&frame_);
+  last_status_ = status;
   if (status == sensor::ReadStatus::kOk) {
     // A device that rebooted starts a new session: its baseline is no longer ours.
     if (backend_.session() != session_) {

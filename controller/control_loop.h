@@ -62,6 +62,10 @@ class ControlLoop {
   /// Command written at the last tick.
   const hand::HandCommand& command() const { return command_; }
   const LoopCounters& counters() const { return counters_; }
+  /// The backend's answer at the last Tick() (kNoNewFrame before the first).
+  sensor::ReadStatus last_status() const { return last_status_; }
+  /// Device session of the frame the loop holds (a change re-tares).
+  uint64_t session() const { return session_; }
   /// Forgets the tare baseline; the next frames are averaged into a new one.
   void Retare();
   /// Uses a stored baseline instead of taring from the first frames [Ohm], layout order.
@@ -82,6 +86,7 @@ class ControlLoop {
   LoopCounters counters_;
   double last_frame_time_s_ = -1.0;  ///< loop time of the newest frame; < 0 before the first
   uint64_t session_ = 0;
+  sensor::ReadStatus last_status_ = sensor::ReadStatus::kNoNewFrame;
   bool stale_ = false;
 };
 

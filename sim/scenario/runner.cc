@@ -20,6 +20,7 @@
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
 #include "sim/scenario/script_player.h"
+#include "sim/scenario/run_outputs.h"
 #include "sim/scenario/signal_log.h"
 #include "sim/scenario/state_log.h"
 #include "sim/sim_rig.h"
@@ -29,29 +30,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kIncompleteMarker = "INCOMPLETE";
-// Files a run writes; removed at the start so an old result never sits next to a new run.
-constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
-                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png",
-                                        "taxels_fn.png",         "taxels_ft.png", "states.csv",
-                                        "video.mp4",             "video_strip.png"};
-// Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
-constexpr double kTaxelScaleFloorN = 0.5;
+using internal::kIncompleteMarker;
+using internal::kLoopColumnCount;
+using internal::IntentName;
+using internal::Line;
+using internal::MakeChart;
+using internal::PerUnitFnChart;
+using internal::HorizontalLine;
+using internal::ScriptMarkers;
+using internal::WriteTaxelMaps;
+using internal::WriteCsvAtomic;
+using internal::PrepareOutputDir;
+
 // Simulated time between progress callbacks [s].
 constexpr double kProgressPeriodS = 0.1;
 
-
-const char* IntentName(controller::GraspIntent intent) {
-  switch (intent) {
-    case controller::GraspIntent::kClose:
-      return "close";
-    case controller::GraspIntent::kOpen:
-      return "open";
-    case controller::GraspIntent::kIdle:
-      return "idle";
-  }
-  return "idle";
-}
 
 /// True unit loads per control tick in a ring, to look up the truth at a frame's sample time.
 class TruthRing {
@@ -94,23 +87,9 @@ class TruthRing {
   std::vector<sensor::UnitLoad> loads_;
 };
 
-// Column indices of the fixed (non per-unit) numeric signals.
+// Column indices of the ground-truth signals, after the loop's columns (internal::LoopColumn).
 enum Col : size_t {
-  kTime,
-  kGripEffort,
-  kEnable,
-  kBrake,
-  kGripTarget,
-  kFrictionEstimate,
-  kSlipFlag,
-  kSafeHold,
-  kStale,
-  kValidUnits,
-  kContactUnits,
-  kEstTotalFn,
-  kEstShearAxial,
-  kEstShearCirc,
-  kTrueSensedFn,
+  kTrueSensedFn = kLoopColumnCount,
   kTrueFingerFn,
   kTrueThumbFn,
   kTrueSqueeze,
@@ -134,16 +113,12 @@ enum Col : size_t {
   kFixedCount
 };
 
-constexpr const char* kFixedNames[kFixedCount] = {
-    "time_s",          "grip_effort",        "motor_enable",     "brake",
-    "grip_target_n",   "friction_estimate",  "slip_flag",        "safe_hold",
-    "stale",           "valid_units",        "contact_units",    "est_total_fn_n",
-    "est_shear_axial_n", "est_shear_circumferential_n", "true_sensed_fn_n", "true_finger_fn_n",
-    "true_thumb_fn_n", "true_squeeze_n",     "slip_speed_mm_s",  "object_x_m",
-    "object_y_m",      "object_z_m",         "object_height_m",  "wrist_x_m",
-    "wrist_y_m",       "wrist_z_m",          "wrist_target_z_m", "grip_closure_m",
-    "object_mass_kg",  "external_force_x_n", "external_force_y_n", "external_force_z_n",
-    "holding",         "slip_event",         "slip_distance_mm"};
+constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] = {
+    "true_sensed_fn_n", "true_finger_fn_n", "true_thumb_fn_n", "true_squeeze_n",     "slip_speed_mm_s",
+    "object_x_m",       "object_y_m",       "object_z_m",      "object_height_m",    "wrist_x_m",
+    "wrist_y_m",        "wrist_z_m",        "wrist_target_z_m", "grip_closure_m",    "object_mass_kg",
+    "external_force_x_n", "external_force_y_n", "external_force_z_n", "holding",     "slip_event",
+    "slip_distance_mm"};
 
 // Per-unit columns, in this order per unit.
 constexpr const char* kUnitNames[] = {"r1_ohm", "r2_ohm", "fn_est_n", "ft_est_n", "fn_true_n", "ft_true_n",
@@ -151,115 +126,12 @@ constexpr const char* kUnitNames[] = {"r1_ohm", "r2_ohm", "fn_est_n", "ft_est_n"
 constexpr size_t kPerUnit = std::size(kUnitNames);
 
 std::vector<std::string> NumericColumns(int units) {
-  std::vector<std::string> names(kFixedNames, kFixedNames + kFixedCount);
+  std::vector<std::string> names(internal::kLoopColumnNames, internal::kLoopColumnNames + kLoopColumnCount);
+  names.insert(names.end(), std::begin(kTruthNames), std::end(kTruthNames));
   for (int u = 0; u < units; ++u) {
     for (const char* name : kUnitNames) names.push_back(std::string(name) + "_" + std::to_string(u));
   }
   return names;
-}
-
-std::string TempPath(const std::string& path) {
-  static std::atomic<uint64_t> counter{0};
-  return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-}
-
-void WriteCsvAtomic(const SignalLog& log, const std::string& path) {
-  const std::string temp = TempPath(path);
-  std::FILE* file = std::fopen(temp.c_str(), "w");
-  if (file == nullptr) throw std::runtime_error(path + ": cannot write");
-  try {
-    log.WriteCsv(file);
-  } catch (const std::exception&) {
-    std::fclose(file);
-    std::remove(temp.c_str());
-    throw std::runtime_error(path + ": write error");
-  }
-  if (std::fclose(file) != 0 || std::rename(temp.c_str(), path.c_str()) != 0) {
-    std::remove(temp.c_str());
-    throw std::runtime_error(path + ": write error");
-  }
-}
-
-plot::Chart MakeChart(const std::string& title, const std::string& x_label, const std::string& y_label) {
-  plot::Chart chart;
-  chart.title = title;
-  chart.x_label = x_label;
-  chart.y_label = y_label;
-  return chart;
-}
-
-plot::Series HorizontalLine(const std::string& name, double x0, double x1, double y) {
-  plot::Series series;
-  series.name = name;
-  series.x = {x0, x1};
-  series.y = {y, y};
-  series.dashed = true;
-  return series;
-}
-
-plot::Series Line(const SignalLog& log, const std::vector<double>& time, const std::string& column,
-                  const std::string& name, double scale = 1.0, bool dashed = false) {
-  plot::Series series;
-  series.name = name;
-  series.x = time;
-  series.y = log.ColumnValues(column);
-  for (double& value : series.y) value *= scale;
-  series.dashed = dashed;
-  return series;
-}
-
-// One marker per action that fired, at the time it fired (an event action's time is the run's).
-std::vector<plot::Marker> ScriptMarkers(const RunResult& result) {
-  std::vector<plot::Marker> markers;
-  for (size_t i = 0; i < result.config.script.size(); ++i) {
-    const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
-    if (fired_s >= 0.0) markers.push_back({fired_s, ActionName(result.config.script[i].kind)});
-  }
-  return markers;
-}
-
-// Units x time colour maps of the estimated Fn and Ft ("which units were loaded when"): one row per
-// unit in layout order, labelled with its index, row and column and beam axis; an invalid estimate
-// (dead, shorted, saturated, not yet tared) is grey.
-void WriteTaxelMaps(const RunResult& result, const SignalLog& log, const sensor::Layout& layout,
-                    const std::vector<double>& time, const std::string& title, const std::string& dir) {
-  plot::Heatmap fn;
-  fn.x_label = "time [s]";
-  fn.row_label = "unit (row, column, beam axis)";
-  fn.x = time;
-  fn.markers = ScriptMarkers(result);
-  plot::Heatmap ft = fn;
-  double fn_max = kTaxelScaleFloorN;
-  double ft_max = kTaxelScaleFloorN;
-  for (int u = 0; u < layout.unit_count(); ++u) {
-    const sensor::UnitPose& pose = layout.units[static_cast<size_t>(u)];
-    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" + std::to_string(pose.column) +
-                              (pose.orientation == sensor::BeamOrientation::kAxial ? ", ax)" : ", circ)");
-    fn.row_labels.push_back(label);
-    ft.row_labels.push_back(label);
-    std::vector<double> fn_row = log.ColumnValues("fn_est_n_" + std::to_string(u));
-    std::vector<double> ft_row = log.ColumnValues("ft_est_n_" + std::to_string(u));
-    const std::vector<double> validity = log.ColumnValues("validity_" + std::to_string(u));
-    for (size_t i = 0; i < validity.size(); ++i) {
-      if (validity[i] != static_cast<double>(sensor::UnitValidity::kValid)) {
-        fn_row[i] = ft_row[i] = std::numeric_limits<double>::quiet_NaN();
-        continue;
-      }
-      if (std::isfinite(fn_row[i])) fn_max = std::max(fn_max, fn_row[i]);
-      if (std::isfinite(ft_row[i])) ft_max = std::max(ft_max, std::abs(ft_row[i]));
-    }
-    fn.values.push_back(std::move(fn_row));
-    ft.values.push_back(std::move(ft_row));
-  }
-  fn.title = title + ": estimated Fn per unit";
-  fn.value_label = "Fn [N], estimated";
-  fn.value_max = fn_max;
-  ft.title = title + ": estimated Ft per unit (along its beam)";
-  ft.value_label = "Ft [N], estimated";
-  ft.signed_scale = true;
-  ft.value_max = ft_max;
-  plot::WritePng(fn, dir + "/taxels_fn.png");
-  plot::WritePng(ft, dir + "/taxels_ft.png");
 }
 
 void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Layout& layout, const std::string& dir) {
@@ -271,11 +143,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   plot::Figure forces;
   forces.title = title + ": forces";
   forces.columns = 1;
-  plot::Chart per_unit = MakeChart("Estimated normal force per unit", "time [s]", "Fn [N]");
-  for (int u = 0; u < units; ++u) {
-    per_unit.series.push_back(Line(log, time, "fn_est_n_" + std::to_string(u), "unit " + std::to_string(u)));
-  }
-  per_unit.include_zero_y = true;
+  const plot::Chart per_unit = PerUnitFnChart(log, time, units);
   plot::Chart totals = MakeChart("Total normal force", "time [s]", "force [N]");
   totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
   totals.series.push_back(Line(log, time, "true_sensed_fn_n", "true, on the mesas", 1.0, true));
@@ -363,38 +231,7 @@ nlohmann::json Optional(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-void PrepareOutputDir(const std::string& dir) {
-  std::error_code error;
-  fs::create_directories(dir, error);
-  // A place the user named that cannot hold results is bad input (exit 2), not a failed expectation.
-  if (error || !fs::is_directory(dir)) {
-    throw std::invalid_argument("--out " + dir + ": cannot create the output directory" +
-                                (error ? " (" + error.message() + ")" : ""));
-  }
-  for (const char* name : kOutputFiles) fs::remove(fs::path(dir) / name, error);
-  WriteFileAtomic(dir + "/" + kIncompleteMarker,
-                  "This run is in progress or was interrupted; its results are not complete.\n");
-}
-
 }  // namespace
-
-void WriteFileAtomic(const std::string& path, const std::string& content) {
-  const std::string temp = TempPath(path);
-  {
-    std::ofstream stream(temp, std::ios::binary | std::ios::trunc);
-    if (!stream) throw std::runtime_error(path + ": cannot write");
-    stream << content;
-    stream.flush();
-    if (!stream) {
-      std::remove(temp.c_str());
-      throw std::runtime_error(path + ": write error");
-    }
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    std::remove(temp.c_str());
-    throw std::runtime_error(path + ": cannot rename the temporary file into place");
-  }
-}
 
 sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
   sim::SimRigConfig rig;
@@ -413,6 +250,7 @@ sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
 }
 
 RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
+  if (config.backend != Backend::kSim) return internal::RunOnBench(config, options);
   const auto wall_start = std::chrono::steady_clock::now();
   RunResult result;
   result.config = config;
@@ -479,7 +317,6 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     const sensor::TactileState& state = rig->loop().state();
     const std::span<const sensor::UnitLoad> true_loads = truth_ring.Near(state.time_s);
     const controller::ControllerTelemetry telemetry = rig->controller().telemetry();
-    const hand::HandCommand& command = rig->loop().command();
 
     TickSample sample;
     sample.time_s = t;
@@ -497,20 +334,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       text[0] = IntentName(player.intent());
       text[1] = telemetry.phase;
       text[2] = telemetry.slip_cues;
-      row[kTime] = t;
-      row[kGripEffort] = command.grip_effort;
-      row[kEnable] = command.enable ? 1.0 : 0.0;
-      row[kBrake] = command.brake ? 1.0 : 0.0;
-      row[kGripTarget] = telemetry.grip_target_n;
-      row[kFrictionEstimate] = telemetry.friction_estimate;
-      row[kSlipFlag] = telemetry.slip_detected ? 1.0 : 0.0;
-      row[kSafeHold] = telemetry.safe_hold ? 1.0 : 0.0;
-      row[kStale] = state.stale ? 1.0 : 0.0;
-      row[kValidUnits] = state.valid_count;
-      row[kContactUnits] = state.contact_count;
-      row[kEstTotalFn] = state.total_fn_n;
-      row[kEstShearAxial] = state.total_shear_axial_n;
-      row[kEstShearCirc] = state.total_shear_circumferential_n;
+      internal::WriteLoopCells(row, t, rig->loop(), telemetry);
       double sensed = 0.0;
       for (const sensor::UnitLoad& load : true_loads) sensed += load.fn_n;
       row[kTrueSensedFn] = sensed;
@@ -604,6 +428,38 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
 nlohmann::json SummaryJson(const RunResult& result) {
   const Metrics& m = result.metrics;
+  if (result.config.backend != Backend::kSim) {
+    // No ground truth: the bench's own record instead of the simulation's metrics.
+    nlohmann::json expectations = nlohmann::json::array();
+    for (const ExpectationOutcome& o : result.outcomes) {
+      expectations.push_back({{"name", o.name}, {"limit", o.limit}, {"scored", false}, {"note", o.note}});
+    }
+    nlohmann::json script = nlohmann::json::array();
+    for (size_t i = 0; i < result.config.script.size(); ++i) {
+      const Action& action = result.config.script[i];
+      const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
+      script.push_back({{"action", ActionName(action.kind)},
+                        {"line", action.line},
+                        {"at_s", action.at_s},
+                        {"fired_s", fired_s >= 0.0 ? nlohmann::json(fired_s) : nlohmann::json(nullptr)}});
+    }
+    return {{"scenario", result.config.name},
+            {"source_file", result.config.source_file},
+            {"controller", result.config.controller.name},
+            {"backend", BackendName(result.config.backend)},
+            {"completed", result.completed},
+            {"passed", result.passed},
+            {"duration_s", m.sim_s},
+            {"wall_s", m.wall_s},
+            {"bench", result.bench},
+            {"expectations", expectations},
+            {"script", script},
+            {"counters",
+             {{"control_ticks", result.control_ticks},
+              {"frames", result.frames},
+              {"stale_ticks", result.stale_ticks},
+              {"signal_rows_lost", result.signal_rows_lost}}}};
+  }
   nlohmann::json metrics = {
       {"dropped", m.dropped},
       {"max_slip_mm", m.max_slip_mm},
@@ -696,6 +552,7 @@ std::string SummaryTable(const RunResult& result) {
   const Metrics& m = result.metrics;
   std::ostringstream out;
   char line[256];
+  if (result.config.backend != Backend::kSim) return internal::BenchSummaryTable(result);
   const auto optional_text = [](const std::optional<double>& v, const char* format) {
     if (!v) return std::string("none");
     char buffer[64];

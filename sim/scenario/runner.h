@@ -1,6 +1,7 @@
 #pragma once
-/// Running one scenario: builds the rig (simulation, simulated sensor, control loop, controller,
-/// actuator), plays the script, scores the run and writes its outputs:
+/// Running one scenario on its backend (`backend: sim | serial | replay`; serial and replay in
+/// bench_runner.cc, docs/hardware.md). On the simulation: builds the rig (simulation, simulated
+/// sensor, control loop, controller, actuator), plays the script, scores the run and writes its outputs:
 ///   DIR/config.yaml   the fully resolved configuration (loads again to reproduce the run)
 ///   DIR/signals.csv   one row per control tick (docs/scenarios.md, "Outputs")
 ///   DIR/summary.json  metrics, every expectation with its outcome, and `passed`
@@ -79,6 +80,15 @@ struct RunOptions {
   /// Called once after the loop with the result, before summary.json is written and the INCOMPLETE
   /// marker removed (a video is finished there). An exception from it propagates.
   std::function<void(const RunResult&)> on_finished;
+  /// backend serial: script actions that need the simulator (lift, pull, add_mass, ...) are printed
+  /// on stderr at their times as prompts for a person at the bench, instead of refusing the scenario.
+  bool prompt_actions = false;
+  /// backend serial: live intent from standard input (keys c/o/i/q on a terminal, lines
+  /// close/open/idle/quit otherwise).
+  bool intent_stdin = false;
+  /// backend serial: live intent lines from this FIFO, e.g. an EMG classifier's ("" none; created
+  /// when missing).
+  std::string intent_fifo;
 };
 
 /// Lets a suite or sweep add observers (e.g. a video) to the options of each run it starts: called on
@@ -103,9 +113,12 @@ struct RunResult {
   uint64_t control_ticks = 0;
   size_t signal_rows_lost = 0;    ///< rows beyond the reserved signal storage (should be 0)
   std::string out_dir;            ///< where the outputs went ("" none)
+  /// backend serial or replay: link counters, intent events, prompts, controller phases, the
+  /// replayed commands' comparison (summary.json "bench", docs/hardware.md); null for sim.
+  nlohmann::json bench;
 };
 
-/// Runs `config`. Throws std::invalid_argument (common::ConfigError naming the scenario file) for a
+/// Runs `config` on config.backend. Throws std::invalid_argument (common::ConfigError naming the scenario file) for a
 /// configuration the rig refuses, e.g. a scene whose bodies start inside each other, before any
 /// output is written; std::runtime_error when outputs cannot be written. A physics fault (NaN, a
 /// MuJoCo warning) is a result, not an exception: it ends the run at once, the outputs so far are

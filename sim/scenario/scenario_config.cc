@@ -474,6 +474,16 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   if (auto expectations_map = map.GetMap("expectations")) {
     config.expectations = LoadExpectations(*expectations_map, config);
   }
+  const std::string backend = map.GetString("backend", "sim", {"sim", "serial", "replay"});
+  config.backend = backend == "serial" ? Backend::kSerial : backend == "replay" ? Backend::kReplay : Backend::kSim;
+  if (auto serial_map = map.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*serial_map);
+  config.log = map.GetString("log", "");
+  if (config.backend == Backend::kReplay && config.log.empty()) {
+    map.Fail("backend", "replay needs the recording to replay: log: PATH (or graspbed run --log PATH)");
+  }
+  if (config.backend == Backend::kSerial && config.serial.port.empty()) {
+    map.Fail("backend", "serial needs a port: serial: {port: PATH} (or graspbed run --port PATH)");
+  }
   map.RejectUnknownKeys();
   AtMap(map, [&] { config.Validate(); });
   double latency_s = config.sensor.latency_s;
@@ -968,6 +978,18 @@ std::string ResolveLayoutPath(const ScenarioConfig& config) {
                                                : config.sensor.layout;
 }
 
+const char* BackendName(Backend backend) {
+  switch (backend) {
+    case Backend::kSim:
+      return "sim";
+    case Backend::kSerial:
+      return "serial";
+    case Backend::kReplay:
+      return "replay";
+  }
+  return "sim";
+}
+
 std::string EmitScenarioYaml(const ScenarioConfig& config) {
   YAML::Emitter out;
   out << YAML::BeginMap;
@@ -975,6 +997,23 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   out << YAML::Key << "description" << YAML::Value << config.description;
   out << YAML::Key << "seed" << YAML::Value << config.seed;
   EmitNumber(out, "duration_s", config.duration_s);
+  out << YAML::Key << "backend" << YAML::Value << BackendName(config.backend);
+  if (config.backend == Backend::kSerial) {
+    const hardware::HardwareConfig& h = config.serial;
+    out << YAML::Key << "serial" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "port" << YAML::Value << h.port;
+    out << YAML::Key << "motor_port" << YAML::Value << h.motor_port;
+    out << YAML::Key << "baud" << YAML::Value << h.baud;
+    EmitNumber(out, "hello_timeout_s", h.hello_timeout_s);
+    EmitNumber(out, "stale_timeout_s", h.stale_timeout_s);
+    EmitNumber(out, "disconnect_timeout_s", h.disconnect_timeout_s);
+    EmitNumber(out, "reconnect_backoff_s", h.reconnect_backoff_s);
+    EmitNumber(out, "reconnect_backoff_max_s", h.reconnect_backoff_max_s);
+    EmitNumber(out, "poll_interval_s", h.poll_interval_s);
+    EmitNumber(out, "write_timeout_s", h.write_timeout_s);
+    out << YAML::EndMap;
+  }
+  if (!config.log.empty()) out << YAML::Key << "log" << YAML::Value << config.log;
   EmitScene(out, config.scene);
   EmitSensor(out, config.sensor);
 

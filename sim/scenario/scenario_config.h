@@ -18,6 +18,7 @@
 #include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "controller/control_loop.h"
+#include "hardware/hardware_config.h"
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
@@ -209,6 +210,14 @@ struct ControllerOptions {
 /// and the controller's own cross-field checks are refused at the offending key with file and line.
 ControllerOptions LoadControllerOptions(const common::YamlMap& map, const std::string& default_name = "open_loop");
 
+/// Where a run's frames come from and its commands go (docs/hardware.md, "One runner, three
+/// backends"): the simulation; the hand over a serial link (or `graspbed emulate`); a recording
+/// played back through readout, inversion and controller.
+enum class Backend { kSim, kSerial, kReplay };
+
+/// "sim", "serial", "replay".
+const char* BackendName(Backend backend);
+
 /// A complete scenario.
 struct ScenarioConfig {
   std::string name;          ///< default: the file name without .yaml
@@ -224,6 +233,12 @@ struct ScenarioConfig {
   std::vector<Action> script;
   Expectations expectations;
   MetricsConfig metrics;
+  Backend backend = Backend::kSim;  ///< `backend:`; `graspbed run --backend`
+  /// backend serial: ports, baud and timeouts of the link (`serial:`, as in `hw --config`).
+  hardware::HardwareConfig serial;
+  /// backend serial: also write every decoded frame to this CSV (optional, "" none); backend replay:
+  /// the recording to replay (a run's signals.csv or a frame log; required). `graspbed run --log`.
+  std::string log;
 
   /// Throws std::invalid_argument naming the field and value (cross-field checks).
   void Validate() const;

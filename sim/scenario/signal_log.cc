@@ -1,5 +1,8 @@
 #include "sim/scenario/signal_log.h"
 
+#include <charconv>
+#include <cmath>
+
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
@@ -51,8 +54,16 @@ void SignalLog::WriteCsv(std::FILE* file) const {
     line.clear();
     for (size_t c = 0; c < numeric_columns_.size(); ++c) {
       if (c > 0) line += ',';
-      std::snprintf(cell, sizeof(cell), "%.9g", At(r, c));
-      line += cell;
+      // Shortest text that reads back to the same double: a replay feeds the loop these very numbers.
+      const double value = At(r, c);
+      if (std::isnan(value)) {
+        line += "nan";
+      } else if (std::isinf(value)) {
+        line += value > 0 ? "inf" : "-inf";
+      } else {
+        const auto result = std::to_chars(cell, cell + sizeof(cell), value);
+        line.append(cell, result.ptr);
+      }
       if (c == 0) {
         for (size_t t = 0; t < text_columns_.size(); ++t) {
           line += ',';

@@ -37,7 +37,8 @@ class SignalLog {
   std::vector<double> ColumnValues(const std::string& name) const;
 
   /// Writes the log as CSV (header: text columns after the first numeric column "time_s"). Numbers
-  /// with %.9g; inf/nan as "inf"/"nan". Throws std::runtime_error on a write error.
+  /// in the shortest form that reads back (strtod) to the same double; inf/nan as "inf"/"nan".
+  /// Throws std::runtime_error on a write error.
   void WriteCsv(std::FILE* file) const;
 
  private:

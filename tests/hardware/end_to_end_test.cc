@@ -4,12 +4,7 @@
 // assertion: waits are generous deadlines, and the checks are on outcomes and counters.
 #include <gtest/gtest.h>
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -24,16 +19,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/support/child_process.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
-
-extern char** environ;
 
 namespace graspbed::hardware {
 namespace {
 
 using graspbed::testing::CliBinary;
+using Child = graspbed::testing::ChildProcess;
 using graspbed::testing::ReadText;
 using graspbed::testing::TempDir;
 
@@ -101,57 +96,6 @@ std::map<std::string, std::vector<double>> ReadSignals(const std::string& path) 
 }
 // "Few dropped": a loaded machine can stall the host long enough for the emulator's FIFO to overflow.
 constexpr double kMaxDroppedFraction = 0.02;
-
-/// A child process with stdout and stderr in files. Ended by its pid only (SIGTERM, then SIGKILL).
-class Child {
- public:
-  Child(const std::vector<std::string>& args, const std::string& out_path, const std::string& err_path)
-      : out_path_(out_path), err_path_(err_path) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Child() {
-    if (pid_ <= 0 || exit_code_) return;
-    ::kill(pid_, SIGTERM);
-    if (!Wait(5.0)) {
-      ::kill(pid_, SIGKILL);
-      Wait(5.0);
-    }
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-
-  bool started() const { return pid_ > 0; }
-  /// Waits up to `timeout_s` for the exit; the exit code (128 + signal when killed), or nullopt.
-  std::optional<int> Wait(double timeout_s) {
-    if (exit_code_ || pid_ <= 0) return exit_code_;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    for (;;) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        return exit_code_;
-      }
-      if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  }
-  std::string out() const { return ReadText(out_path_); }
-  std::string err() const { return ReadText(err_path_); }
-
- private:
-  pid_t pid_ = -1;
-  std::optional<int> exit_code_;
-  std::string out_path_;
-  std::string err_path_;
-};
 
 class EndToEndTest : public ::testing::Test {
  protected:

@@ -39,7 +39,7 @@ Signals::Signals(const std::string& csv_path) {
   std::vector<std::vector<double>*> numeric(header_.size(), nullptr);
   std::vector<std::vector<std::string>*> text(header_.size(), nullptr);
   for (size_t c = 0; c < header_.size(); ++c) {
-    if (header_[c] == "intent" || header_[c] == "phase") {
+    if (header_[c] == "intent" || header_[c] == "phase" || header_[c] == "slip_cues" || header_[c] == "recorded_phase") {
       text[c] = &text_[header_[c]];
     } else {
       numeric[c] = &numeric_[header_[c]];

@@ -1,0 +1,231 @@
+// backend replay and `graspbed compare` through the real CLI: a simulated run replayed with the
+// controller that recorded it writes the same commands bit for bit; with another controller the
+// output shows both; a frame log replays frame by frame under the scenario's intent script; bad
+// recordings are refused by name; a run compared with itself has zero residuals.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/scenario/scenario_test_util.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::scenario {
+namespace {
+
+using graspbed::testing::CliBinary;
+using graspbed::testing::CliResult;
+using graspbed::testing::ReadText;
+using graspbed::testing::RunCli;
+using graspbed::testing::TempDir;
+using testing::Signals;
+
+// A shipped scenario with slip: the grip-slip controller's commands depend on every frame.
+constexpr char kScenario[] = "scenarios/pull_ramp.yaml";
+constexpr int kUnits = 20;
+constexpr double kR0Ohm = 3400.0;
+// Fn = 5 N alone on a paper unit: R = R0 (1 + G kn Fn) = 3400 x 1.275.
+constexpr double kLoadedOhm = 4335.0;
+constexpr double kLoadedFnN = 5.0;
+// The ideal sensor inverts the paper's numbers exactly up to rounding of the doubles.
+constexpr double kInversionTolN = 1e-9;
+
+/// The raw text of column `name` of a CSV, row by row (for bit-exact comparisons).
+std::vector<std::string> ColumnText(const std::string& path, const std::string& name) {
+  std::ifstream csv(path);
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> header;
+  std::stringstream split(line);
+  for (std::string cell; std::getline(split, cell, ',');) header.push_back(cell);
+  size_t column = header.size();
+  for (size_t c = 0; c < header.size(); ++c) {
+    if (header[c] == name) column = c;
+  }
+  std::vector<std::string> values;
+  if (column == header.size()) {
+    ADD_FAILURE() << path << " has no column " << name;
+    return values;
+  }
+  while (std::getline(csv, line)) {
+    std::stringstream cells(line);
+    std::string cell;
+    for (size_t c = 0; c <= column && std::getline(cells, cell, ','); ++c) {
+    }
+    values.push_back(cell);
+  }
+  return values;
+}
+
+class ReplayCompareTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
+  }
+  std::string Path(const std::string& name) const { return dir_.Path(name); }
+  nlohmann::json Summary(const std::string& run) const {
+    return nlohmann::json::parse(ReadText(Path(run) + "/summary.json"));
+  }
+  /// The simulated reference run, once per test.
+  void RunSimulation() {
+    const CliResult sim = RunCli(std::string("run ") + kScenario + " --no-plots --out " + Path("sim"));
+    ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  }
+
+  const TempDir dir_{"replay"};
+};
+
+TEST_F(ReplayCompareTest, ReplayWithTheRecordedControllerReproducesEveryCommandBitForBit) {
+  RunSimulation();
+  const CliResult replay = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
+                                  "/signals.csv --no-plots --out " + Path("replay"));
+  ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  const nlohmann::json bench = Summary("replay").at("bench");
+  const size_t rows = ColumnText(Path("sim") + "/signals.csv", "time_s").size();
+  ASSERT_GT(rows, 1000u);
+  EXPECT_EQ(bench.at("recorded_ticks").get<size_t>(), rows);
+  EXPECT_EQ(bench.at("commands_compared").get<size_t>(), rows);
+  EXPECT_EQ(bench.at("commands_differing").get<size_t>(), 0u) << bench.dump(2);
+  EXPECT_EQ(bench.at("max_effort_difference").get<double>(), 0.0);
+  EXPECT_EQ(bench.at("intent_from").get<std::string>(), "recording");
+  // The same text, cell by cell: the commands, the controller's target and the estimate.
+  for (const char* column : {"grip_effort", "grip_target_n", "est_total_fn_n", "phase", "intent", "slip_flag"}) {
+    EXPECT_TRUE(ColumnText(Path("sim") + "/signals.csv", column) == ColumnText(Path("replay") + "/signals.csv", column))
+        << column << " differs between the run and its replay";
+  }
+  // The recorded commands are written beside the new ones.
+  EXPECT_TRUE(ColumnText(Path("sim") + "/signals.csv", "grip_effort") ==
+              ColumnText(Path("replay") + "/signals.csv", "recorded_grip_effort"));
+  // The slip the run saw is in the replay too (the scenario's pull makes the controller react).
+  const Signals signals(Path("replay") + "/signals.csv");
+  double flags = 0.0;
+  for (double flag : signals.Column("slip_flag")) flags += flag;
+  EXPECT_GT(flags, 0.0) << "the recording has no slip: the test would not exercise the controller";
+}
+
+TEST_F(ReplayCompareTest, AnotherControllerShowsItsCommandsBesideTheRecordedOnes) {
+  RunSimulation();
+  const CliResult replay = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
+                                  "/signals.csv --controller open_loop --out " + Path("open_loop"));
+  ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  const nlohmann::json bench = Summary("open_loop").at("bench");
+  EXPECT_GT(bench.at("commands_differing").get<size_t>(), 0u);
+  EXPECT_GT(bench.at("max_effort_difference").get<double>(), 0.0);
+  EXPECT_NE(replay.out.find("commands differing from the recording"), std::string::npos) << replay.out;
+  const Signals signals(Path("open_loop") + "/signals.csv");
+  for (const char* column : {"grip_effort", "recorded_grip_effort", "command_differs", "est_total_fn_n"}) {
+    EXPECT_TRUE(signals.Has(column)) << column;
+  }
+  EXPECT_FALSE(signals.Has("true_squeeze_n")) << "a replay has no ground truth: its columns are absent";
+  EXPECT_TRUE(graspbed::testing::ReadText(Path("open_loop") + "/grip.png").rfind("\x89PNG", 0) == 0);
+}
+
+TEST_F(ReplayCompareTest, AFrameLogReplaysFrameByFrameUnderTheScenariosIntentScript) {
+  // A frame log as `hw --log` writes it: 150 unloaded frames (the tare takes 100), then 5 N on every unit.
+  std::ofstream log(Path("frames.csv"));
+  log << "seq,device_time_s";
+  for (int k = 0; k < kUnits; ++k) log << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
+  log << '\n';
+  constexpr int kFrames = 300;
+  for (int i = 0; i < kFrames; ++i) {
+    const double r = i < 150 ? kR0Ohm : kLoadedOhm;
+    log << i << ',' << 10.0 + 0.001 * i;  // the device's clock does not start at 0
+    for (int k = 0; k < kUnits; ++k) log << ',' << r << ',' << r << ",0,0,1";
+    log << '\n';
+  }
+  log.close();
+  std::ofstream scenario(Path("bench.yaml"));
+  scenario << "name: bench\nduration_s: 1.0\ncontroller: {name: grip_slip}\n"
+              "script:\n  - {at_s: 0.12, action: close}\n";
+  scenario.close();
+  const CliResult replay = RunCli("run " + Path("bench.yaml") + " --backend replay --log " + Path("frames.csv") +
+                                  " --json --no-plots --out " + Path("frame_replay"));
+  ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  const nlohmann::json summary = nlohmann::json::parse(replay.out);
+  const nlohmann::json& bench = summary.at("bench");
+  EXPECT_EQ(bench.at("recording_kind").get<std::string>(), "frame log");
+  EXPECT_EQ(bench.at("recorded_ticks").get<int>(), kFrames);
+  EXPECT_EQ(bench.at("loop_frames").get<int>(), kFrames);
+  EXPECT_EQ(bench.at("intent_from").get<std::string>(), "script");
+  EXPECT_FALSE(bench.at("commands_recorded").get<bool>());
+  EXPECT_NEAR(bench.at("final_est_total_fn_n").get<double>(), kUnits * kLoadedFnN, kInversionTolN * kUnits);
+  ASSERT_EQ(bench.at("intent_events").size(), 1u);
+  EXPECT_EQ(bench.at("intent_events")[0].at("intent").get<std::string>(), "close");
+  // Ticks at the frames' times from the first frame: the close fires at the first frame at or after
+  // 0.12 s (10.12 - 10.0 may round below 0.12: then one frame later).
+  const double applied_s = bench.at("intent_events")[0].at("applied_s").get<double>();
+  EXPECT_GE(applied_s, 0.12);
+  EXPECT_LE(applied_s, 0.12 + 0.001 + 1e-9);
+}
+
+TEST_F(ReplayCompareTest, BadRecordingsAreRefusedByName) {
+  RunSimulation();
+  CliResult missing = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("nothing.csv"));
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find(Path("nothing.csv") + ": cannot read the recording"), std::string::npos) << missing.err;
+
+  CliResult no_log = RunCli("run " + Path("sim") + "/config.yaml --backend replay");
+  EXPECT_EQ(no_log.exit_code, 2);
+  EXPECT_NE(no_log.err.find("replay needs the recording to replay"), std::string::npos) << no_log.err;
+
+  // The 9-unit layout cannot replay a 20-unit recording.
+  CliResult units = RunCli("run " + Path("sim") + "/config.yaml --set sensor.layout=paper_3x3 --backend replay --log " +
+                           Path("sim") + "/signals.csv");
+  EXPECT_EQ(units.exit_code, 2);
+  EXPECT_NE(units.err.find("the recording has 20 units (columns r1_ohm_K) but the scenario's layout has 9"),
+            std::string::npos)
+      << units.err;
+
+  std::ofstream bad(Path("bad.csv"));
+  bad << ReadText(Path("sim") + "/signals.csv").substr(0, 20000);
+  bad << "\n0.5,close,holding,oops\n";
+  bad.close();
+  CliResult malformed = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("bad.csv"));
+  EXPECT_EQ(malformed.exit_code, 2);
+  EXPECT_NE(malformed.err.find(Path("bad.csv") + ":"), std::string::npos) << malformed.err;
+  EXPECT_NE(malformed.err.find("cells, the header has"), std::string::npos) << malformed.err;
+}
+
+TEST_F(ReplayCompareTest, ARunComparedWithItselfHasZeroResidualsAndTheSameTimes) {
+  RunSimulation();
+  const CliResult compare =
+      RunCli("compare " + Path("sim") + " " + Path("sim") + " --json --out " + Path("compare"));
+  ASSERT_EQ(compare.exit_code, 0) << compare.out << compare.err;
+  const nlohmann::json c = nlohmann::json::parse(compare.out);
+  EXPECT_EQ(c.at("aligned_on").get<std::string>(), "close");
+  EXPECT_EQ(c.at("shift_s").get<double>(), 0.0);
+  EXPECT_EQ(c.at("fn_rms_n").get<double>(), 0.0);
+  EXPECT_EQ(c.at("grip_rms_n").get<double>(), 0.0);
+  EXPECT_EQ(c.at("effort_rms").get<double>(), 0.0);
+  EXPECT_EQ(c.at("units").size(), static_cast<size_t>(kUnits));
+  EXPECT_EQ(c.at("unmatched_events").get<int>(), 0);
+  ASSERT_GE(c.at("events").size(), 3u) << "close and the controller's phases";
+  for (const auto& event : c.at("events")) EXPECT_EQ(event.at("difference_s").get<double>(), 0.0) << event.dump();
+  EXPECT_TRUE(ReadText(Path("compare") + "/compare.png").rfind("\x89PNG", 0) == 0);
+  EXPECT_EQ(nlohmann::json::parse(ReadText(Path("compare") + "/compare.json")), c);
+
+  // Against a replay with another controller: the same sensor data, so the same estimates; other
+  // commands.
+  ASSERT_EQ(RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
+                   "/signals.csv --controller open_loop --no-plots --out " + Path("open_loop"))
+                .exit_code,
+            0);
+  const nlohmann::json other =
+      nlohmann::json::parse(RunCli("compare " + Path("sim") + " " + Path("open_loop") + " --json").out);
+  EXPECT_EQ(other.at("fn_rms_n").get<double>(), 0.0);
+  EXPECT_GT(other.at("effort_rms").get<double>(), 0.0);
+
+  const CliResult bad = RunCli("compare " + Path("sim") + " " + Path("."));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("signals.csv: cannot read"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace graspbed::scenario
