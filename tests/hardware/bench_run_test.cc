@@ -38,7 +38,14 @@ using graspbed::testing::ReadText;
 using graspbed::testing::RunCli;
 using graspbed::testing::TempDir;
 
-constexpr char kScenario[] = "scenarios/default.yaml";  // close at 0.15 s, lift 50 mm at 0.8 s
+// A shipped scenario whose script is an intent and a lift: close at 0.15 s, lift 60 mm at 0.8 s.
+// (Not scenarios/default.yaml: there the grip-slip controller's grasp turns on one millisecond of
+// latency -- at sensor.latency_s 0 the simulation flags a false slip at the lift's onset and regrips
+// to 10 N, at 0.001 s it holds at 1.5 N through the lift, as it does over the wire, whose loop sees
+// each frame about one period late. docs/hardware.md, "The bench workflow".)
+constexpr char kScenario[] = "scenarios/lift_unknown_mass.yaml";
+// The emulator runs longer than the host, so the host's session ends with the device still there.
+constexpr char kEmulatorDurationS[] = "3.6";
 constexpr double kStartupDeadlineS = 30.0;
 constexpr double kRunDeadlineS = 60.0;
 // The grip the sensor reports, bench against simulation (the 5 %). The emulator is the same
@@ -175,7 +182,7 @@ class BenchRunTest : public ::testing::Test {
 TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGrip) {
   const CliResult sim = RunCli(std::string("run ") + kScenario + " --no-plots --out " + Path("sim"));
   ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
-  auto emulator = StartEmulator({kScenario, "--json"});
+  auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS, "--json"});
   ChildProcess host({binary_, "run", kScenario, "--backend", "serial", "--port", Path("dev"), "--prompt-actions",
                      "--log", Path("frames.csv"), "--out", Path("serial")},
                     Path("host.out"), Path("host.err"));
@@ -191,7 +198,7 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
   ASSERT_EQ(bench.at("prompts").size(), 1u) << bench.dump(2);
   EXPECT_EQ(bench.at("prompts")[0].at("action").get<std::string>(), "lift");
   EXPECT_GE(bench.at("prompts")[0].at("shown_s").get<double>(), 0.8);
-  EXPECT_NE(host.err().find("lift the hand by 50 mm over 0.80 s now"), std::string::npos) << host.err();
+  EXPECT_NE(host.err().find("lift the hand by 60 mm over 0.80 s now"), std::string::npos) << host.err();
   ASSERT_EQ(bench.at("intent_events").size(), 1u);
   EXPECT_EQ(bench.at("intent_events")[0].at("source").get<std::string>(), "script");
   // The frame log beside it: every frame.
@@ -211,10 +218,17 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
 
   // Like e2e: a machine too busy to feed the host every frame makes its state stale, and the
   // controller then holds on purpose (safe hold), another grasp, not a wrong one.
-  if (bench.at("stale_periods").get<int>() != 0 || bench.at("dropped").get<int>() != 0) {
-    std::printf("[   NOTE   ] the serial run fell behind real time (%d stale periods, %d dropped): its phases "
-                "and grip are not compared with the simulation's\n",
-                bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>());
+  // Stale ticks once frames flowed (the first ticks, before any frame, are stale by definition).
+  int stale_ticks = 0;
+  bool fresh_seen = false;
+  for (double stale : serial.numeric.at("stale")) {
+    fresh_seen = fresh_seen || stale == 0.0;
+    if (fresh_seen && stale != 0.0) ++stale_ticks;
+  }
+  if (bench.at("stale_periods").get<int>() != 0 || bench.at("dropped").get<int>() != 0 || stale_ticks > 0) {
+    std::printf("[   NOTE   ] the serial run fell behind real time (%d stale periods, %d dropped, %d stale ticks): "
+                "its phases and grip are not compared with the simulation's\n",
+                bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
     return;
   }
   EXPECT_EQ(Join(PhaseSequence(serial)), Join(PhaseSequence(simulated)));
