@@ -202,6 +202,12 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
 
+  // A FIFO that cannot be made is refused before anything else is touched.
+  std::unique_ptr<hardware::IntentInput> live;
+  if (serial && (options.intent_stdin || !options.intent_fifo.empty())) {
+    live = std::make_unique<hardware::IntentInput>(
+        hardware::IntentInputConfig{.read_stdin = options.intent_stdin, .fifo_path = options.intent_fifo});
+  }
   // The recording (replay) or the link (serial); both refused, like all bad input, before any output.
   std::optional<hardware::RecordedSession> recording;
   std::unique_ptr<hardware::ReplayBackend> replay_backend;
@@ -218,11 +224,6 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     serial_backend = std::make_unique<hardware::HardwareBackend>(config.serial, units, layout.name);
     serial_actuator = std::make_unique<hardware::HardwareActuator>(*serial_backend, config.serial);
     if (!config.log.empty()) serial_backend->link()->EnableTap(16384);
-  }
-  std::unique_ptr<hardware::IntentInput> live;
-  if (serial && (options.intent_stdin || !options.intent_fifo.empty())) {
-    live = std::make_unique<hardware::IntentInput>(
-        hardware::IntentInputConfig{.read_stdin = options.intent_stdin, .fifo_path = options.intent_fifo});
   }
   if (serial) {
     try {

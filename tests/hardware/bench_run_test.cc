@@ -258,6 +258,14 @@ TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
   const CliResult no_port = RunCli("run " + LiveScenario(1.0) + " --backend serial");
   EXPECT_EQ(no_port.exit_code, 2);
   EXPECT_NE(no_port.err.find("serial needs a port"), std::string::npos) << no_port.err;
+
+  // An intent FIFO path taken by a regular file: refused by name before the port is tried.
+  std::ofstream(Path("not_a_fifo")) << "x\n";
+  const CliResult fifo = RunCli("run " + LiveScenario(1.0) + " --backend serial --port " + Path("no-device") +
+                                " --intent-fifo " + Path("not_a_fifo"));
+  EXPECT_EQ(fifo.exit_code, 2);
+  EXPECT_NE(fifo.err.find("--intent-fifo " + Path("not_a_fifo") + ": exists and is not a FIFO"), std::string::npos)
+      << fifo.err;
 }
 
 TEST_F(BenchRunTest, LinesOnStdinAndOnAFifoChangeTheIntentAtTheNextTick) {
