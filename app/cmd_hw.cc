@@ -1,10 +1,8 @@
-// `graspbed hw`: the shared control loop against the tactile readout and hand electronics over a
-// serial link. `graspbed emulate`: the simulated hand behind a pseudo-terminal, speaking the same
+// `graspbed hw`: a session on the hand without a scenario -- a thin alias of `graspbed run --backend
+// serial` (one intent once tared, its own --config, no outputs but the frame log). `graspbed emulate`: the simulated hand behind a pseudo-terminal, speaking the same
 // protocol as the device, so `hw` runs end to end without hardware. docs/hardware.md.
 
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -14,10 +12,8 @@
 #include <iostream>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -33,7 +29,6 @@
 #include "sensor/layout.h"
 #include "sensor/readout.h"
 #include "hardware/device_emulator.h"
-#include "hardware/frame_logger.h"
 #include "hardware/hardware_backend.h"
 #include "sim/scenario/emulated_hand.h"
 #include "sim/scenario/runner.h"
@@ -41,12 +36,6 @@
 
 namespace graspbed::app {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // ---- hw ----------------------------------------------------------------------------------------------
 
@@ -141,110 +130,66 @@ void RunHw(const HwOptions& options) {
     chosen.params[assignment.substr(0, equals)] = value;
   }
   // The factory names an unknown parameter, a value out of its range or a cross-field conflict.
-  std::unique_ptr<controller::GraspController> grasp = controller::MakeController(chosen.name, chosen.params);
-  if (chosen.grip_ceiling_n > 0.0) grasp->SetGripCeiling(chosen.grip_ceiling_n);
-  // The log must be writable before the port is touched (refused, like all bad input, up front).
-  if (!options.log.empty() && !std::ofstream(options.log + ".partial", std::ios::trunc)) {
-    throw std::invalid_argument("--log " + options.log + ": cannot write this file");
-  }
+  controller::MakeController(chosen.name, chosen.params);
 
-  hardware::HardwareBackend backend(config.serial, units, layout.name);
-  hardware::HardwareActuator actuator(backend, config.serial);
-  hardware::SerialLink& link = *backend.link();
-  if (!options.log.empty()) link.EnableTap(16384);
+  // The session is a scenario on backend serial with one intent, given once the tare is done (the
+  // first baseline_frames frames at the sensor's rate), and no outputs but the frame log.
+  scenario::ScenarioConfig scenario;
+  scenario.name = "hw";
+  scenario.backend = scenario::Backend::kSerial;
+  scenario.serial = config.serial;
+  scenario.log = options.log;
+  scenario.controller = chosen;
+  scenario.sensor.layout = options.layout.empty() ? sensor::DefaultLayoutPath() : options.layout;
+  scenario.sensor.readout = config.loop.readout;
+  scenario.sensor.inversion = config.loop.inversion;
+  scenario.duration_s = options.duration_s > 0.0 ? options.duration_s : std::numeric_limits<double>::infinity();
+  scenario::Action action;
+  action.kind = intent == controller::GraspIntent::kClose  ? scenario::ActionKind::kClose
+                : intent == controller::GraspIntent::kOpen ? scenario::ActionKind::kOpen
+                                                           : scenario::ActionKind::kIdle;
+  action.at_s = config.loop.readout.baseline_frames / scenario.sensor.sample_rate_hz;
+  scenario.script = {action};
+  scenario::RunOptions run;
+  run.stop = &StopRequested();
+  run.calibration = calibration;
   // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
   StopSignalGuard signals;
-  try {
-    backend.Start();
-    actuator.Start();
-  } catch (const std::runtime_error& error) {
-    // Missing port, no permission, busy, no HELLO, wrong unit count: refused before running.
-    if (!options.log.empty()) std::filesystem::remove(options.log + ".partial");
-    throw std::invalid_argument(error.what());
-  }
-  controller::ControlLoop loop(backend, *grasp, actuator, layout, calibration, config.loop);
-  std::unique_ptr<hardware::FrameLogger> logger;
-  if (!options.log.empty()) {
-    logger = std::make_unique<hardware::FrameLogger>(
-        options.log, [&link](hardware::TappedFrame* entry) { return link.PopTap(entry); }, layout, calibration,
-        config.loop.readout, config.loop.inversion, backend.nominal_r0_ohm());
-  }
+  const scenario::RunResult result = scenario::RunScenario(scenario, run);
 
-  // Tick on every frame arrival, and at rate_hz when frames stop (stale detection, commands).
-  const double period_s = 1.0 / chosen.rate_hz;
-  const Clock::time_point start = Clock::now();
-  uint64_t seen = 0;
-  bool intent_given = false;
-  double peak_total_fn_n = 0.0;
-  while (!StopRequested().load()) {
-    if (options.duration_s > 0.0 && SecondsSince(start) >= options.duration_s) break;
-    link.WaitForFrame(seen, period_s);
-    seen = link.published();
-    loop.Tick(SecondsSince(start));
-    // The first baseline_frames frames are the tare (no load on the fingertip); then the intent.
-    if (!intent_given && loop.counters().frames >= static_cast<uint64_t>(config.loop.readout.baseline_frames)) {
-      grasp->SetIntent(intent);
-      intent_given = true;
-    }
-    if (!loop.state().stale) peak_total_fn_n = std::max(peak_total_fn_n, loop.state().total_fn_n);
+  // hw's own summary keys (docs/hardware.md), from the run's.
+  const nlohmann::json& bench = result.bench;
+  nlohmann::json summary = {{"port", config.serial.port}, {"layout", layout.name}, {"controller", chosen.name},
+                            {"duration_s", result.metrics.sim_s}};
+  for (const char* key : {"frames", "corrupt", "dropped", "unknown_packets", "reconnects", "stale_periods", "sessions",
+                          "ticks", "loop_frames", "stale_ticks", "disconnected_ticks", "actuator_failures", "retares",
+                          "motor_commands"}) {
+    summary[key] = bench.at(key);
   }
-  const double run_s = SecondsSince(start);
-  const bool connected_at_end = link.connected();  // before Stop() closes the port
-  // The clean shutdown order of docs/protocol.md: stream stop, motor off (both sent by the link's
-  // shutdown when the motor shares the port; a separate motor port is switched off just after),
-  // restore, close.
-  backend.Stop();
-  actuator.Stop();
-  if (logger) logger->Finish();
-
-  const sensor::BackendCounters counters = backend.counters();
-  const controller::LoopCounters& ticks = loop.counters();
-  nlohmann::json summary = {
-      {"port", config.serial.port},
-      {"layout", layout.name},
-      {"controller", grasp->name()},
-      {"duration_s", run_s},
-      {"frames", counters.frames},
-      {"corrupt", counters.corrupt},
-      {"dropped", counters.dropped},
-      {"unknown_packets", counters.unknown_packets},
-      {"reconnects", counters.reconnects},
-      {"stale_periods", counters.stale_periods},
-      {"sessions", counters.sessions},
-      {"ticks", ticks.ticks},
-      {"loop_frames", ticks.frames},
-      {"stale_ticks", ticks.stale_ticks},
-      {"disconnected_ticks", ticks.disconnected_ticks},
-      {"actuator_failures", ticks.actuator_failures},
-      {"retares", ticks.retares},
-      {"motor_commands", link.motor_commands_sent()},
-      {"tare_frames", config.loop.readout.baseline_frames},
-      {"peak_total_fn_n", peak_total_fn_n},
-      {"final_total_fn_n", loop.state().total_fn_n},
-      {"final_valid_units", loop.state().valid_count},
-      {"interrupted", StopRequested().load()},
-  };
-  if (logger) {
-    summary["log"] = options.log;
-    summary["log_rows"] = logger->rows();
-    summary["log_rows_lost"] = link.tap_overflows();
-    if (!logger->error().empty()) summary["log_error"] = logger->error();
+  summary["tare_frames"] = config.loop.readout.baseline_frames;
+  summary["peak_total_fn_n"] = bench.at("peak_est_total_fn_n");
+  summary["final_total_fn_n"] = bench.at("final_est_total_fn_n");
+  summary["final_valid_units"] = bench.at("final_valid_units");
+  summary["interrupted"] = !result.completed;
+  for (const char* key : {"log", "log_rows", "log_rows_lost", "log_error", "last_error"}) {
+    if (bench.contains(key)) summary[key] = bench.at(key);
   }
-  // The run failed (exit 1) when the device was gone at the end or the log could not be completed.
+  const bool connected_at_end = bench.at("connected_at_end").get<bool>();
   summary["connected_at_end"] = connected_at_end;
-  const bool failed = !connected_at_end || (logger && !logger->error().empty());
-  if (!link.last_error().empty()) summary["last_error"] = link.last_error();
+  const std::string log_error = bench.value("log_error", std::string());
   if (options.json) {
     std::cout << summary.dump(2) << '\n';
   } else {
-    std::cout << "hw " << config.serial.port << ": " << run_s << " s, " << counters.frames << " frames, "
-              << counters.corrupt << " corrupt, " << counters.dropped << " dropped, " << counters.unknown_packets
-              << " unknown, " << counters.reconnects << " reconnects, " << counters.stale_periods
-              << " stale periods, " << counters.sessions << " sessions; peak grip " << peak_total_fn_n
-              << " N (sensed)" << (connected_at_end ? "" : "; device DISCONNECTED at the end")
-              << (logger && !logger->error().empty() ? "; log: " + logger->error() : "") << '\n';
+    std::cout << "hw " << config.serial.port << ": " << result.metrics.sim_s << " s, " << bench.at("frames")
+              << " frames, " << bench.at("corrupt") << " corrupt, " << bench.at("dropped") << " dropped, "
+              << bench.at("unknown_packets") << " unknown, " << bench.at("reconnects") << " reconnects, "
+              << bench.at("stale_periods") << " stale periods, " << bench.at("sessions") << " sessions; peak grip "
+              << bench.at("peak_est_total_fn_n") << " N (sensed)"
+              << (connected_at_end ? "" : "; device DISCONNECTED at the end")
+              << (log_error.empty() ? "" : "; log: " + log_error) << '\n';
   }
-  if (failed) throw CLI::RuntimeError(kExitFailed);  // main() returns the code silently
+  // The run failed (exit 1) when the device was gone at the end or the log could not be completed.
+  if (!connected_at_end || !log_error.empty()) throw CLI::RuntimeError(kExitFailed);  // main() returns it silently
 }
 
 // ---- emulate -----------------------------------------------------------------------------------------

@@ -188,7 +188,9 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
   const int units = layout.unit_count();
   // The host inverts with the sensor's nominal constants, as a simulated run does.
-  const sensor::Calibration calibration = sensor::NominalCalibration(config.sensor.strain_model.nominal, units);
+  const sensor::Calibration calibration = options.calibration
+                                              ? *options.calibration
+                                              : sensor::NominalCalibration(config.sensor.strain_model.nominal, units);
   controller::ControlLoopConfig loop_config;
   loop_config.stale_timeout_s = config.controller.stale_timeout_s;
   loop_config.readout = config.sensor.readout;
@@ -259,8 +261,10 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   if (replay) columns.insert(columns.end(), std::begin(kRecordedNames), std::end(kRecordedNames));
   std::vector<std::string> text_columns = {"intent", "phase", "slip_cues"};
   if (replay) text_columns.push_back("recorded_phase");
+  // Without an output directory (`graspbed hw`, possibly until Ctrl-C) no rows are kept.
   const size_t capacity_rows =
-      replay ? recording->ticks() + 1
+      options.out_dir.empty() ? 0
+      : replay                ? recording->ticks() + 1
              : static_cast<size_t>(std::ceil(config.duration_s *
                                              std::max(config.controller.rate_hz, config.sensor.sample_rate_hz) *
                                              kSerialRowMargin)) + 16;
@@ -388,8 +392,10 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     std::string inputs;
     if (live && options.intent_stdin) inputs += live->keys() ? "keys c/o/i/q" : "lines on stdin";
     if (!options.intent_fifo.empty()) inputs += (inputs.empty() ? "" : ", ") + ("lines on " + options.intent_fifo);
-    std::fprintf(stderr, "run: backend serial on %s: session started (%.1f s; live intent: %s)\n",
-                 config.serial.port.c_str(), config.duration_s, inputs.empty() ? "none" : inputs.c_str());
+    char length[32] = "until stopped";
+    if (std::isfinite(config.duration_s)) std::snprintf(length, sizeof(length), "%.1f s", config.duration_s);
+    std::fprintf(stderr, "run: backend serial on %s: session started (%s; live intent: %s)\n",
+                 config.serial.port.c_str(), length, inputs.empty() ? "none" : inputs.c_str());
     uint64_t seen = 0;
     double next_progress_s = 0.0;
     for (;;) {

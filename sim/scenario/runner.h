@@ -13,10 +13,13 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "sensor/calibration.h"
 
 #include "sim/scenario/metrics.h"
 #include "sim/scenario/scenario_config.h"
@@ -89,6 +92,9 @@ struct RunOptions {
   /// backend serial: live intent lines from this FIFO, e.g. an EMG classifier's ("" none; created
   /// when missing).
   std::string intent_fifo;
+  /// backend serial and replay: the host's calibration (e.g. `graspbed hw --calibration`); unset:
+  /// the sensor's nominal constants, as in simulation.
+  std::optional<sensor::Calibration> calibration;
 };
 
 /// Lets a suite or sweep add observers (e.g. a video) to the options of each run it starts: called on

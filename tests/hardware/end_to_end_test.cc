@@ -58,8 +58,12 @@ constexpr double kGraspComplianceM = 1e-5;
 //   right), but the share of the squeeze the mesas carry along their normals is where the object
 //   sits on the digits, the same in both paths; the grip moves it only through the contacts'
 //   penetration (3.6 um per 10 N): measured 0.9771 at 7.6 N and at 10 N, 0.981 at 2 N. Over an
-//   exact wire the host's sensed total is that share of the true squeeze, so the shares agree to 0.5 %.
-constexpr double kShareTol = 0.005;
+//   exact wire the host's sensed total is that share of the true squeeze, so the shares agree to 0.5 %
+//   at those grips. At the 1.5 N hold the preload-fitting controller settles on here, the share moves
+//   from tick to tick with the lifted box's sway: 0.9677 .. 0.9742 over the last second of the
+//   simulation (`graspbed run tests/hardware/data/e2e_lift.yaml --set sensor.latency_s=0.001`), so
+//   two single-tick samples, one per path, differ by up to 0.0065.
+constexpr double kShareTol = 0.007;
 // - The closing impact: the peak squeeze is reached while the squeeze rises at up to R N/s (read from
 //   the simulation's signals); the host's loop reacts up to two frame periods later than the
 //   simulation's (one for taking the newest frame when it wakes, one for the pty hand-off), so the
