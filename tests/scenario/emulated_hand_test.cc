@@ -71,7 +71,9 @@ TEST_F(EmulatedHandTest, TheHostsMotorGraspsAndItsStreamStopFreezesTheOutcome) {
   }
   EXPECT_GT(largest_change_ohm, 10.0);
   // Only the host's controller scores its estimates.
-  EXPECT_FALSE(held.at("metrics").contains("fn_rmse_n"));
+  for (const char* key : {"fn_rmse_n", "false_slip_flags", "false_slip_flag_s"}) {
+    EXPECT_FALSE(held.at("metrics").contains(key)) << key;
+  }
 
   // The host stops streaming: the outcome is the one it left, however long the device runs on.
   hand.Frame(false, &frame);
