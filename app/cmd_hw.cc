@@ -159,7 +159,7 @@ void RunHw(const HwOptions& options) {
 
   // hw's own summary keys (docs/hardware.md), from the run's.
   const nlohmann::json& bench = result.bench;
-  nlohmann::json summary = {{"port", config.serial.port}, {"layout", layout.name}, {"controller", chosen.name},
+  nlohmann::json summary = {{"port", config.serial.port}, {"layout", layout.name}, {"controller", bench.at("controller")},
                             {"duration_s", result.metrics.sim_s}};
   for (const char* key : {"frames", "corrupt", "dropped", "unknown_packets", "reconnects", "stale_periods", "sessions",
                           "ticks", "loop_frames", "stale_ticks", "disconnected_ticks", "actuator_failures", "retares",

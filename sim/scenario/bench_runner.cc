@@ -446,7 +446,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   const double end_s = t;
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   bool connected_at_end = true;
-  nlohmann::json bench = {{"backend", BackendName(config.backend)}};
+  nlohmann::json bench = {{"backend", BackendName(config.backend)}, {"controller", grasp->name()}};
   if (serial) {
     hardware::SerialLink& link = *serial_backend->link();
     connected_at_end = link.connected();

@@ -47,7 +47,8 @@ def stage(build_dir, stage_dir):
     os.rename(first, os.path.join(stage_dir, "prefix"))
     prefix = os.path.join(stage_dir, "prefix")
     for path in ["bin/graspbed", "include/graspbed/controller/controller_api.h",
-                 "include/graspbed/controller/grasp_controller.h", "include/graspbed/sensor/tactile_state.h",
+                 "include/graspbed/controller/grasp_controller.h", "include/graspbed/hand/hand_command.h",
+                 "include/graspbed/sensor/tactile_state.h",
                  "share/graspbed/sensor/layouts/default_20.yaml", "share/graspbed/sensor/fea/unit_fea.yaml",
                  "share/graspbed/scenarios/default.yaml", "share/graspbed/scenarios/scorecard/set.yaml",
                  "share/graspbed/models/hand_default.xml", "lib/cmake/graspbed/graspbedConfig.cmake",
@@ -192,7 +193,7 @@ def example_hw(source_dir, stage_dir):
     prefix = os.path.join(stage_dir, "prefix")
     binary = os.path.join(prefix, "bin", "graspbed")
     plugin = os.path.join(stage_dir, "example-build", "libthreshold_grip.so")
-    scenario = os.path.join(source_dir, "tests", "serial", "data", "e2e_lift.yaml")
+    scenario = os.path.join(source_dir, "tests", "hardware", "data", "e2e_lift.yaml")
     link = os.path.join(stage_dir, "hw-dev")
     if os.path.lexists(link):
         os.remove(link)
