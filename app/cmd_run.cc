@@ -123,6 +123,10 @@ void RunCommand(const RunCommandOptions& options) {
     };
   }
   std::shared_ptr<const render::VideoCost> video_cost;
+  if (options.video.enabled && config.backend != scenario::Backend::kSim) {
+    throw std::invalid_argument(std::string("--video: renders the simulation, and backend ") +
+                                scenario::BackendName(config.backend) + " has none");
+  }
   if (options.video.enabled) {
     const render::VideoOptions video = options.video.Resolve();
     std::error_code error;
