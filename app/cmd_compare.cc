@@ -28,26 +28,31 @@ void RunCompare(const CompareOptions& options) {
     if (error || !std::filesystem::is_directory(options.out_dir)) {
       throw std::invalid_argument("--out " + options.out_dir + ": cannot create the output directory");
     }
-    scenario::WriteFileAtomic(options.out_dir + "/compare.json", scenario::ComparisonJson(comparison).dump(2) + "\n");
+    scenario::WriteFileAtomic(options.out_dir + "/compare.json",
+                              scenario::ComparisonJson(comparison).dump(2) + "\n");
     scenario::WriteComparisonPlot(comparison, options.out_dir + "/compare.png");
   }
   if (options.json) {
     std::cout << scenario::ComparisonJson(comparison).dump(2) << '\n';
   } else {
     std::cout << scenario::ComparisonTable(comparison);
-    if (!options.out_dir.empty()) std::cout << "  outputs: " << options.out_dir << "/ (compare.json, compare.png)\n";
+    if (!options.out_dir.empty())
+      std::cout << "  outputs: " << options.out_dir << "/ (compare.json, compare.png)\n";
   }
 }
 
 void AddCompareCommand(CLI::App& root) {
   auto options = std::make_shared<CompareOptions>();
   CLI::App* command = root.add_subcommand(
-      "compare", "Compare two runs (e.g. a session on the hand and its simulated scenario), aligned by intent "
-                 "events: per-unit estimate residuals, grip and timing differences");
+      "compare",
+      "Compare two runs (e.g. a session on the hand and its simulated scenario), aligned by intent "
+      "events: per-unit estimate residuals, grip and timing differences");
   command->add_option("run_a", options->run_a, "output directory of run A (its signals.csv)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  command->add_option("run_b", options->run_b, "output directory of run B")->required()->check(CLI::ExistingDirectory);
+  command->add_option("run_b", options->run_b, "output directory of run B")
+      ->required()
+      ->check(CLI::ExistingDirectory);
   command->add_option("--out", options->out_dir, "write compare.json and compare.png here");
   command->add_flag("--json", options->json, "print the comparison as JSON");
   command->callback([options] { RunCompare(*options); });

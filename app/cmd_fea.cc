@@ -27,10 +27,10 @@ void PrintTable(const fea::FeaResults& r, const fea::FeaConfig& config) {
   std::printf("  time: mesh %.3f s, assemble+factorise %.3f s, solve+recover %.3f s\n", r.stats.mesh_s,
               r.stats.assemble_factor_s, r.stats.solve_s);
   std::printf("  %-24s %12s %12s %8s\n", "", "graspbed", "paper", "ratio");
-  std::printf("  %-24s %12.4e %12.4e %8.3f\n", "k_n [1/N]", r.sensitivities.kn_per_n, config.reference.kn_per_n,
-              r.kn_ratio);
-  std::printf("  %-24s %12.4e %12.4e %8.3f\n", "k_t [1/N]", r.sensitivities.kt_per_n, config.reference.kt_per_n,
-              r.kt_ratio);
+  std::printf("  %-24s %12.4e %12.4e %8.3f\n", "k_n [1/N]", r.sensitivities.kn_per_n,
+              config.reference.kn_per_n, r.kn_ratio);
+  std::printf("  %-24s %12.4e %12.4e %8.3f\n", "k_t [1/N]", r.sensitivities.kt_per_n,
+              config.reference.kt_per_n, r.kt_ratio);
   std::printf("  linearity R^2: normal %.9f, shear %.9f\n", r.normal_fit.r_squared, r.shear_fit.r_squared);
   std::printf("  superposition error: %.3e\n", r.superposition_error);
   std::printf("  peak underside strain at %.0f N: normal %.4e, shear %.4e\n", config.load.max_force_n,
@@ -59,18 +59,21 @@ void RunFea(const FeaOptions& options) {
       unit.kt_per_n = results.sensitivities.kt_per_n;
     }
     sensor::SaveCalibration(calibration, options.calibration_path);
-    if (!options.json) std::printf("  wrote %s (%d units)\n", options.calibration_path.c_str(), options.units);
+    if (!options.json)
+      std::printf("  wrote %s (%d units)\n", options.calibration_path.c_str(), options.units);
   }
 }
 
 void AddFeaCommand(CLI::App& root) {
   auto options = std::make_shared<FeaOptions>();
   CLI::App* command = root.add_subcommand(
-      "fea", "Plane-stress finite-element analysis of one sensing unit: underside strain profiles, "
-             "resistor strains over 0..10 N, k_n and k_t against the paper's");
+      "fea",
+      "Plane-stress finite-element analysis of one sensing unit: underside strain profiles, "
+      "resistor strains over 0..10 N, k_n and k_t against the paper's");
   command->add_option("--config", options->config_path, "FEA config YAML (default sensor/fea/unit_fea.yaml)")
       ->check(CLI::ExistingFile);
-  command->add_option("--out", options->out_dir, "write CSV curves, PNG plots, summary JSON and the config used here");
+  command->add_option("--out", options->out_dir,
+                      "write CSV curves, PNG plots, summary JSON and the config used here");
   command->add_flag("--json", options->json, "print the summary as JSON instead of a table");
   command->add_option("--write-calibration", options->calibration_path,
                       "write a calibration YAML with the paper's constants but k_n, k_t from this analysis");

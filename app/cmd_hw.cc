@@ -1,6 +1,7 @@
 // `graspbed hw`: a session on the hand without a scenario -- a thin alias of `graspbed run --backend
-// serial` (one intent once tared, its own --config, no outputs but the frame log). `graspbed emulate`: the simulated hand behind a pseudo-terminal, speaking the same
-// protocol as the device, so `hw` runs end to end without hardware. docs/hardware.md.
+// serial` (one intent once tared, its own --config, no outputs but the frame log). `graspbed emulate`: the
+// simulated hand behind a pseudo-terminal, speaking the same protocol as the device, so `hw` runs end to end
+// without hardware. docs/hardware.md.
 
 #include <algorithm>
 #include <chrono>
@@ -52,16 +53,16 @@ struct HwRunConfig {
 /// Reads `hw --config FILE`; an empty path gives the defaults (the reference controller).
 HwRunConfig LoadHwRunConfig(const std::string& path) {
   YAML::Node no_file(YAML::NodeType::Map);
-  const common::YamlMap root = path.empty() ? common::YamlMap(no_file, "(no --config)", "")
-                                            : common::YamlMap::LoadFile(path);
+  const common::YamlMap root =
+      path.empty() ? common::YamlMap(no_file, "(no --config)", "") : common::YamlMap::LoadFile(path);
   HwRunConfig config;
   if (const auto section = root.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*section);
   if (const auto section = root.GetMap("controller")) {
     config.controller = scenario::LoadControllerOptions(*section, "grip_slip");
   } else {
     YAML::Node empty(YAML::NodeType::Map);
-    config.controller = scenario::LoadControllerOptions(common::YamlMap(empty, root.file(), "controller"),
-                                                        "grip_slip");
+    config.controller =
+        scenario::LoadControllerOptions(common::YamlMap(empty, root.file(), "controller"), "grip_slip");
   }
   config.loop.stale_timeout_s = config.controller.stale_timeout_s;
   if (const auto section = root.GetMap("readout")) config.loop.readout = sensor::LoadReadoutConfig(*section);
@@ -77,7 +78,7 @@ struct HwOptions {
   std::string config;
   std::string layout;
   std::string calibration;
-  std::string controller;  ///< empty: the config's (default grip_slip)
+  std::string controller;           ///< empty: the config's (default grip_slip)
   std::vector<std::string> params;  ///< NAME=VALUE controller parameters
   std::string intent = "close";
   double duration_s = 0.0;
@@ -143,7 +144,8 @@ void RunHw(const HwOptions& options) {
   scenario.sensor.layout = options.layout.empty() ? sensor::DefaultLayoutPath() : options.layout;
   scenario.sensor.readout = config.loop.readout;
   scenario.sensor.inversion = config.loop.inversion;
-  scenario.duration_s = options.duration_s > 0.0 ? options.duration_s : std::numeric_limits<double>::infinity();
+  scenario.duration_s =
+      options.duration_s > 0.0 ? options.duration_s : std::numeric_limits<double>::infinity();
   scenario::Action action;
   action.kind = intent == controller::GraspIntent::kClose  ? scenario::ActionKind::kClose
                 : intent == controller::GraspIntent::kOpen ? scenario::ActionKind::kOpen
@@ -159,11 +161,13 @@ void RunHw(const HwOptions& options) {
 
   // hw's own summary keys (docs/hardware.md), from the run's.
   const nlohmann::json& bench = result.bench;
-  nlohmann::json summary = {{"port", config.serial.port}, {"layout", layout.name}, {"controller", bench.at("controller")},
+  nlohmann::json summary = {{"port", config.serial.port},
+                            {"layout", layout.name},
+                            {"controller", bench.at("controller")},
                             {"duration_s", result.metrics.sim_s}};
-  for (const char* key : {"frames", "corrupt", "dropped", "unknown_packets", "reconnects", "stale_periods", "sessions",
-                          "ticks", "loop_frames", "stale_ticks", "disconnected_ticks", "actuator_failures", "retares",
-                          "motor_commands"}) {
+  for (const char* key : {"frames", "corrupt", "dropped", "unknown_packets", "reconnects", "stale_periods",
+                          "sessions", "ticks", "loop_frames", "stale_ticks", "disconnected_ticks",
+                          "actuator_failures", "retares", "motor_commands"}) {
     summary[key] = bench.at(key);
   }
   summary["tare_frames"] = config.loop.readout.baseline_frames;
@@ -183,13 +187,14 @@ void RunHw(const HwOptions& options) {
     std::cout << "hw " << config.serial.port << ": " << result.metrics.sim_s << " s, " << bench.at("frames")
               << " frames, " << bench.at("corrupt") << " corrupt, " << bench.at("dropped") << " dropped, "
               << bench.at("unknown_packets") << " unknown, " << bench.at("reconnects") << " reconnects, "
-              << bench.at("stale_periods") << " stale periods, " << bench.at("sessions") << " sessions; peak grip "
-              << bench.at("peak_est_total_fn_n") << " N (sensed)"
+              << bench.at("stale_periods") << " stale periods, " << bench.at("sessions")
+              << " sessions; peak grip " << bench.at("peak_est_total_fn_n") << " N (sensed)"
               << (connected_at_end ? "" : "; device DISCONNECTED at the end")
               << (log_error.empty() ? "" : "; log: " + log_error) << '\n';
   }
   // The run failed (exit 1) when the device was gone at the end or the log could not be completed.
-  if (!connected_at_end || !log_error.empty()) throw CLI::RuntimeError(kExitFailed);  // main() returns it silently
+  if (!connected_at_end || !log_error.empty())
+    throw CLI::RuntimeError(kExitFailed);  // main() returns it silently
 }
 
 // ---- emulate -----------------------------------------------------------------------------------------
@@ -268,11 +273,10 @@ void RunEmulate(const EmulateOptions& options) {
   std::cout << "emulate " << options.link << " (" << ended_by << "): " << summary["sim_time_s"].get<double>()
             << " s simulated, " << stats.frames_sent << " frames sent, " << stats.motor_commands
             << " motor commands, " << stats.watchdog_trips << " watchdog trips; object "
-            << (!metrics["grasped"].get<bool>() ? "not grasped"
+            << (!metrics["grasped"].get<bool>()  ? "not grasped"
                 : metrics["dropped"].get<bool>() ? "DROPPED"
                                                  : "held")
-            << ", lifted "
-            << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak grip "
+            << ", lifted " << 1e3 * summary["object_lift_m"].get<double>() << " mm, peak grip "
             << metrics["peak_grip_n"].get<double>() << " N, slip " << metrics["max_slip_mm"].get<double>()
             << " mm\n";
 }
@@ -287,11 +291,13 @@ void AddHwCommands(CLI::App& root) {
       ->check(CLI::ExistingFile);
   hw->add_option("--layout", hw_options->layout, "Layout file (default: sensor/layouts/default_20.yaml)");
   hw->add_option("--calibration", hw_options->calibration, "Calibration file (default: paper values)");
-  hw->add_option("--controller", hw_options->controller,
-                 "Controller: a built-in name or plugin:LIBRARY (default: the controller of --config, else grip_slip)");
+  hw->add_option(
+      "--controller", hw_options->controller,
+      "Controller: a built-in name or plugin:LIBRARY (default: the controller of --config, else grip_slip)");
   hw->add_option("--param", hw_options->params,
                  "Controller parameter NAME=VALUE, as in a scenario's controller.params (repeatable)");
-  hw->add_option("--intent", hw_options->intent, "Intent once tared: close, open or idle")->capture_default_str();
+  hw->add_option("--intent", hw_options->intent, "Intent once tared: close, open or idle")
+      ->capture_default_str();
   hw->add_option("--duration", hw_options->duration_s, "Stop cleanly after S seconds (0: until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
   hw->add_option("--tare-frames", hw_options->tare_frames,
@@ -307,12 +313,14 @@ void AddHwCommands(CLI::App& root) {
   emulate->add_option("--link", emulate_options->link, "Path of the symlink to create")->required();
   emulate->add_option("scenario", emulate_options->scenario, "Scenario YAML (wrist and object script)")
       ->check(CLI::ExistingFile);
-  emulate->add_option("--duration", emulate_options->duration_s,
-                      "Simulated seconds after the host starts streaming (default: the scenario's; "
-                      "without a scenario, until Ctrl-C)")
+  emulate
+      ->add_option("--duration", emulate_options->duration_s,
+                   "Simulated seconds after the host starts streaming (default: the scenario's; "
+                   "without a scenario, until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
-  emulate->add_flag("--json", emulate_options->json,
-                    "Print a JSON summary at the end: ground truth and run metrics as the host left the hand");
+  emulate->add_flag(
+      "--json", emulate_options->json,
+      "Print a JSON summary at the end: ground truth and run metrics as the host left the hand");
   emulate->callback([emulate_options] { RunEmulate(*emulate_options); });
 }
 

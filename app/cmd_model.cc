@@ -69,8 +69,9 @@ void AddModelCommand(CLI::App& root) {
   command->add_option("--scene", options->scene_path, "scene YAML: object, hand, physics (default: built-in)")
       ->check(CLI::ExistingFile);
   command->add_option("-o,--output", options->output_path, "write to this file instead of stdout");
-  command->add_option("--check", options->check_s,
-                      "also load the model in MuJoCo and step it this many seconds; exit 1 on a warning/NaN")
+  command
+      ->add_option("--check", options->check_s,
+                   "also load the model in MuJoCo and step it this many seconds; exit 1 on a warning/NaN")
       ->check(CLI::NonNegativeNumber);
   command->add_flag("--kinematics", options->kinematics,
                     "print the hand's design and its placement for the scene (joints, pre-shape, lever arms, "

@@ -68,18 +68,24 @@ void AddRenderCommand(CLI::App& root) {
   auto options = std::make_shared<RenderCommandOptions>();
   CLI::App* command = root.add_subcommand(
       "render",
-      "Render stills of a scenario offscreen (no display or GPU needed: EGL, Mesa llvmpipe): runs it with its "
-      "controller and script up to each --at instant and writes OUT/<scenario>_t<time>s.png. Units are coloured by "
-      "their estimated Fn: grey unloaded to red at the rated 10 N (square-root scale: 2.5 N is half way), magenta saturated, black unusable (open, short, "
+      "Render stills of a scenario offscreen (no display or GPU needed: EGL, Mesa llvmpipe): runs it with "
+      "its "
+      "controller and script up to each --at instant and writes OUT/<scenario>_t<time>s.png. Units are "
+      "coloured by "
+      "their estimated Fn: grey unloaded to red at the rated 10 N (square-root scale: 2.5 N is half way), "
+      "magenta saturated, black unusable (open, short, "
       "implausible, not yet tared). The object is drawn see-through so the units it covers show. "
       "Exit 0 written, 1 rendering failed, 2 bad input, 130 interrupted");
   command->footer(
       "Cameras: 'grasp' (default) frames hand and object from 45 deg beside the units' outward normal, from "
-      "above; 'fingertip' is a close-up of the units; any other NAME is a <camera> of the model. --view places "
-      "MuJoCo's orbit camera: azimuth 0 looks along +x, 90 along +y; elevation < 0 looks down; world frame, z up, "
+      "above; 'fingertip' is a close-up of the units; any other NAME is a <camera> of the model. --view "
+      "places "
+      "MuJoCo's orbit camera: azimuth 0 looks along +x, 90 along +y; elevation < 0 looks down; world frame, "
+      "z up, "
       "table top at z = 0.\n"
       "Example: graspbed render scenarios/default.yaml --at 0.1 --at 1.2 --out docs/img");
-  command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")->required();
+  command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")
+      ->required();
   command->add_option("--at", options->times_s, "simulated time to render [s] (repeatable)")
       ->required()
       ->expected(1)
@@ -88,21 +94,26 @@ void AddRenderCommand(CLI::App& root) {
   command->add_option("--out", options->out_dir, "output directory (created if missing)")->required();
   command->add_option("--width", options->width_px, "picture width [px], 16..4096")->capture_default_str();
   command->add_option("--height", options->height_px, "picture height [px], 16..4096")->capture_default_str();
-  CLI::Option* camera =
-      command->add_option("--camera", options->camera, "grasp (default), fingertip, or a camera of the model");
-  command->add_option("--view", options->view,
-                      "free camera: azimuth,elevation,distance,lookat_x,lookat_y,lookat_z (deg, deg, m, m, m, m)")
+  CLI::Option* camera = command->add_option("--camera", options->camera,
+                                            "grasp (default), fingertip, or a camera of the model");
+  command
+      ->add_option(
+          "--view", options->view,
+          "free camera: azimuth,elevation,distance,lookat_x,lookat_y,lookat_z (deg, deg, m, m, m, m)")
       ->excludes(camera);
   command->add_flag("--contact-forces", options->contact_forces, "draw an arrow at every contact");
   command->add_option("--force-scale", options->force_scale_mm_per_n, "contact-force arrow length [mm/N]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  command->add_option("--object-alpha", options->object_alpha,
-                      "opacity of the object, 0..1 (1 opaque; 0 leaves it out)")
+  command
+      ->add_option("--object-alpha", options->object_alpha,
+                   "opacity of the object, 0..1 (1 opaque; 0 leaves it out)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   command->add_flag("--no-label", options->no_label, "no text (scenario, time, controller phase, forces)");
-  command->add_option("--set", options->sets, "override a scenario key, e.g. --set object.mass_kg=0.3 (repeatable)")
+  command
+      ->add_option("--set", options->sets,
+                   "override a scenario key, e.g. --set object.mass_kg=0.3 (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->callback([options] { RenderCommand(*options); });

@@ -38,12 +38,14 @@ struct VideoCommandOptions {
   bool shadows = false;
 
   void Add(CLI::App* command, const std::string& where) {
-    command->add_flag("--video", enabled, "render the run offscreen to " + where +
-                                              " (MP4 by ffmpeg, H.264) and a PNG strip of 6 frames beside it");
+    command->add_flag("--video", enabled,
+                      "render the run offscreen to " + where +
+                          " (MP4 by ffmpeg, H.264) and a PNG strip of 6 frames beside it");
     command->add_option("--video-fps", fps, "video frames per simulated second")->capture_default_str();
     command->add_option("--video-size", size, "video WIDTHxHEIGHT [px], even")->capture_default_str();
     command->add_option("--video-camera", camera, "grasp (default), fingertip, or a camera of the model");
-    command->add_flag("--video-shadows", shadows, "draw shadows (about 3x the rendering time on a software renderer)");
+    command->add_flag("--video-shadows", shadows,
+                      "draw shadows (about 3x the rendering time on a software renderer)");
   }
 
   /// Checked before any run starts (exit 2 on a bad value).
@@ -61,7 +63,8 @@ struct VideoCommandOptions {
   scenario::PrepareRun Preparer(const std::string& dir) const {
     if (!enabled) return {};
     const render::VideoOptions video = Resolve();
-    return [video, dir](const scenario::ScenarioConfig& config, const std::string& name, scenario::RunOptions& run) {
+    return [video, dir](const scenario::ScenarioConfig& config, const std::string& name,
+                        scenario::RunOptions& run) {
       const std::string out = dir.empty() ? run.out_dir : dir + "/" + name;
       fs::create_directories(out);
       render::AttachVideo(config, video, out + "/video.mp4", out + "/video_strip.png", run);
@@ -131,15 +134,18 @@ void RunCommand(const RunCommandOptions& options) {
     const render::VideoOptions video = options.video.Resolve();
     std::error_code error;
     fs::create_directories(run.out_dir, error);  // the encoder writes there from the first frame
-    video_cost = render::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
+    video_cost =
+        render::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
   }
   StopSignalGuard guard;
   const scenario::RunResult result = scenario::RunScenario(config, run);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   if (video_cost && video_cost->frames > 0) {
-    std::fprintf(stderr, "graspbed run: video %s/video.mp4, %d frames, rendering %.1f ms/frame, encoding %.1f ms/frame\n",
-                 run.out_dir.c_str(), video_cost->frames, video_cost->render_ms / video_cost->frames,
-                 video_cost->encode_ms / video_cost->frames);
+    std::fprintf(
+        stderr,
+        "graspbed run: video %s/video.mp4, %d frames, rendering %.1f ms/frame, encoding %.1f ms/frame\n",
+        run.out_dir.c_str(), video_cost->frames, video_cost->render_ms / video_cost->frames,
+        video_cost->encode_ms / video_cost->frames);
   }
 
   if (options.json) {
@@ -149,13 +155,15 @@ void RunCommand(const RunCommandOptions& options) {
     const bool sim = config.backend == scenario::Backend::kSim;
     std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
               << (options.no_plots ? ""
-                  : sim ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, taxels_fn.png, taxels_ft.png"
-                        : ", forces.png, grip.png, taxels_fn.png, taxels_ft.png")
-              << (sim ? ", states.csv" : "") << (options.video.enabled ? ", video.mp4, video_strip.png" : "") << ")\n";
+                  : sim            ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, "
+                                     "taxels_fn.png, taxels_ft.png"
+                                   : ", forces.png, grip.png, taxels_fn.png, taxels_ft.png")
+              << (sim ? ", states.csv" : "") << (options.video.enabled ? ", video.mp4, video_strip.png" : "")
+              << ")\n";
   }
   if (!result.completed) {
-    std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in " << run.out_dir
-              << " (marked INCOMPLETE)\n";
+    std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in "
+              << run.out_dir << " (marked INCOMPLETE)\n";
     ExitWith(kExitInterrupted);
   }
   if (result.metrics.physics_fault) {
@@ -169,9 +177,11 @@ void RunCommand(const RunCommandOptions& options) {
 void AddRunCommand(CLI::App& root) {
   auto options = std::make_shared<RunCommandOptions>();
   CLI::App* command = root.add_subcommand(
-      "run", "Run one scenario: writes signals.csv, summary.json, config.yaml and PNG plots; exit 0 when every "
-             "expectation holds, 1 when one fails, 2 on bad input, 130 when interrupted");
-  command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")->required();
+      "run",
+      "Run one scenario: writes signals.csv, summary.json, config.yaml and PNG plots; exit 0 when every "
+      "expectation holds, 1 when one fails, 2 on bad input, 130 when interrupted");
+  command->add_option("scenario", options->scenario, "scenario YAML file (see docs/scenarios.md)")
+      ->required();
   command->add_option("--out", options->out_dir, "output directory (default out/<scenario name>)");
   command->add_option("--controller", options->controller,
                       "controller to test instead of the file's (its parameters in the file are dropped): a "
@@ -183,22 +193,28 @@ void AddRunCommand(CLI::App& root) {
   command->add_flag("--json", options->json, "print the summary JSON on stdout instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
   options->video.Add(command, "OUT/video.mp4");
-  command->add_option("--backend", options->backend,
-                      "sim (default), serial (the hand or `graspbed emulate` on --port) or replay (the recording "
-                      "at --log)")
+  command
+      ->add_option(
+          "--backend", options->backend,
+          "sim (default), serial (the hand or `graspbed emulate` on --port) or replay (the recording "
+          "at --log)")
       ->check(CLI::IsMember({"sim", "serial", "replay"}));
   command->add_option("--port", options->port, "backend serial: serial device (serial.port)");
-  command->add_option("--log", options->log,
-                      "backend serial: also write every decoded frame to this CSV; backend replay: the recording "
-                      "(a run's signals.csv or a frame log)");
-  command->add_flag("--prompt-actions", options->prompt_actions,
-                    "backend serial: print script actions that need the simulator (lift, pull, add_mass, ...) as "
-                    "prompts at their times instead of refusing them");
-  command->add_option("--intent-fifo", options->intent_fifo,
-                      "backend serial: read intent lines (close/open/idle/quit) from this FIFO, e.g. from an EMG "
-                      "pipeline (created when missing)");
-  command->add_flag("--no-stdin-intent", options->no_stdin_intent,
-                    "backend serial: do not read intent from stdin (keys c/o/i/q on a terminal, lines otherwise)");
+  command->add_option(
+      "--log", options->log,
+      "backend serial: also write every decoded frame to this CSV; backend replay: the recording "
+      "(a run's signals.csv or a frame log)");
+  command->add_flag(
+      "--prompt-actions", options->prompt_actions,
+      "backend serial: print script actions that need the simulator (lift, pull, add_mass, ...) as "
+      "prompts at their times instead of refusing them");
+  command->add_option(
+      "--intent-fifo", options->intent_fifo,
+      "backend serial: read intent lines (close/open/idle/quit) from this FIFO, e.g. from an EMG "
+      "pipeline (created when missing)");
+  command->add_flag(
+      "--no-stdin-intent", options->no_stdin_intent,
+      "backend serial: do not read intent from stdin (keys c/o/i/q on a terminal, lines otherwise)");
   command->callback([options] { RunCommand(*options); });
 }
 
@@ -234,7 +250,9 @@ void SuiteCommand(const SuiteCommandOptions& options) {
   suite.on_finished = [terminal](int done, int total, const scenario::SuiteRun& run) {
     if (!terminal) return;
     std::fprintf(stderr, "\r\033[K  [%d/%d] %s: %s", done, total, run.result.config.name.c_str(),
-                 !run.error.empty() ? "error" : run.result.passed ? "pass" : "FAIL");
+                 !run.error.empty()  ? "error"
+                 : run.result.passed ? "pass"
+                                     : "FAIL");
     std::fflush(stderr);
   };
   StopSignalGuard guard;
@@ -253,8 +271,9 @@ void SuiteCommand(const SuiteCommandOptions& options) {
 void AddSuiteCommand(CLI::App& root) {
   auto options = std::make_shared<SuiteCommandOptions>();
   CLI::App* command = root.add_subcommand(
-      "suite", "Run every scenario (*.yaml) of a directory in parallel: pass/fail table, DIR_OUT/suite.json and "
-               "one output directory per scenario; exit 1 if any fails");
+      "suite",
+      "Run every scenario (*.yaml) of a directory in parallel: pass/fail table, DIR_OUT/suite.json and "
+      "one output directory per scenario; exit 1 if any fails");
   command->add_option("dir", options->dir, "directory of scenario files, e.g. scenarios")->required();
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
   command->add_option("--out", options->out_dir, "output directory (default out/suite)");
@@ -302,11 +321,13 @@ void SweepCommand(const SweepCommandOptions& options) {
   StopSignalGuard guard;
   const scenario::SweepOutcome outcome = scenario::RunSweep(spec, sweep);
   if (terminal) std::fprintf(stderr, "\r\033[K");
-  std::printf("sweep %s shard %s: %d of %d runs finished, %d passed, %.2f s -> %s/results.csv, results.jsonl\n",
-              spec.source_file.c_str(), options.shard.c_str(), outcome.finished, outcome.runs, outcome.passed,
-              outcome.wall_s, options.out_dir.c_str());
+  std::printf(
+      "sweep %s shard %s: %d of %d runs finished, %d passed, %.2f s -> %s/results.csv, results.jsonl\n",
+      spec.source_file.c_str(), options.shard.c_str(), outcome.finished, outcome.runs, outcome.passed,
+      outcome.wall_s, options.out_dir.c_str());
   if (!outcome.completed) {
-    std::fprintf(stderr, "graspbed: interrupted; finished rows are in %s/results.jsonl.partial (not merged)\n",
+    std::fprintf(stderr,
+                 "graspbed: interrupted; finished rows are in %s/results.jsonl.partial (not merged)\n",
                  options.out_dir.c_str());
     ExitWith(kExitInterrupted);
   }
@@ -315,27 +336,33 @@ void SweepCommand(const SweepCommandOptions& options) {
 void AddSweepCommand(CLI::App& root) {
   auto options = std::make_shared<SweepCommandOptions>();
   CLI::App* command = root.add_subcommand(
-      "sweep", "Run a grid or seeded random sample over scenario parameters: one row per run in "
-               "DIR/results.csv and results.jsonl; --shard K/N runs every N-th run for cluster arrays");
+      "sweep",
+      "Run a grid or seeded random sample over scenario parameters: one row per run in "
+      "DIR/results.csv and results.jsonl; --shard K/N runs every N-th run for cluster arrays");
   command->add_option("spec", options->spec, "sweep spec YAML (see docs/scenarios.md, Sweeps)")->required();
-  command->add_option("--shard", options->shard, "run shard K of N (1-based: runs with index % N == K - 1), e.g. with sbatch --array=0-7: --shard $((SLURM_ARRAY_TASK_ID+1))/8");
+  command->add_option("--shard", options->shard,
+                      "run shard K of N (1-based: runs with index % N == K - 1), e.g. with sbatch "
+                      "--array=0-7: --shard $((SLURM_ARRAY_TASK_ID+1))/8");
   command->add_option("--out", options->out_dir, "output directory (default out/sweep)");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
-  command->add_option("--controller", options->controller,
-                      "controller for every run instead of the scenario's: a built-in name or plugin:LIBRARY");
+  command->add_option(
+      "--controller", options->controller,
+      "controller for every run instead of the scenario's: a built-in name or plugin:LIBRARY");
   options->video.Add(command, "OUT/videos/run_<index>/video.mp4");
   command->callback([options] { SweepCommand(*options); });
 
   auto dirs = std::make_shared<std::vector<std::string>>();
   auto out = std::make_shared<std::string>("out/sweep-merged");
   CLI::App* merge = root.add_subcommand(
-      "merge", "Combine the output directories of all shards of one sweep into one results.csv/jsonl; refuses "
-               "missing, repeated, incomplete or foreign shards");
+      "merge",
+      "Combine the output directories of all shards of one sweep into one results.csv/jsonl; refuses "
+      "missing, repeated, incomplete or foreign shards");
   merge->add_option("shards", *dirs, "shard output directories")->required();
   merge->add_option("--out", *out, "merged output directory (default out/sweep-merged)");
   merge->callback([dirs, out] {
     const int rows = scenario::MergeSweeps(*dirs, *out);
-    std::printf("merged %zu shards: %d rows -> %s/results.csv, results.jsonl\n", dirs->size(), rows, out->c_str());
+    std::printf("merged %zu shards: %d rows -> %s/results.csv, results.jsonl\n", dirs->size(), rows,
+                out->c_str());
   });
 }
 

@@ -28,7 +28,8 @@ struct ScoreCommandOptions {
 };
 
 void ScoreCommand(const ScoreCommandOptions& options) {
-  const std::string set_dir = options.set_dir.empty() ? common::DataPath("scenarios/scorecard") : options.set_dir;
+  const std::string set_dir =
+      options.set_dir.empty() ? common::DataPath("scenarios/scorecard") : options.set_dir;
   const scenario::ScorecardSet set = scenario::LoadScorecardSet(set_dir + "/set.yaml");
   scenario::ScorecardOptions score;
   if (!options.controllers.empty()) {
@@ -59,16 +60,22 @@ void ScoreCommand(const ScoreCommandOptions& options) {
 void AddScoreCommand(CLI::App& root) {
   auto options = std::make_shared<ScoreCommandOptions>();
   CLI::App* command = root.add_subcommand(
-      "score", "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
-               "base scenarios plus seeded variations): slip detection, latency, false flags, drops, crushes, "
-               "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv, scorecard.json and scorecard.png");
-  command->add_option("--controller", options->controllers,
-                      "controller to score: a built-in name or plugin:LIBRARY (repeatable; default grip_slip and open_loop)")
+      "score",
+      "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
+      "base scenarios plus seeded variations): slip detection, latency, false flags, drops, crushes, "
+      "grip efficiency, Fn RMSE, passes; writes DIR/scorecard.csv, scorecard.json and scorecard.png");
+  command
+      ->add_option("--controller", options->controllers,
+                   "controller to score: a built-in name or plugin:LIBRARY (repeatable; default grip_slip "
+                   "and open_loop)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  command->add_option("--set-dir", options->set_dir, "directory holding set.yaml (default: the shipped set, share/graspbed/scenarios/scorecard)");
+  command->add_option(
+      "--set-dir", options->set_dir,
+      "directory holding set.yaml (default: the shipped set, share/graspbed/scenarios/scorecard)");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));
-  command->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
+  command
+      ->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--out", options->out_dir, "output directory (default out/scorecard)");
   command->callback([options] { ScoreCommand(*options); });

@@ -64,7 +64,8 @@ struct CalibrateOptions {
 
 void WarnBeyondRange(const char* name, double force_n, double rated_n) {
   if (std::abs(force_n) > rated_n) {
-    std::fprintf(stderr, "graspbed: note: %s = %g N is beyond the rated %g N range\n", name, force_n, rated_n);
+    std::fprintf(stderr, "graspbed: note: %s = %g N is beyond the rated %g N range\n", name, force_n,
+                 rated_n);
   }
 }
 
@@ -79,19 +80,26 @@ void RunForward(const ForwardOptions& options) {
   // Far beyond the rated range the linear gauge model would give a resistance <= 0: no reading.
   if (!(r.r1_ohm > 0.0) || !(r.r2_ohm > 0.0)) {
     char message[200];
-    std::snprintf(message, sizeof(message),
-                  "--fn = %s, --ft = %s: the gauge model gives R1 = %.0f Ohm, R2 = %.0f Ohm (<= 0: far beyond "
-                  "the rated %g N)",
-                  options.fn.c_str(), options.ft.c_str(), r.r1_ohm, r.r2_ohm, constants.rated_force_n);
+    std::snprintf(
+        message, sizeof(message),
+        "--fn = %s, --ft = %s: the gauge model gives R1 = %.0f Ohm, R2 = %.0f Ohm (<= 0: far beyond "
+        "the rated %g N)",
+        options.fn.c_str(), options.ft.c_str(), r.r1_ohm, r.r2_ohm, constants.rated_force_n);
     throw std::invalid_argument(message);
   }
   const double dr1 = r.r1_ohm / constants.r0_ohm - 1.0;
   const double dr2 = r.r2_ohm / constants.r0_ohm - 1.0;
   if (options.json) {
-    const nlohmann::json out = {{"fn", fn_n},          {"ft", ft_n},          {"r0", constants.r0_ohm},
-                                {"r1", r.r1_ohm},      {"r2", r.r2_ohm},      {"dr1_rel", dr1},
-                                {"dr2_rel", dr2},      {"gauge_factor", constants.gauge_factor},
-                                {"kn_per_n", constants.kn_per_n}, {"kt_per_n", constants.kt_per_n}};
+    const nlohmann::json out = {{"fn", fn_n},
+                                {"ft", ft_n},
+                                {"r0", constants.r0_ohm},
+                                {"r1", r.r1_ohm},
+                                {"r2", r.r2_ohm},
+                                {"dr1_rel", dr1},
+                                {"dr2_rel", dr2},
+                                {"gauge_factor", constants.gauge_factor},
+                                {"kn_per_n", constants.kn_per_n},
+                                {"kt_per_n", constants.kt_per_n}};
     std::cout << out.dump() << '\n';
     return;
   }
@@ -115,15 +123,16 @@ void RunInvert(const InvertOptions& options) {
   const double dr2 = r2 / constants.r0_ohm - 1.0;
   const sensor::UnitForces forces = sensor::InvertUnit(calibration, dr1, dr2);
   if (options.json) {
-    const nlohmann::json out = {{"r1", r1},   {"r2", r2},   {"r0", constants.r0_ohm}, {"dr1_rel", dr1},
-                                {"dr2_rel", dr2}, {"fn", forces.fn_n}, {"ft", forces.ft_n}};
+    const nlohmann::json out = {{"r1", r1},         {"r2", r2},       {"r0", constants.r0_ohm},
+                                {"dr1_rel", dr1},   {"dr2_rel", dr2}, {"fn", forces.fn_n},
+                                {"ft", forces.ft_n}};
     std::cout << out.dump() << '\n';
     return;
   }
   WarnBeyondRange("Fn", forces.fn_n, constants.rated_force_n);
   WarnBeyondRange("Ft", forces.ft_n, constants.rated_force_n);
-  std::printf("R1 = %g Ohm, R2 = %g Ohm, R0 = %g Ohm: dR1/R1 = %+.4f, dR2/R2 = %+.4f\n", r1, r2, constants.r0_ohm,
-              dr1, dr2);
+  std::printf("R1 = %g Ohm, R2 = %g Ohm, R0 = %g Ohm: dR1/R1 = %+.4f, dR2/R2 = %+.4f\n", r1, r2,
+              constants.r0_ohm, dr1, dr2);
   std::printf("Fn = %.3f N\nFt = %.3f N\n", forces.fn_n, forces.ft_n);
 }
 
@@ -132,7 +141,9 @@ void RunLayout(const LayoutOptions& options) {
   if (options.json) {
     nlohmann::json units = nlohmann::json::array();
     for (const sensor::UnitPose& pose : layout.units) {
-      const auto vector = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+      const auto vector = [](const Eigen::Vector3d& v) {
+        return nlohmann::json::array({v.x(), v.y(), v.z()});
+      };
       units.push_back({{"row", pose.row},
                        {"column", pose.column},
                        {"orientation", sensor::ToString(pose.orientation)},
@@ -151,19 +162,21 @@ void RunLayout(const LayoutOptions& options) {
     std::cout << out.dump(2) << '\n';
     return;
   }
-  std::printf("layout %s (%s): %d units on a %.1f x %.1f mm elliptic holder, %.1f mm long\n", layout.name.c_str(),
-              layout.source_file.c_str(), layout.unit_count(), layout.holder.major_axis_m * 1e3,
-              layout.holder.minor_axis_m * 1e3, layout.holder.length_m * 1e3);
+  std::printf("layout %s (%s): %d units on a %.1f x %.1f mm elliptic holder, %.1f mm long\n",
+              layout.name.c_str(), layout.source_file.c_str(), layout.unit_count(),
+              layout.holder.major_axis_m * 1e3, layout.holder.minor_axis_m * 1e3,
+              layout.holder.length_m * 1e3);
   std::printf("holder frame: x along the axis (distal +), y lateral, z dorsal; positions in mm\n");
   std::printf("%4s %3s %3s %-15s %7s %7s   %-26s %-24s %s\n", "unit", "row", "col", "beam", "x", "arc",
               "position (x, y, z)", "inward normal", "beam axis");
   for (int i = 0; i < layout.unit_count(); ++i) {
     const sensor::UnitPose& u = layout.units[static_cast<size_t>(i)];
-    std::printf("%4d %3d %3d %-15s %7.2f %7.2f   (%6.2f, %6.3f, %6.3f)   (%5.3f, %6.3f, %5.3f)   (%5.3f, %6.3f, %6.3f)\n",
-                i, u.row, u.column, sensor::ToString(u.orientation), u.axial_position_m * 1e3,
-                u.arc_position_m * 1e3, u.position_m.x() * 1e3, u.position_m.y() * 1e3, u.position_m.z() * 1e3,
-                u.inward_normal.x(), u.inward_normal.y(), u.inward_normal.z(), u.beam_axis.x(), u.beam_axis.y(),
-                u.beam_axis.z());
+    std::printf(
+        "%4d %3d %3d %-15s %7.2f %7.2f   (%6.2f, %6.3f, %6.3f)   (%5.3f, %6.3f, %5.3f)   (%5.3f, %6.3f, "
+        "%6.3f)\n",
+        i, u.row, u.column, sensor::ToString(u.orientation), u.axial_position_m * 1e3, u.arc_position_m * 1e3,
+        u.position_m.x() * 1e3, u.position_m.y() * 1e3, u.position_m.z() * 1e3, u.inward_normal.x(),
+        u.inward_normal.y(), u.inward_normal.z(), u.beam_axis.x(), u.beam_axis.y(), u.beam_axis.z());
   }
 }
 
@@ -171,7 +184,8 @@ void RunCalibrate(const CalibrateOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(options.layout_path);
   const std::vector<sensor::CalibrationSample> samples =
       sensor::LoadCalibrationLog(options.log_path, layout.unit_count());
-  const sensor::CalibrationFit fit = sensor::FitCalibration(samples, layout.unit_count(), options.gauge_factor);
+  const sensor::CalibrationFit fit =
+      sensor::FitCalibration(samples, layout.unit_count(), options.gauge_factor);
   sensor::SaveCalibration(fit.calibration, options.out_path);
   if (options.json) {
     nlohmann::json units = nlohmann::json::array();
@@ -194,8 +208,8 @@ void RunCalibrate(const CalibrateOptions& options) {
   }
   std::printf("fitted %zu samples for %d units (G = %g); wrote %s\n", samples.size(), layout.unit_count(),
               options.gauge_factor, options.out_path.c_str());
-  std::printf("%4s %7s %11s %11s %9s %9s %9s %9s %9s %9s\n", "unit", "samples", "kn [1/N]", "kt [1/N]", "Fn0 [N]",
-              "Ft0 [N]", "rmsFn[N]", "rmsFt[N]", "Fn<-Ft", "Ft<-Fn");
+  std::printf("%4s %7s %11s %11s %9s %9s %9s %9s %9s %9s\n", "unit", "samples", "kn [1/N]", "kt [1/N]",
+              "Fn0 [N]", "Ft0 [N]", "rmsFn[N]", "rmsFt[N]", "Fn<-Ft", "Ft<-Fn");
   for (size_t i = 0; i < fit.reports.size(); ++i) {
     const sensor::UnitCalibration& c = fit.calibration.units[i];
     const sensor::UnitFitReport& r = fit.reports[i];
@@ -214,11 +228,13 @@ void AddSensorCommands(CLI::App& root) {
   CLI::App* forward_command = sensor->add_subcommand(
       "forward", "R1, R2 and dR/R of one unit (paper constants) for a normal and a shear force");
   forward_command->add_option("--fn", forward->fn, "normal force on the mesa [N], >= 0 (default 0)");
-  forward_command->add_option("--ft", forward->ft,
-                              "shear force along the beam [N], either sign: rated -10..10, negative gives R1 < R2 "
-                              "(default 0)");
+  forward_command->add_option(
+      "--ft", forward->ft,
+      "shear force along the beam [N], either sign: rated -10..10, negative gives R1 < R2 "
+      "(default 0)");
   forward_command->add_option("--r0", forward->r0, "unstrained resistance of R1 and R2 [Ohm] (default 3400)");
-  forward_command->add_flag("--json", forward->json, "print one JSON object: fn, ft [N], r0, r1, r2 [Ohm], dr1_rel, dr2_rel");
+  forward_command->add_flag("--json", forward->json,
+                            "print one JSON object: fn, ft [N], r0, r1, r2 [Ohm], dr1_rel, dr2_rel");
   forward_command->callback([forward] { RunForward(*forward); });
 
   auto invert = std::make_shared<InvertOptions>();
@@ -226,21 +242,24 @@ void AddSensorCommands(CLI::App& root) {
       "invert", "Fn and Ft of one unit from measured R1, R2 (paper eq. 4, paper constants)");
   invert_command->add_option("--r1", invert->r1, "measured R1 [Ohm], > 0")->required();
   invert_command->add_option("--r2", invert->r2, "measured R2 [Ohm], > 0")->required();
-  invert_command->add_option("--r0", invert->r0, "unloaded resistance (tare) of R1 and R2 [Ohm] (default 3400)");
+  invert_command->add_option("--r0", invert->r0,
+                             "unloaded resistance (tare) of R1 and R2 [Ohm] (default 3400)");
   invert_command->add_flag("--json", invert->json, "print one JSON object: r1, r2, r0 [Ohm], fn, ft [N]");
   invert_command->callback([invert] { RunInvert(*invert); });
 
   auto layout = std::make_shared<LayoutOptions>();
   CLI::App* layout_command =
       sensor->add_subcommand("layout", "Unit poses of a layout file: position, inward normal, beam axis");
-  layout_command->add_option("--layout", layout->layout_path, "layout YAML (default sensor/layouts/default_20.yaml)");
+  layout_command->add_option("--layout", layout->layout_path,
+                             "layout YAML (default sensor/layouts/default_20.yaml)");
   layout_command->add_flag("--json", layout->json, "print the poses as JSON");
   layout_command->callback([layout] { RunLayout(*layout); });
 
   auto calibrate = std::make_shared<CalibrateOptions>();
   CLI::App* calibrate_command = sensor->add_subcommand(
-      "calibrate", "Least-squares fit of per-unit kn, kt and offsets from a CSV log of known loads and "
-                   "readings (docs/sensor.md); writes a calibration YAML");
+      "calibrate",
+      "Least-squares fit of per-unit kn, kt and offsets from a CSV log of known loads and "
+      "readings (docs/sensor.md); writes a calibration YAML");
   calibrate_command->add_option("--log", calibrate->log_path, "calibration log CSV")->required();
   calibrate_command->add_option("--out", calibrate->out_path, "calibration YAML to write")->required();
   calibrate_command->add_option("--layout", calibrate->layout_path,

@@ -43,7 +43,8 @@ void ViewCommand(const ViewCommandOptions& options) {
   StopSignalGuard guard;
   render::ViewerResult result;
   if (fs::is_directory(options.target)) {
-    if (!options.sets.empty()) throw std::invalid_argument("--set: a replay shows the run as it was; no overrides");
+    if (!options.sets.empty())
+      throw std::invalid_argument("--set: a replay shows the run as it was; no overrides");
     result = render::ViewReplay(options.target, viewer);
   } else {
     std::vector<scenario::Override> overrides;
@@ -58,15 +59,20 @@ void AddViewCommand(CLI::App& root) {
   auto options = std::make_shared<ViewCommandOptions>();
   CLI::App* command = root.add_subcommand(
       "view",
-      "Watch a scenario live in a window, run by its controller and script (real time by default), or replay a "
+      "Watch a scenario live in a window, run by its controller and script (real time by default), or replay "
+      "a "
       "finished run from its output directory (config.yaml, signals.csv, states.csv) without simulating it. "
-      "Units coloured by estimated Fn, Ft arrows along their beams, contact forces, a panel with the controller's "
+      "Units coloured by estimated Fn, Ft arrows along their beams, contact forces, a panel with the "
+      "controller's "
       "state. Needs a display (xvfb-run works); videos need none (graspbed run --video). Exit 0 closed, 1 no "
       "window, 2 bad input");
   command->footer(
-      "Keys: space pause; right arrow one step (live: a control tick; replay: 5 ms), left arrow back (replay); "
-      "[ ] half a second back/forward (replay); + - speed x2 / x0.5; backspace restart; F fingertip camera, G grasp "
-      "camera; Q or Esc quit. Mouse as mujoco-simulate: left drag rotate, right drag move, wheel zoom, shift for "
+      "Keys: space pause; right arrow one step (live: a control tick; replay: 5 ms), left arrow back "
+      "(replay); "
+      "[ ] half a second back/forward (replay); + - speed x2 / x0.5; backspace restart; F fingertip camera, "
+      "G grasp "
+      "camera; Q or Esc quit. Mouse as mujoco-simulate: left drag rotate, right drag move, wheel zoom, shift "
+      "for "
       "the horizontal forms.\n"
       "Examples: graspbed view scenarios/default.yaml\n"
       "          graspbed run scenarios/slip_recovery.yaml --out out/s && graspbed view out/s");
@@ -76,7 +82,8 @@ void AddViewCommand(CLI::App& root) {
   command->add_option("--speed", options->speed, "simulated seconds per second at the start (1 = real time)")
       ->capture_default_str();
   command->add_flag("--paused", options->paused, "start paused");
-  command->add_option("--frames", options->frames, "close after this many frames (0: when the window is closed)")
+  command
+      ->add_option("--frames", options->frames, "close after this many frames (0: when the window is closed)")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--camera", options->camera, "grasp (default), fingertip, or a camera of the model");
   command->add_flag("--shadows", options->shadows, "draw shadows (slow on a software renderer)");

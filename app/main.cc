@@ -7,8 +7,9 @@
 #include "app/command_registry.h"
 
 int main(int argc, char** argv) {
-  CLI::App root{"graspbed: simulation-in-the-loop grasp testbed for a prosthetic hand with a tactile "
-                "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
+  CLI::App root{
+      "graspbed: simulation-in-the-loop grasp testbed for a prosthetic hand with a tactile "
+      "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
   root.require_subcommand(1);
   root.set_version_flag("--version", std::string("graspbed ") + GRASPBED_VERSION);
   graspbed::app::InstallCommands(root);

@@ -53,7 +53,8 @@ void BM_DecodeFrames(benchmark::State& state) {
     benchmark::DoNotOptimize(raw);
   }
   if (decoder.stats().corrupt() != 0) state.SkipWithError("corrupt packets in a clean stream");
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
   state.counters["x_nominal_1kHz"] =
       benchmark::Counter(static_cast<double>(frames) / 1000.0, benchmark::Counter::kIsRate);
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(stream.size()));
@@ -69,8 +70,8 @@ void BM_EncodeFrame(benchmark::State& state) {
     ++frame.sequence;
     benchmark::DoNotOptimize(EncodePacket(frame, out));
   }
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_EncodeFrame);
 

@@ -103,19 +103,22 @@ void PrintRatio(const char* label, const SceneConfig& scene) {
     pipeline_cpu += ThreadCpuSeconds() - cpu_start;
   }
   const double simulated = kRounds * kRoundS;
-  std::printf("\nPipeline cost, %s, 10 N pinch hold, %.0f s simulated each, interleaved:\n", label, simulated);
+  std::printf("\nPipeline cost, %s, 10 N pinch hold, %.0f s simulated each, interleaved:\n", label,
+              simulated);
   std::printf("  bare physics   : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / physics_wall,
               simulated / physics_cpu);
   std::printf("  full pipeline  : %7.2f sim s per wall s, %7.2f per CPU s\n", simulated / pipeline_wall,
               simulated / pipeline_cpu);
   std::printf("  ratio full / bare: %.3f wall, %.3f CPU   (budget <= 1.15)\n", pipeline_wall / physics_wall,
               pipeline_cpu / physics_cpu);
-  if (physics->fault().occurred || rig->simulation().fault().occurred) std::printf("  PHYSICS FAULT during timing\n");
+  if (physics->fault().occurred || rig->simulation().fault().occurred)
+    std::printf("  PHYSICS FAULT during timing\n");
 }
 
 void PrintCoverage() {
   std::printf("\nForce coverage, 10 N pinch (sensed = on mesas; share of all finger contact force):\n");
-  std::printf("  %-28s %9s %9s %9s %8s %12s\n", "object", "finger N", "mesas N", "holder N", "share", "mesa pen um");
+  std::printf("  %-28s %9s %9s %9s %8s %12s\n", "object", "finger N", "mesas N", "holder N", "share",
+              "mesa pen um");
   struct Case {
     const char* name;
     ObjectShape shape;
@@ -139,8 +142,8 @@ void PrintCoverage() {
     const double share =
         truth.finger_normal_force_n > 0.0 ? truth.sensed_normal_force_n / truth.finger_normal_force_n : 0.0;
     std::printf("  %-28s %9.3f %9.3f %9.3f %8.3f %12.1f%s\n", c.name, truth.finger_normal_force_n,
-                truth.sensed_normal_force_n, truth.holder_normal_force_n, share, truth.max_mesa_penetration_m * 1e6,
-                simulation->fault().occurred ? "  FAULT" : "");
+                truth.sensed_normal_force_n, truth.holder_normal_force_n, share,
+                truth.max_mesa_penetration_m * 1e6, simulation->fault().occurred ? "  FAULT" : "");
   }
 }
 

@@ -81,8 +81,7 @@ void ValidateChart(const Chart& chart) {
   }
 }
 
-void ShowText(cairo_t* cr, const std::string& text, double x, double y, double align_x,
-              double align_y) {
+void ShowText(cairo_t* cr, const std::string& text, double x, double y, double align_x, double align_y) {
   cairo_text_extents_t extents;
   cairo_text_extents(cr, text.c_str(), &extents);
   cairo_move_to(cr, x - align_x * extents.width - extents.x_bearing,
@@ -118,8 +117,12 @@ void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double wid
   const double right = x0 + width - kMarginRight;
   const double top = y0 + kMarginTop;
   const double bottom = y0 + height - kMarginBottom;
-  auto to_px_x = [&](double x) { return left + (x - x_range.lo) / (x_range.hi - x_range.lo) * (right - left); };
-  auto to_px_y = [&](double y) { return bottom - (y - y_range.lo) / (y_range.hi - y_range.lo) * (bottom - top); };
+  auto to_px_x = [&](double x) {
+    return left + (x - x_range.lo) / (x_range.hi - x_range.lo) * (right - left);
+  };
+  auto to_px_y = [&](double y) {
+    return bottom - (y - y_range.lo) / (y_range.hi - y_range.lo) * (bottom - top);
+  };
 
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, kFontSize);
@@ -301,8 +304,8 @@ void Render(int width_px, int height_px, const std::string& path, DrawFn draw) {
   draw(cr.get());
   cairo_surface_flush(surface.get());
   if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
-    throw std::runtime_error("plot: drawing " + path + " failed: " +
-                             cairo_status_to_string(cairo_status(cr.get())));
+    throw std::runtime_error("plot: drawing " + path +
+                             " failed: " + cairo_status_to_string(cairo_status(cr.get())));
   }
   const std::string temp_path = path + ".tmp." + std::to_string(::getpid());
   const cairo_status_t status = cairo_surface_write_to_png(surface.get(), temp_path.c_str());
@@ -356,11 +359,13 @@ void ValidateHeatmap(const Heatmap& heatmap, const std::string& path) {
   if (heatmap.width_px <= kHeatmapMarginLeft + kHeatmapMarginRight + 10 ||
       heatmap.height_px <= kHeatmapMarginTop + kHeatmapMarginBottom + 10) {
     throw std::invalid_argument("plot: heat map size " + std::to_string(heatmap.width_px) + "x" +
-                                std::to_string(heatmap.height_px) + " for " + path + ": too small for its margins");
+                                std::to_string(heatmap.height_px) + " for " + path +
+                                ": too small for its margins");
   }
   if (heatmap.row_labels.size() != heatmap.values.size()) {
-    throw std::invalid_argument("plot: heat map for " + path + " has " + std::to_string(heatmap.values.size()) +
-                                " rows but " + std::to_string(heatmap.row_labels.size()) + " row labels");
+    throw std::invalid_argument("plot: heat map for " + path + " has " +
+                                std::to_string(heatmap.values.size()) + " rows but " +
+                                std::to_string(heatmap.row_labels.size()) + " row labels");
   }
   for (size_t row = 0; row < heatmap.values.size(); ++row) {
     if (heatmap.values[row].size() != heatmap.x.size()) {
@@ -449,7 +454,9 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
         value = values[std::abs(x[before] - centre) <= std::abs(x[after] - centre) ? before : after];
       }
       const Rgb colour = ColourOf(value, scale, heatmap.signed_scale);
-      const auto channel = [](double c) { return static_cast<uint32_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0)); };
+      const auto channel = [](double c) {
+        return static_cast<uint32_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
+      };
       *reinterpret_cast<uint32_t*>(data + row * stride + 4 * column) =
           (channel(colour.r) << 16) | (channel(colour.g) << 8) | channel(colour.b);
       first = end;
@@ -494,8 +501,8 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
   cairo_set_font_size(cr, label_size);
   const int label_every = std::max(1, static_cast<int>(std::ceil((label_size + 2.0) / g.row_height())));
   for (int row = 0; row < g.rows; row += label_every) {
-    ShowText(cr, heatmap.row_labels[static_cast<size_t>(row)], g.left - 6, g.top + (row + 0.5) * g.row_height(),
-             1.0, 0.5);
+    ShowText(cr, heatmap.row_labels[static_cast<size_t>(row)], g.left - 6,
+             g.top + (row + 0.5) * g.row_height(), 1.0, 0.5);
   }
   cairo_set_font_size(cr, kFontSize);
   cairo_save(cr);
@@ -521,7 +528,9 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
   // Colour bar with its scale.
   const double bar_left = g.right + 16;
   const double value_lo = heatmap.signed_scale ? -scale : 0.0;
-  const auto bar_y = [&](double value) { return g.bottom - (value - value_lo) / (scale - value_lo) * (g.bottom - g.top); };
+  const auto bar_y = [&](double value) {
+    return g.bottom - (value - value_lo) / (scale - value_lo) * (g.bottom - g.top);
+  };
   for (int py = static_cast<int>(g.top); py < static_cast<int>(g.bottom); ++py) {
     const double value = value_lo + (g.bottom - (py + 0.5)) / (g.bottom - g.top) * (scale - value_lo);
     const Rgb colour = ColourOf(value, scale, heatmap.signed_scale);
@@ -580,16 +589,15 @@ std::vector<double> NiceTicks(double lo, double hi, int target_count) {
 
 void WritePng(const Chart& chart, const std::string& path, int width_px, int height_px) {
   ValidateChart(chart);
-  Render(width_px, height_px, path, [&](cairo_t* cr) {
-    DrawChart(cr, chart, 0.0, 0.0, width_px, height_px);
-  });
+  Render(width_px, height_px, path,
+         [&](cairo_t* cr) { DrawChart(cr, chart, 0.0, 0.0, width_px, height_px); });
 }
 
 void WritePng(const Figure& figure, const std::string& path) {
   for (const Chart& chart : figure.panels) ValidateChart(chart);
   if (figure.columns <= 0) {
-    throw std::invalid_argument("plot: figure for " + path + " has " +
-                                std::to_string(figure.columns) + " columns: must be positive");
+    throw std::invalid_argument("plot: figure for " + path + " has " + std::to_string(figure.columns) +
+                                " columns: must be positive");
   }
   const int count = std::max<int>(1, static_cast<int>(figure.panels.size()));
   const int columns = std::min(figure.columns, count);
@@ -610,9 +618,8 @@ void WritePng(const Figure& figure, const std::string& path) {
     for (size_t i = 0; i < figure.panels.size(); ++i) {
       const int row = static_cast<int>(i) / columns;
       const int column = static_cast<int>(i) % columns;
-      DrawChart(cr, figure.panels[i], column * figure.panel_width_px,
-                title_px + row * figure.panel_height_px, figure.panel_width_px,
-                figure.panel_height_px);
+      DrawChart(cr, figure.panels[i], column * figure.panel_width_px, title_px + row * figure.panel_height_px,
+                figure.panel_width_px, figure.panel_height_px);
     }
   });
 }

@@ -12,11 +12,11 @@ namespace graspbed::plot {
 
 /// One named line. x and y have the same length; non-finite points break the line.
 struct Series {
-  std::string name;        ///< legend text; empty = not listed in the legend
-  std::vector<double> x;   ///< abscissae, in the chart's x unit
-  std::vector<double> y;   ///< ordinates, in the chart's y unit
-  bool dashed = false;     ///< draw dashed instead of solid
-  bool markers = false;    ///< draw a small dot at every point
+  std::string name;       ///< legend text; empty = not listed in the legend
+  std::vector<double> x;  ///< abscissae, in the chart's x unit
+  std::vector<double> y;  ///< ordinates, in the chart's y unit
+  bool dashed = false;    ///< draw dashed instead of solid
+  bool markers = false;   ///< draw a small dot at every point
 };
 
 /// A vertical line across the plot area at `x`, labelled at its top.
@@ -56,9 +56,9 @@ struct Figure {
 /// colour of a cell the channel's value there, a colour bar with its scale, optional markers.
 struct Heatmap {
   std::string title;
-  std::string x_label;      ///< with its unit, e.g. "time [s]"
-  std::string row_label;    ///< what the rows are, e.g. "unit (row, column)"
-  std::string value_label;  ///< colour bar label with its unit, e.g. "Fn [N]"
+  std::string x_label;                      ///< with its unit, e.g. "time [s]"
+  std::string row_label;                    ///< what the rows are, e.g. "unit (row, column)"
+  std::string value_label;                  ///< colour bar label with its unit, e.g. "Fn [N]"
   std::vector<std::string> row_labels;      ///< one per row, top to bottom
   std::vector<double> x;                    ///< sample abscissae shared by all rows, increasing
   std::vector<std::vector<double>> values;  ///< values[row][sample]; non-finite cells are grey

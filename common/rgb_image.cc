@@ -24,12 +24,13 @@ void WritePng(const RgbImage& image, const std::string& path) {
   if (image.width_px <= 0 || image.height_px <= 0 ||
       image.rgb.size() != static_cast<size_t>(image.width_px) * image.height_px * 3) {
     throw std::invalid_argument("image " + path + ": " + std::to_string(image.width_px) + "x" +
-                                std::to_string(image.height_px) + " with " + std::to_string(image.rgb.size()) +
-                                " bytes: not a non-empty RGB image");
+                                std::to_string(image.height_px) + " with " +
+                                std::to_string(image.rgb.size()) + " bytes: not a non-empty RGB image");
   }
   Surface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width_px, image.height_px));
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
-    throw std::runtime_error("image " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
+    throw std::runtime_error("image " + path + ": " +
+                             cairo_status_to_string(cairo_surface_status(surface.get())));
   }
   // CAIRO_FORMAT_RGB24: one native-endian uint32 per pixel, 0x00RRGGBB.
   cairo_surface_flush(surface.get());
@@ -63,7 +64,8 @@ void WritePng(const RgbImage& image, const std::string& path) {
 RgbImage ReadPng(const std::string& path) {
   Surface surface(cairo_image_surface_create_from_png(path.c_str()));
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
-    throw std::runtime_error("cannot read " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
+    throw std::runtime_error("cannot read " + path + ": " +
+                             cairo_status_to_string(cairo_surface_status(surface.get())));
   }
   const cairo_format_t format = cairo_image_surface_get_format(surface.get());
   if (format != CAIRO_FORMAT_RGB24 && format != CAIRO_FORMAT_ARGB32) {

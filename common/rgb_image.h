@@ -15,7 +15,9 @@ struct RgbImage {
   std::vector<uint8_t> rgb;  ///< width_px * height_px * 3 bytes
 
   /// Pointer to the R byte of pixel (`column`, `row`), row 0 at the top; no bounds check.
-  const uint8_t* At(int column, int row) const { return rgb.data() + 3 * (static_cast<size_t>(row) * width_px + column); }
+  const uint8_t* At(int column, int row) const {
+    return rgb.data() + 3 * (static_cast<size_t>(row) * width_px + column);
+  }
 };
 
 /// Writes `image` as a PNG at `path` (temp file + rename). Throws std::invalid_argument for an empty

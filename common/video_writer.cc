@@ -56,7 +56,8 @@ int Spawn(const std::vector<std::string>& argv, int stdin_fd, const std::string&
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   }
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
   std::vector<char*> args;
   for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
   args.push_back(nullptr);
@@ -100,12 +101,15 @@ std::string FindProgram(const std::string& name) {
 }
 
 VideoWriter::VideoWriter(const Options& options) : options_(options) {
-  if (options.width_px <= 0 || options.height_px <= 0 || options.width_px % 2 != 0 || options.height_px % 2 != 0) {
+  if (options.width_px <= 0 || options.height_px <= 0 || options.width_px % 2 != 0 ||
+      options.height_px % 2 != 0) {
     throw std::invalid_argument("video size " + std::to_string(options.width_px) + "x" +
-                                std::to_string(options.height_px) + ": width and height must be even and > 0 (H.264)");
+                                std::to_string(options.height_px) +
+                                ": width and height must be even and > 0 (H.264)");
   }
   if (!(options.fps > 0.0 && options.fps <= 1000.0)) {
-    throw std::invalid_argument("video frame rate " + std::to_string(options.fps) + ": must be in (0, 1000] fps");
+    throw std::invalid_argument("video frame rate " + std::to_string(options.fps) +
+                                ": must be in (0, 1000] fps");
   }
   const std::string ffmpeg = RequireFfmpeg(options.ffmpeg);
   temp_path_ = options.path + UniqueSuffix();
@@ -113,14 +117,21 @@ VideoWriter::VideoWriter(const Options& options) : options_(options) {
   int fds[2];
   // Close-on-exec: another encoder started in parallel (a suite) must not hold this pipe open, or
   // this ffmpeg would never see the end of its input.
-  if (::pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error(std::string("video: pipe: ") + std::strerror(errno));
+  if (::pipe2(fds, O_CLOEXEC) != 0)
+    throw std::runtime_error(std::string("video: pipe: ") + std::strerror(errno));
   char rate[32];
   std::snprintf(rate, sizeof(rate), "%.6g", options.fps);
   const std::vector<std::string> argv = {
-      ffmpeg, "-nostdin", "-hide_banner", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
-      "-s", std::to_string(options.width_px) + "x" + std::to_string(options.height_px), "-framerate", rate,
-      "-i", "pipe:0", "-an", "-c:v", "libx264", "-preset", "veryfast", "-crf", "23", "-pix_fmt", "yuv420p",
-      "-movflags", "+faststart", "-f", "mp4", temp_path_};
+      ffmpeg,       "-nostdin",  "-hide_banner",
+      "-loglevel",  "error",     "-y",
+      "-f",         "rawvideo",  "-pix_fmt",
+      "rgb24",      "-s",        std::to_string(options.width_px) + "x" + std::to_string(options.height_px),
+      "-framerate", rate,        "-i",
+      "pipe:0",     "-an",       "-c:v",
+      "libx264",    "-preset",   "veryfast",
+      "-crf",       "23",        "-pix_fmt",
+      "yuv420p",    "-movflags", "+faststart",
+      "-f",         "mp4",       temp_path_};
   // -nostdin only stops ffmpeg reading keys from stdin; the frames still come in as pipe:0.
   try {
     pid_ = Spawn(argv, fds[0], log_path_);
@@ -159,9 +170,10 @@ std::string VideoWriter::ErrorText() const {
 void VideoWriter::Write(const RgbImage& frame) {
   if (frame.width_px != options_.width_px || frame.height_px != options_.height_px ||
       frame.rgb.size() != static_cast<size_t>(frame.width_px) * frame.height_px * 3) {
-    throw std::invalid_argument("video: a " + std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) +
-                                " frame for a " + std::to_string(options_.width_px) + "x" +
-                                std::to_string(options_.height_px) + " video");
+    throw std::invalid_argument("video: a " + std::to_string(frame.width_px) + "x" +
+                                std::to_string(frame.height_px) + " frame for a " +
+                                std::to_string(options_.width_px) + "x" + std::to_string(options_.height_px) +
+                                " video");
   }
   if (pipe_fd_ < 0) throw std::runtime_error("video " + options_.path + ": already finished");
   // A dead ffmpeg makes write() raise SIGPIPE, which would end the whole program: blocked on this
@@ -191,8 +203,8 @@ void VideoWriter::Write(const RgbImage& frame) {
   pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   if (error != 0) {
     Stop();
-    throw std::runtime_error("video " + options_.path + ": ffmpeg stopped taking frames (" + std::strerror(error) +
-                             "): " + ErrorText());
+    throw std::runtime_error("video " + options_.path + ": ffmpeg stopped taking frames (" +
+                             std::strerror(error) + "): " + ErrorText());
   }
   ++frames_;
 }
@@ -212,26 +224,45 @@ void VideoWriter::Finish() {
 void WriteVideoStrip(const std::string& video_path, int video_frames, int count, int tile_width_px,
                      const std::string& png_path, const std::string& ffmpeg) {
   if (count < 1 || video_frames < 1 || tile_width_px < 2) {
-    throw std::invalid_argument("video strip: " + std::to_string(count) + " tiles of " + std::to_string(video_frames) +
-                                " frames, " + std::to_string(tile_width_px) + " px wide");
+    throw std::invalid_argument("video strip: " + std::to_string(count) + " tiles of " +
+                                std::to_string(video_frames) + " frames, " + std::to_string(tile_width_px) +
+                                " px wide");
   }
   count = std::min(count, video_frames);
   // Frames 0, step, 2 step, ...: the first and (about) the last of the video.
   const int step = count > 1 ? std::max(1, (video_frames - 1) / (count - 1)) : video_frames;
-  const std::string filter = "select='not(mod(n\\," + std::to_string(step) + "))',scale=" +
-                             std::to_string(tile_width_px) + ":-2,tile=" + std::to_string(count) + "x1";
+  const std::string filter = "select='not(mod(n\\," + std::to_string(step) +
+                             "))',scale=" + std::to_string(tile_width_px) +
+                             ":-2,tile=" + std::to_string(count) + "x1";
   const std::string temp = png_path + UniqueSuffix();
   const std::string log = temp + ".log";
-  const std::vector<std::string> argv = {RequireFfmpeg(ffmpeg), "-nostdin", "-hide_banner", "-loglevel", "error",
-                                         "-y", "-i", video_path, "-vf", filter, "-frames:v", "1", "-update", "1", "-f", "image2",
-                                         "-c:v", "png", temp};
+  const std::vector<std::string> argv = {RequireFfmpeg(ffmpeg),
+                                         "-nostdin",
+                                         "-hide_banner",
+                                         "-loglevel",
+                                         "error",
+                                         "-y",
+                                         "-i",
+                                         video_path,
+                                         "-vf",
+                                         filter,
+                                         "-frames:v",
+                                         "1",
+                                         "-update",
+                                         "1",
+                                         "-f",
+                                         "image2",
+                                         "-c:v",
+                                         "png",
+                                         temp};
   const int pid = Spawn(argv, -1, log);
   const bool succeeded = WaitSucceeded(pid);
   const std::string message = ReadTail(log);
   std::remove(log.c_str());
   if (!succeeded || std::rename(temp.c_str(), png_path.c_str()) != 0) {
     std::remove(temp.c_str());
-    throw std::runtime_error("video strip " + png_path + ": ffmpeg failed: " + (message.empty() ? "no message" : message));
+    throw std::runtime_error("video strip " + png_path +
+                             ": ffmpeg failed: " + (message.empty() ? "no message" : message));
   }
 }
 

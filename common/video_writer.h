@@ -19,10 +19,10 @@ std::string FindProgram(const std::string& name);
 class VideoWriter {
  public:
   struct Options {
-    std::string path;         ///< output .mp4
-    int width_px = 640;       ///< frame width [px], even (H.264 in yuv420p needs even sizes)
-    int height_px = 480;      ///< frame height [px], even
-    double fps = 30.0;        ///< frames per second of the video [1/s], > 0
+    std::string path;               ///< output .mp4
+    int width_px = 640;             ///< frame width [px], even (H.264 in yuv420p needs even sizes)
+    int height_px = 480;            ///< frame height [px], even
+    double fps = 30.0;              ///< frames per second of the video [1/s], > 0
     std::string ffmpeg = "ffmpeg";  ///< the program: a name looked up on PATH, or a path
   };
 

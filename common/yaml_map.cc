@@ -202,8 +202,7 @@ std::vector<double> YamlMap::GetNumberList(std::string_view key, std::vector<dou
   if (!value.IsDefined() || value.IsNull()) return fallback;
   if (!value.IsSequence()) Fail(key, "expected a list of numbers");
   if (expected_size != 0 && value.size() != expected_size) {
-    Fail(key, "expected " + std::to_string(expected_size) + " numbers, got " +
-                  std::to_string(value.size()));
+    Fail(key, "expected " + std::to_string(expected_size) + " numbers, got " + std::to_string(value.size()));
   }
   std::vector<double> numbers;
   for (size_t i = 0; i < value.size(); ++i) {
@@ -253,8 +252,8 @@ void YamlMap::RejectUnknownKeys(const std::vector<std::string>& also_valid) cons
   for (const auto& entry : node_) {
     const std::string& key = entry.first.Scalar();
     if (std::find(valid.begin(), valid.end(), key) == valid.end()) {
-      throw ConfigError(Where(file_, entry.first) + FullKey(key) + ": unknown key; valid keys: " +
-                        Join(valid));
+      throw ConfigError(Where(file_, entry.first) + FullKey(key) +
+                        ": unknown key; valid keys: " + Join(valid));
     }
   }
 }

@@ -60,9 +60,8 @@ sensor::ReadStatus ControlLoop::Tick(double time_s) {
     ++counters_.disconnected_ticks;
   }
 
-  const bool stale = status == sensor::ReadStatus::kStale ||
-                     status == sensor::ReadStatus::kDisconnected || last_frame_time_s_ < 0.0 ||
-                     time_s - last_frame_time_s_ > config_.stale_timeout_s;
+  const bool stale = status == sensor::ReadStatus::kStale || status == sensor::ReadStatus::kDisconnected ||
+                     last_frame_time_s_ < 0.0 || time_s - last_frame_time_s_ > config_.stale_timeout_s;
   state_.stale = stale;
   if (stale) ++counters_.stale_ticks;
 

@@ -30,12 +30,12 @@ struct ControlLoopConfig {
 
 /// What happened in the loop since it started.
 struct LoopCounters {
-  uint64_t ticks = 0;            ///< Tick() calls
-  uint64_t frames = 0;           ///< new frames processed
-  uint64_t stale_ticks = 0;      ///< ticks with a stale state
+  uint64_t ticks = 0;        ///< Tick() calls
+  uint64_t frames = 0;       ///< new frames processed
+  uint64_t stale_ticks = 0;  ///< ticks with a stale state
   uint64_t disconnected_ticks = 0;
   uint64_t actuator_failures = 0;  ///< Write() that did not reach the motor
-  uint64_t retares = 0;          ///< baselines restarted after a device session change
+  uint64_t retares = 0;            ///< baselines restarted after a device session change
 };
 
 /// Ties one backend, one controller and one actuator together. Not copyable; holds references

@@ -50,7 +50,8 @@ struct GraspbedControllerPlugin {
   /// Builds a controller from `params`, which holds every declared parameter (defaults filled in,
   /// each in its range). Throws std::invalid_argument for combinations it refuses (graspbed reports
   /// the message and exits 2); must not return nullptr.
-  std::unique_ptr<graspbed::controller::GraspController> (*make)(const graspbed::controller::ControllerParams& params);
+  std::unique_ptr<graspbed::controller::GraspController> (*make)(
+      const graspbed::controller::ControllerParams& params);
 };
 
 /// Signature of the entry point.
@@ -58,10 +59,10 @@ using GraspbedControllerPluginEntry = const GraspbedControllerPlugin* (*)();
 
 /// Defines the plugin's entry point: a controller named `name_literal` whose parameters come from
 /// `parameters_function` and which `make_function` builds. Use once per library, at namespace scope.
-#define GRASPBED_CONTROLLER_PLUGIN(name_literal, parameters_function, make_function)                     \
-  extern "C" __attribute__((visibility("default"))) const GraspbedControllerPlugin*                      \
-  graspbed_controller_plugin() {                                                                         \
-    static const GraspbedControllerPlugin plugin{GRASPBED_CONTROLLER_API_VERSION, name_literal,           \
-                                                 parameters_function, make_function};                   \
-    return &plugin;                                                                                      \
+#define GRASPBED_CONTROLLER_PLUGIN(name_literal, parameters_function, make_function)            \
+  extern "C" __attribute__((visibility("default"))) const GraspbedControllerPlugin*             \
+  graspbed_controller_plugin() {                                                                \
+    static const GraspbedControllerPlugin plugin{GRASPBED_CONTROLLER_API_VERSION, name_literal, \
+                                                 parameters_function, make_function};           \
+    return &plugin;                                                                             \
   }

@@ -66,7 +66,8 @@ std::unique_ptr<GraspController> MakeController(const std::string& name, const C
   // A plugin is checked exactly like a built-in: its declared parameters, then its own make().
   const LoadedPlugin* plugin = IsPluginName(name) ? &LoadPlugin(name) : nullptr;
   const ControllerEntry* entry = plugin == nullptr ? &Find(name) : nullptr;
-  const std::vector<ControllerParameter> declared = plugin != nullptr ? plugin->parameters : entry->parameters();
+  const std::vector<ControllerParameter> declared =
+      plugin != nullptr ? plugin->parameters : entry->parameters();
   ControllerParams resolved;
   for (const ControllerParameter& parameter : declared) resolved[parameter.name] = parameter.default_value;
   for (const auto& [key, value] : params) {

@@ -25,15 +25,15 @@ enum class GraspIntent { kIdle, kClose, kOpen };
 
 /// Controller state exposed for logging and plots; fixed size, filled every update.
 struct ControllerTelemetry {
-  const char* phase = "idle";       ///< static string naming the current phase
-  double grip_target_n = 0.0;       ///< grip force the controller aims for [N]
-  double friction_estimate = 0.0;   ///< current estimate of the contact friction coefficient
-  bool slip_detected = false;       ///< slip detected at this update
+  const char* phase = "idle";      ///< static string naming the current phase
+  double grip_target_n = 0.0;      ///< grip force the controller aims for [N]
+  double friction_estimate = 0.0;  ///< current estimate of the contact friction coefficient
+  bool slip_detected = false;      ///< slip detected at this update
   /// Static string naming the cues behind slip_detected ("ratio", "vibration+centroid", ...;
   /// "" when none fired or the controller does not say).
   const char* slip_cues = "";
-  int slip_events = 0;              ///< slip events since Reset()
-  bool safe_hold = false;           ///< holding because data are stale or too few units are valid
+  int slip_events = 0;     ///< slip events since Reset()
+  bool safe_hold = false;  ///< holding because data are stale or too few units are valid
 };
 
 /// One tunable parameter of a controller: its name, default, unit and meaning (for docs and

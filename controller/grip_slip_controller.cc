@@ -21,9 +21,11 @@ constexpr double kLoadedFraction = 0.9;
 
 /// Static name of the cues that fired in `signals` (telemetry; no allocation).
 const char* CueNames(const SlipSignals& signals) {
-  static constexpr const char* kNames[8] = {"",          "ratio",           "vibration",          "ratio+vibration",
-                                            "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
-  return kNames[(signals.ratio_slip ? 1 : 0) | (signals.vibration_slip ? 2 : 0) | (signals.centroid_slip ? 4 : 0)];
+  static constexpr const char* kNames[8] = {
+      "",         "ratio",          "vibration",          "ratio+vibration",
+      "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
+  return kNames[(signals.ratio_slip ? 1 : 0) | (signals.vibration_slip ? 2 : 0) |
+                (signals.centroid_slip ? 4 : 0)];
 }
 
 /// One declared parameter bound to its field of GripSlipConfig.
@@ -42,25 +44,26 @@ template <typename Field>
 constexpr bool kIsInteger = std::is_integral_v<Field>;
 
 // Binds a parameter name to a config field in one line; ints and bools take whole numbers.
-#define GRASPBED_BIND(name, field, min, max, unit, doc)                                              \
-  Binding {                                                                                          \
-    name, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,                         \
-        [](const GripSlipConfig& c) { return static_cast<double>(c.field); },                       \
-        [](GripSlipConfig& c, double v) {                                                            \
-          using Field = decltype(GripSlipConfig{}.field);                                            \
-          if constexpr (std::is_same_v<Field, bool>) {                                               \
-            c.field = v != 0.0;                                                                      \
-          } else if constexpr (std::is_integral_v<Field>) {                                          \
-            c.field = static_cast<Field>(std::lround(v));                                            \
-          } else {                                                                                   \
-            c.field = v;                                                                             \
-          }                                                                                          \
-        }                                                                                            \
+#define GRASPBED_BIND(name, field, min, max, unit, doc)                       \
+  Binding {                                                                   \
+    name, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,  \
+        [](const GripSlipConfig& c) { return static_cast<double>(c.field); }, \
+        [](GripSlipConfig& c, double v) {                                     \
+          using Field = decltype(GripSlipConfig{}.field);                     \
+          if constexpr (std::is_same_v<Field, bool>) {                        \
+            c.field = v != 0.0;                                               \
+          } else if constexpr (std::is_integral_v<Field>) {                   \
+            c.field = static_cast<Field>(std::lround(v));                     \
+          } else {                                                            \
+            c.field = v;                                                      \
+          }                                                                   \
+        }                                                                     \
   }
 
 const std::vector<Binding>& Bindings() {
   static const std::vector<Binding> bindings = {
-      GRASPBED_BIND("close_effort", close_effort, 0.01, 1.0, "", "motor effort while closing towards the object"),
+      GRASPBED_BIND("close_effort", close_effort, 0.01, 1.0, "",
+                    "motor effort while closing towards the object"),
       GRASPBED_BIND("open_effort", open_effort, 0.01, 1.0, "", "motor effort magnitude while releasing"),
       GRASPBED_BIND("release_time_s", release_time_s, 0.01, 10.0, "s",
                     "opening effort is applied this long after an open command, then 0"),
@@ -99,23 +102,27 @@ const std::vector<Binding>& Bindings() {
                     "the estimate is learned only from slips under at least this tangential load"),
       GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N",
                     "feed-forward effort per newton of grip target (about 1 / stall pinch force)"),
-      GRASPBED_BIND("kp_effort_per_n", kp_effort_per_n, 0.0, 1.0, "1/N", "proportional gain of the force loop"),
+      GRASPBED_BIND("kp_effort_per_n", kp_effort_per_n, 0.0, 1.0, "1/N",
+                    "proportional gain of the force loop"),
       GRASPBED_BIND("ki_effort_per_n_s", ki_effort_per_n_s, 0.0, 100.0, "1/(N s)",
                     "integral gain of the force loop"),
       GRASPBED_BIND("integrator_limit", integrator_limit, 0.0, 1.0, "", "bound of the integral term"),
       GRASPBED_BIND("max_effort", max_effort, 0.01, 1.0, "", "largest closing effort ever commanded"),
       GRASPBED_BIND("ceiling_effort_margin", ceiling_effort_margin, 1.0, 100.0, "",
                     "effort cap = this x effort_per_newton x grip ceiling (guards against a blind sensor)"),
-      GRASPBED_BIND("grip_filter_s", grip_filter_s, 0.0, 0.1, "s", "low-pass time constant of the measured grip"),
+      GRASPBED_BIND("grip_filter_s", grip_filter_s, 0.0, 0.1, "s",
+                    "low-pass time constant of the measured grip"),
       GRASPBED_BIND("slip_grip_gain", slip_grip_gain, 0.0, 5.0, "",
                     "on slip: grip target = max(target, grip) x (1 + slip_grip_gain) + slip_grip_step_n"),
-      GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N", "additive part of the slip response"),
+      GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N",
+                    "additive part of the slip response"),
       GRASPBED_BIND("slip_refractory_s", slip_refractory_s, 0.001, 1.0, "s",
                     "a further slip event is counted no sooner than this"),
       GRASPBED_BIND("slip_floor_decay_n_per_s", slip_floor_decay_n_per_s, 0.0, 1000.0, "N/s",
                     "how fast the grip raised by a slip response relaxes back to the coupled target"),
       GRASPBED_BIND("slip_grip_rate_n_per_s", slip_grip_rate_n_per_s, 0.0, 10000.0, "N/s",
-                    "while the cues keep reporting slip after a response, the slip floor keeps rising this fast; 0 = off"),
+                    "while the cues keep reporting slip after a response, the slip floor keeps rising this "
+                    "fast; 0 = off"),
       GRASPBED_BIND("sample_rate_hz", slip.sample_rate_hz, 10.0, 100000.0, "Hz",
                     "tactile frame rate the detector filters are designed for"),
       GRASPBED_BIND("grid_columns", slip.grid_columns, 1, 64, "units",
@@ -123,11 +130,13 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("even_units_axial", slip.even_units_axial, 0, 1, "",
                     "1: units with (row + column) even have an axial beam (checkerboard); 0: odd ones"),
       GRASPBED_BIND("ratio_detector", slip.ratio_enabled, 0, 1, "", "1: use the shear/normal ratio cue"),
-      GRASPBED_BIND("ratio_filter_s", slip.ratio_filter_s, 0.0, 1.0, "s", "low-pass time constant of the ratio"),
+      GRASPBED_BIND("ratio_filter_s", slip.ratio_filter_s, 0.0, 1.0, "s",
+                    "low-pass time constant of the ratio"),
       GRASPBED_BIND("ratio_slip_fraction", slip.ratio_slip_fraction, 0.1, 2.0, "",
                     "ratio cue fires above this fraction of the friction estimate"),
-      GRASPBED_BIND("ratio_release_fraction", slip.ratio_release_fraction, 0.01, 1.0, "",
-                    "once fired, the ratio cue holds until the ratio falls below this fraction of its threshold"),
+      GRASPBED_BIND(
+          "ratio_release_fraction", slip.ratio_release_fraction, 0.01, 1.0, "",
+          "once fired, the ratio cue holds until the ratio falls below this fraction of its threshold"),
       GRASPBED_BIND("ratio_noise_sigmas", slip.ratio_noise_sigmas, 0.0, 20.0, "sigma",
                     "ratio threshold raised by this many standard deviations of the ratio estimate"),
       GRASPBED_BIND("ratio_min_grip_n", slip.ratio_min_grip_n, 0.01, 100.0, "N",
@@ -144,9 +153,10 @@ const std::vector<Binding>& Bindings() {
                     "vibration cue fires after this many consecutive frames above its threshold"),
       GRASPBED_BIND("vibration_min_rms_n", slip.vibration_min_rms_n, 0.0001, 10.0, "N",
                     "lower bound of the vibration threshold (mechanical vibration, noise-free signals)"),
-      GRASPBED_BIND("vibration_noise_sigmas", slip.vibration_noise_sigmas, 0.0, 20.0, "sigma",
-                    "with the readout's measured noise: vibration threshold floor = max(vibration_min_rms_n, this x "
-                    "the high-passed per-unit shear noise); 0 = off"),
+      GRASPBED_BIND(
+          "vibration_noise_sigmas", slip.vibration_noise_sigmas, 0.0, 20.0, "sigma",
+          "with the readout's measured noise: vibration threshold floor = max(vibration_min_rms_n, this x "
+          "the high-passed per-unit shear noise); 0 = off"),
       GRASPBED_BIND("shear_blind_noise_n", slip.shear_blind_noise_n, 0.0, 100.0, "N",
                     "readout shear noise per unit above which the shear cues are off and the grip is held at "
                     "shear_blind_grip_fraction of the ceiling; 0 = never"),
@@ -162,23 +172,27 @@ const std::vector<Binding>& Bindings() {
                     "centroid movement is measured over this window"),
       GRASPBED_BIND("centroid_shift_units", slip.centroid_shift_units, 0.01, 10.0, "pitch",
                     "centroid cue fires above this movement, in unit pitches"),
-      GRASPBED_BIND("centroid_drift_units", slip.centroid_drift_units, 0.01, 10.0, "pitch",
-                    "centroid cue also fires when the contact has drifted this far since the cues were armed"),
+      GRASPBED_BIND(
+          "centroid_drift_units", slip.centroid_drift_units, 0.01, 10.0, "pitch",
+          "centroid cue also fires when the contact has drifted this far since the cues were armed"),
       GRASPBED_BIND("centroid_noise_sigmas", slip.centroid_noise_sigmas, 0.0, 20.0, "sigma",
                     "centroid thresholds raised by this many standard deviations of noise-induced movement"),
       GRASPBED_BIND("centroid_min_weight_n", slip.centroid_min_weight_n, 0.01, 100.0, "N",
                     "minimum contact normal force for a centroid"),
-      GRASPBED_BIND("centroid_grip_band", slip.centroid_grip_band, 0.0, 10.0, "",
-                    "the centroid drift reference is taken afresh when the grip moved by more than this fraction "
-                    "(the pad rolls with the grip); 0 = off"),
+      GRASPBED_BIND(
+          "centroid_grip_band", slip.centroid_grip_band, 0.0, 10.0, "",
+          "the centroid drift reference is taken afresh when the grip moved by more than this fraction "
+          "(the pad rolls with the grip); 0 = off"),
       GRASPBED_BIND("detector_settle_s", slip.settle_s, 0.0, 1.0, "s",
                     "slip cues stay silent at least this long after contact onset or after stale data"),
-      GRASPBED_BIND("detector_settle_max_s", slip.settle_max_s, 0.0, 2.0, "s",
-                    "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
-                    "at most this long after contact onset or stale data"),
-      GRASPBED_BIND("preload_reference", slip.preload_reference, 0, 1, "",
-                    "1: the shear locked in when the grasp settles is preload; the ratio cue measures the load on "
-                    "top of it"),
+      GRASPBED_BIND(
+          "detector_settle_max_s", slip.settle_max_s, 0.0, 2.0, "s",
+          "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
+          "at most this long after contact onset or stale data"),
+      GRASPBED_BIND(
+          "preload_reference", slip.preload_reference, 0, 1, "",
+          "1: the shear locked in when the grasp settles is preload; the ratio cue measures the load on "
+          "top of it"),
   };
   return bindings;
 }
@@ -206,7 +220,8 @@ void GripSlipConfig::Validate() const {
     const double value = binding.get(*this);
     std::ostringstream range;
     range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
-    Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value, range.str());
+    Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value,
+            range.str());
   }
   Require(min_grip_n <= max_grip_n, "min_grip_n", min_grip_n, "must not exceed max_grip_n");
   Require(initial_grip_n <= max_grip_n, "initial_grip_n", initial_grip_n, "must not exceed max_grip_n");
@@ -218,7 +233,8 @@ std::vector<ControllerParameter> GripSlipController::Parameters() {
   const GripSlipConfig defaults;
   std::vector<ControllerParameter> parameters;
   for (const Binding& binding : Bindings()) {
-    parameters.push_back({binding.name, binding.get(defaults), binding.min, binding.max, binding.unit, binding.doc});
+    parameters.push_back(
+        {binding.name, binding.get(defaults), binding.min, binding.max, binding.unit, binding.doc});
   }
   return parameters;
 }
@@ -230,7 +246,8 @@ GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& para
     if (found == params.end()) continue;
     const double value = found->second;
     if (binding.integer) {
-      Require(std::isfinite(value) && value == std::round(value), binding.name, value, "must be a whole number");
+      Require(std::isfinite(value) && value == std::round(value), binding.name, value,
+              "must be a whole number");
     }
     binding.set(config, value);
   }
@@ -246,13 +263,20 @@ GripSlipController::GripSlipController(const GripSlipConfig& config)
 
 const char* GripSlipController::PhaseName(Phase phase) {
   switch (phase) {
-    case Phase::kIdle: return "idle";
-    case Phase::kClosing: return "closing";
-    case Phase::kLoading: return "loading";
-    case Phase::kHolding: return "holding";
-    case Phase::kSlip: return "slip";
-    case Phase::kReleasing: return "releasing";
-    case Phase::kOpen: return "open";
+    case Phase::kIdle:
+      return "idle";
+    case Phase::kClosing:
+      return "closing";
+    case Phase::kLoading:
+      return "loading";
+    case Phase::kHolding:
+      return "holding";
+    case Phase::kSlip:
+      return "slip";
+    case Phase::kReleasing:
+      return "releasing";
+    case Phase::kOpen:
+      return "open";
   }
   return "unknown";
 }
@@ -315,8 +339,8 @@ double GripSlipController::ForceLoop(double target_n, double grip_n, double dt_s
   const bool pinned_low = effort <= 0.0 && error_n < 0.0;
   const bool blocked = !may_increase && error_n > 0.0;
   if (!pinned_high && !pinned_low && !blocked) {
-    integrator_ = std::clamp(integrator_ + config_.ki_effort_per_n_s * error_n * dt_s, -config_.integrator_limit,
-                             config_.integrator_limit);
+    integrator_ = std::clamp(integrator_ + config_.ki_effort_per_n_s * error_n * dt_s,
+                             -config_.integrator_limit, config_.integrator_limit);
   }
   effort = std::clamp(feed_forward + proportional + integrator_, 0.0, effort_cap);
   // A saturated unit hides how hard we already squeeze: never squeeze harder than last time.
@@ -328,7 +352,8 @@ void GripSlipController::UpdateHoldTarget(double dt_s) {
   const SlipSignals& signals = detector_.signals();
   // The friction holds the whole shear, the locked-in preload too (constant while the contact
   // sticks, so coupling to it does not feed back through the grip).
-  const double coupled = std::max(config_.min_grip_n, signals.contact_shear_n / friction_ * config_.safety_margin);
+  const double coupled =
+      std::max(config_.min_grip_n, signals.contact_shear_n / friction_ * config_.safety_margin);
   // Rise at once, fall slowly: a load that drops for a moment must not loosen the grip with it.
   coupled_target_n_ = coupled >= coupled_target_n_
                           ? coupled
@@ -345,13 +370,15 @@ void GripSlipController::RespondToSlip(double time_s) {
   // load step, so this frame's own ratio counts too: the larger of the two is the better estimate of
   // where the cone is. The ratio cue itself compares against the estimate, so only the independent
   // cues teach the estimate.
-  if ((signals.vibration_slip || signals.centroid_slip) && signals.tangential_load_n >= config_.friction_learn_min_load_n) {
+  if ((signals.vibration_slip || signals.centroid_slip) &&
+      signals.tangential_load_n >= config_.friction_learn_min_load_n) {
     // In the coordinates the ratio cue and the coupling use (the load's part, preload removed), and
     // by at most friction_learn_max_drop of the estimate per event: a slip at a ratio far below the
     // estimate is a jolt (an impact, the pad reseating), not the friction limit.
     const double observed = std::clamp(std::max(signals.load_ratio, signals.instant_load_ratio),
                                        (1.0 - config_.friction_learn_max_drop) * friction_, friction_);
-    friction_ = std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+    friction_ =
+        std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
   }
   const double grip_n = diagnostics_.measured_grip_n;
   slip_floor_n_ = std::max(target_n_, grip_n) * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
@@ -401,7 +428,8 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
   }
   telemetry_.safe_hold = !data_ok;
 
-  const bool new_frame = data_ok && (!have_frame_ || state.sequence != last_sequence_ || state.time_s != last_frame_time_s_);
+  const bool new_frame =
+      data_ok && (!have_frame_ || state.sequence != last_sequence_ || state.time_s != last_frame_time_s_);
   if (new_frame) {
     have_frame_ = true;
     last_sequence_ = state.sequence;
@@ -430,7 +458,8 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
     case Phase::kClosing: {
       target_n_ = 0.0;
       command.grip_effort = std::min(config_.close_effort, EffortCap());
-      if (new_frame) contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
+      if (new_frame)
+        contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
       if (contact_frames_ >= config_.contact_confirm_frames) {
         Enter(Phase::kLoading, time_s);
         detector_.RestartContact();
@@ -467,9 +496,11 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
       if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
       if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
-      double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
+      double base_n =
+          phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
       // A sensor that cannot resolve shear cannot tell the load: hold at a fixed share of the ceiling.
-      if (signals.shear_blind && phase_ != Phase::kLoading) base_n = std::max(base_n, config_.shear_blind_grip_fraction * ceiling_n);
+      if (signals.shear_blind && phase_ != Phase::kLoading)
+        base_n = std::max(base_n, config_.shear_blind_grip_fraction * ceiling_n);
       target_n_ = std::min(std::max(base_n, slip_floor_n_), ceiling_n);
       command.grip_effort = ForceLoop(target_n_, grip_n, dt_s, may_increase);
       break;

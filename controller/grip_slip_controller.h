@@ -33,39 +33,40 @@ struct GripSlipConfig {
   int min_valid_units = 3;         ///< fewer valid units than this: safe hold
 
   // Grip force targets.
-  double initial_grip_n = 2.0;          ///< grip reached in the loading phase [N]
-  double load_rate_n_per_s = 20.0;      ///< ramp rate of the grip target while loading [N/s]
-  double load_timeout_s = 0.3;          ///< loading ends after this long even if the grip lags [s]
-  double min_grip_n = 1.5;              ///< grip target never drops below this while holding [N]
-  double max_grip_n = 10.0;             ///< overall grip ceiling, sum over the units (tuning choice, docs/controller.md) [N]
-  double safety_margin = 1.4;           ///< grip = tangential load / friction estimate x this
+  double initial_grip_n = 2.0;      ///< grip reached in the loading phase [N]
+  double load_rate_n_per_s = 20.0;  ///< ramp rate of the grip target while loading [N/s]
+  double load_timeout_s = 0.3;      ///< loading ends after this long even if the grip lags [s]
+  double min_grip_n = 1.5;          ///< grip target never drops below this while holding [N]
+  double max_grip_n =
+      10.0;  ///< overall grip ceiling, sum over the units (tuning choice, docs/controller.md) [N]
+  double safety_margin = 1.4;               ///< grip = tangential load / friction estimate x this
   double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
-  double unit_range_n = 10.0;           ///< a saturated (out-of-range) unit counts as this force [N]
+  double unit_range_n = 10.0;               ///< a saturated (out-of-range) unit counts as this force [N]
   /// With a sensor that cannot resolve shear (SlipSignals::shear_blind) the hold grip is this
   /// fraction of the ceiling: the load is unknown, so the grip is set for the heaviest it may be.
   double shear_blind_grip_fraction = 0.8;
 
   // Friction estimate.
-  double friction_initial = 0.5;      ///< friction coefficient assumed at the start of each grasp
-  double friction_min = 0.15;         ///< the estimate never goes below this
-  double friction_learn_rate = 1.0;   ///< fraction of the way towards the ratio observed at slip
+  double friction_initial = 0.5;           ///< friction coefficient assumed at the start of each grasp
+  double friction_min = 0.15;              ///< the estimate never goes below this
+  double friction_learn_rate = 1.0;        ///< fraction of the way towards the ratio observed at slip
   double friction_learn_min_load_n = 0.2;  ///< learn only from slips under at least this tangential load [N]
   double friction_learn_max_drop = 0.5;    ///< one slip lowers the estimate by at most this fraction of it
 
   // Force loop (feed-forward + PI with anti-windup) on the measured grip.
-  double effort_per_newton = 0.05;    ///< feed-forward effort per newton of target (1 / the 20 N stall pinch)
-  double kp_effort_per_n = 0.04;      ///< proportional gain [1/N]
-  double ki_effort_per_n_s = 1.5;     ///< integral gain [1/(N s)]
-  double integrator_limit = 0.5;      ///< bound of the integral term [-]
-  double max_effort = 1.0;            ///< largest closing effort ever commanded [-]
+  double effort_per_newton = 0.05;  ///< feed-forward effort per newton of target (1 / the 20 N stall pinch)
+  double kp_effort_per_n = 0.04;    ///< proportional gain [1/N]
+  double ki_effort_per_n_s = 1.5;   ///< integral gain [1/(N s)]
+  double integrator_limit = 0.5;    ///< bound of the integral term [-]
+  double max_effort = 1.0;          ///< largest closing effort ever commanded [-]
   double ceiling_effort_margin = 1.0;  ///< effort cap = this x effort_per_newton x grip ceiling
-  double grip_filter_s = 0.002;       ///< low-pass time constant of the measured grip [s]
+  double grip_filter_s = 0.002;        ///< low-pass time constant of the measured grip [s]
 
   // Slip response.
-  double slip_grip_gain = 0.25;            ///< on slip, grip target = grip x (1 + this) + step
-  double slip_grip_step_n = 0.5;           ///< additive part of the slip response [N]
-  double slip_refractory_s = 0.04;         ///< a new slip event is counted no sooner than this [s]
-  double slip_floor_decay_n_per_s = 0.5;   ///< the raised grip after slip relaxes this fast [N/s]
+  double slip_grip_gain = 0.25;           ///< on slip, grip target = grip x (1 + this) + step
+  double slip_grip_step_n = 0.5;          ///< additive part of the slip response [N]
+  double slip_refractory_s = 0.04;        ///< a new slip event is counted no sooner than this [s]
+  double slip_floor_decay_n_per_s = 0.5;  ///< the raised grip after slip relaxes this fast [N/s]
   /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
   /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
   double slip_grip_rate_n_per_s = 100.0;

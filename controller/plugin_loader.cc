@@ -42,10 +42,10 @@ fs::path FindLibrary(const std::string& plugin_name) {
   }
   std::string searched;
   for (const std::string& directory : search_path) searched += (searched.empty() ? "" : ", ") + directory;
-  throw std::invalid_argument("controller plugin '" + library + "' not found (looked for " + candidates.front() +
-                              (candidates.size() > 1 ? " and " + candidates.back() : "") + " in " +
-                              (searched.empty() ? "no directory" : searched) +
-                              "; set GRASPBED_PLUGIN_PATH or give a path)");
+  throw std::invalid_argument(
+      "controller plugin '" + library + "' not found (looked for " + candidates.front() +
+      (candidates.size() > 1 ? " and " + candidates.back() : "") + " in " +
+      (searched.empty() ? "no directory" : searched) + "; set GRASPBED_PLUGIN_PATH or give a path)");
 }
 
 void CheckParameters(const std::string& path, const std::vector<ControllerParameter>& parameters) {
@@ -78,7 +78,8 @@ LoadedPlugin Load(const fs::path& path) {
   void* symbol = dlsym(handle, GRASPBED_CONTROLLER_PLUGIN_SYMBOL);
   if (symbol == nullptr) {
     throw std::invalid_argument(where + ": not a graspbed controller plugin (exports no " +
-                                GRASPBED_CONTROLLER_PLUGIN_SYMBOL + "; define it with GRASPBED_CONTROLLER_PLUGIN)");
+                                GRASPBED_CONTROLLER_PLUGIN_SYMBOL +
+                                "; define it with GRASPBED_CONTROLLER_PLUGIN)");
   }
   const auto entry = reinterpret_cast<GraspbedControllerPluginEntry>(symbol);
   const GraspbedControllerPlugin* descriptor = nullptr;
@@ -88,7 +89,8 @@ LoadedPlugin Load(const fs::path& path) {
     throw std::invalid_argument(where + ": " + GRASPBED_CONTROLLER_PLUGIN_SYMBOL + "() threw");
   }
   if (descriptor == nullptr) {
-    throw std::invalid_argument(where + ": " + GRASPBED_CONTROLLER_PLUGIN_SYMBOL + "() returned no descriptor");
+    throw std::invalid_argument(where + ": " + GRASPBED_CONTROLLER_PLUGIN_SYMBOL +
+                                "() returned no descriptor");
   }
   // The version first: nothing else in the descriptor may be read if it differs.
   if (descriptor->api_version != GRASPBED_CONTROLLER_API_VERSION) {
@@ -124,7 +126,8 @@ std::string ResolvePluginName(const std::string& name, const std::string& base_d
   if (!IsPluginName(name)) return name;
   const std::string library = LibraryOf(name);
   if (library.find('/') == std::string::npos || fs::path(library).is_absolute()) return name;
-  return std::string(kPluginPrefix) + (fs::absolute(base_dir.empty() ? "." : base_dir) / library).lexically_normal().string();
+  return std::string(kPluginPrefix) +
+         (fs::absolute(base_dir.empty() ? "." : base_dir) / library).lexically_normal().string();
 }
 
 std::vector<std::string> PluginSearchPath() {
@@ -137,8 +140,8 @@ std::vector<std::string> PluginSearchPath() {
   }
   // <prefix>/share/graspbed -> <prefix>/lib/graspbed/plugins (the build tree has no plugins there).
   try {
-    directories.push_back((fs::path(common::DataDir()).parent_path().parent_path() / "lib" / "graspbed" / "plugins")
-                              .string());
+    directories.push_back(
+        (fs::path(common::DataDir()).parent_path().parent_path() / "lib" / "graspbed" / "plugins").string());
   } catch (const std::exception&) {
     // No data directory: only $GRASPBED_PLUGIN_PATH.
   }
@@ -154,7 +157,8 @@ const LoadedPlugin& LoadPlugin(const std::string& plugin_name) {
   return loaded.emplace(path.string(), Load(path)).first->second;
 }
 
-std::unique_ptr<GraspController> MakePluginController(const LoadedPlugin& plugin, const ControllerParams& params) {
+std::unique_ptr<GraspController> MakePluginController(const LoadedPlugin& plugin,
+                                                      const ControllerParams& params) {
   const std::string where = "controller plugin " + plugin.path + " ('" + plugin.name + "')";
   std::unique_ptr<GraspController> controller;
   try {

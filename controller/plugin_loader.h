@@ -33,9 +33,9 @@ std::vector<std::string> PluginSearchPath();
 
 /// A loaded, checked plugin.
 struct LoadedPlugin {
-  std::string path;                              ///< absolute path of the library
-  std::string name;                              ///< the controller name it declares
-  std::vector<ControllerParameter> parameters;   ///< as declared (checked: min <= default <= max)
+  std::string path;                             ///< absolute path of the library
+  std::string name;                             ///< the controller name it declares
+  std::vector<ControllerParameter> parameters;  ///< as declared (checked: min <= default <= max)
   const GraspbedControllerPlugin* descriptor = nullptr;
 };
 
@@ -47,6 +47,7 @@ const LoadedPlugin& LoadPlugin(const std::string& plugin_name);
 
 /// Builds the plugin's controller from fully resolved, validated `params`. Anything the plugin's
 /// make() throws, or a null controller, becomes std::invalid_argument naming the plugin.
-std::unique_ptr<GraspController> MakePluginController(const LoadedPlugin& plugin, const ControllerParams& params);
+std::unique_ptr<GraspController> MakePluginController(const LoadedPlugin& plugin,
+                                                      const ControllerParams& params);
 
 }  // namespace graspbed::controller

@@ -40,10 +40,12 @@ void Require(bool ok, const char* field, double value, const char* rule) {
 }  // namespace
 
 void SlipDetectorConfig::Validate() const {
-  Require(std::isfinite(sample_rate_hz) && sample_rate_hz > 0.0, "sample_rate_hz", sample_rate_hz, "must be > 0");
+  Require(std::isfinite(sample_rate_hz) && sample_rate_hz > 0.0, "sample_rate_hz", sample_rate_hz,
+          "must be > 0");
   Require(grid_columns >= 1 && grid_columns <= sensor::kMaxUnits, "grid_columns", grid_columns,
           "must be in [1, 64]");
-  Require(contact_unit_threshold_n > 0.0, "contact_unit_threshold_n", contact_unit_threshold_n, "must be > 0");
+  Require(contact_unit_threshold_n > 0.0, "contact_unit_threshold_n", contact_unit_threshold_n,
+          "must be > 0");
   Require(ratio_filter_s >= 0.0, "ratio_filter_s", ratio_filter_s, "must be >= 0");
   Require(ratio_slip_fraction > 0.0, "ratio_slip_fraction", ratio_slip_fraction, "must be > 0");
   Require(ratio_release_fraction > 0.0 && ratio_release_fraction <= 1.0, "ratio_release_fraction",
@@ -51,11 +53,12 @@ void SlipDetectorConfig::Validate() const {
   Require(shear_blind_noise_n >= 0.0, "shear_blind_noise_n", shear_blind_noise_n, "must be >= 0");
   Require(ratio_noise_sigmas >= 0.0, "ratio_noise_sigmas", ratio_noise_sigmas, "must be >= 0");
   Require(ratio_min_grip_n > 0.0, "ratio_min_grip_n", ratio_min_grip_n, "must be > 0");
-  Require(vibration_highpass_hz > 0.0 && vibration_highpass_hz < 0.45 * sample_rate_hz, "vibration_highpass_hz",
-          vibration_highpass_hz, "must be in (0, 0.45 x sample_rate_hz)");
+  Require(vibration_highpass_hz > 0.0 && vibration_highpass_hz < 0.45 * sample_rate_hz,
+          "vibration_highpass_hz", vibration_highpass_hz, "must be in (0, 0.45 x sample_rate_hz)");
   Require(vibration_window_s > 0.0, "vibration_window_s", vibration_window_s, "must be > 0");
   Require(vibration_factor >= 1.0, "vibration_factor", vibration_factor, "must be >= 1");
-  Require(vibration_confirm_frames >= 1, "vibration_confirm_frames", vibration_confirm_frames, "must be >= 1");
+  Require(vibration_confirm_frames >= 1, "vibration_confirm_frames", vibration_confirm_frames,
+          "must be >= 1");
   Require(vibration_min_rms_n > 0.0, "vibration_min_rms_n", vibration_min_rms_n, "must be > 0");
   Require(vibration_noise_sigmas >= 0.0 && std::isfinite(vibration_noise_sigmas), "vibration_noise_sigmas",
           vibration_noise_sigmas, "must be >= 0");
@@ -83,9 +86,11 @@ SlipDetector::SlipDetector(const SlipDetectorConfig& config) : config_(config) {
   ratio_filter_ = LowPassFilter(config_.ratio_filter_s, period_s);
   ratio_circumferential_filter_ = LowPassFilter(config_.ratio_filter_s, period_s);
   // Variance of a first-order low-pass output over that of its white input: alpha / (2 - alpha).
-  const double ratio_alpha = config_.ratio_filter_s > 0.0 ? 1.0 - std::exp(-period_s / config_.ratio_filter_s) : 1.0;
+  const double ratio_alpha =
+      config_.ratio_filter_s > 0.0 ? 1.0 - std::exp(-period_s / config_.ratio_filter_s) : 1.0;
   ratio_variance_reduction_ = ratio_alpha / (2.0 - ratio_alpha);
-  for (auto& filter : shear_highpass_) filter = HighPassBiquad(config_.vibration_highpass_hz, config_.sample_rate_hz);
+  for (auto& filter : shear_highpass_)
+    filter = HighPassBiquad(config_.vibration_highpass_hz, config_.sample_rate_hz);
   // White noise power the high-pass keeps: the energy of its impulse response.
   HighPassBiquad impulse(config_.vibration_highpass_hz, config_.sample_rate_hz);
   highpass_power_fraction_ = 0.0;
@@ -172,7 +177,8 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
     }
   }
   // A light, broad contact may leave every unit below the threshold while the sum is clearly there.
-  signals_.in_contact = signals_.contact_units > 0 || grip_n > kContactSumFactor * config_.contact_unit_threshold_n;
+  signals_.in_contact =
+      signals_.contact_units > 0 || grip_n > kContactSumFactor * config_.contact_unit_threshold_n;
 
   if (settle_remaining_ > 0) --settle_remaining_;
   if (settle_max_remaining_ > 0) --settle_max_remaining_;
@@ -186,7 +192,8 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
 
   // The readout's own noise figure, RMS over the valid units: it changes only with a new tare or a
   // unit changing validity.
-  const bool noise_changed = state.noise_known != noise_known_seen_ || state.noise_generation != noise_generation_seen_;
+  const bool noise_changed =
+      state.noise_known != noise_known_seen_ || state.noise_generation != noise_generation_seen_;
   if (noise_changed || validity_changed) {
     noise_known_seen_ = state.noise_known;
     noise_generation_seen_ = state.noise_generation;
@@ -203,8 +210,8 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   // flag at every noise crossing.
   const double ratio_bar = signals_.ratio_slip ? config_.ratio_release_fraction * signals_.ratio_threshold
                                                : signals_.ratio_threshold;
-  signals_.ratio_slip = live && config_.ratio_enabled && !signals_.shear_blind && grip_n > config_.ratio_min_grip_n &&
-                        signals_.load_ratio > ratio_bar;
+  signals_.ratio_slip = live && config_.ratio_enabled && !signals_.shear_blind &&
+                        grip_n > config_.ratio_min_grip_n && signals_.load_ratio > ratio_bar;
   // A single frame over the threshold is a noise peak of the averaged statistic far more often than
   // slip, which keeps the statistic up for many frames.
   vibration_frames_ = signals_.vibration_rms_n > signals_.vibration_threshold_n ? vibration_frames_ + 1 : 0;
@@ -239,10 +246,12 @@ void SlipDetector::UpdateSensorNoise(const TactileState& state) {
     signals_.sensor_shear_noise_n = std::sqrt(shear_sum / valid);
     signals_.sensor_normal_noise_n = std::sqrt(normal_sum / valid);
   }
-  signals_.shear_blind = config_.shear_blind_noise_n > 0.0 && signals_.sensor_shear_noise_n > config_.shear_blind_noise_n;
+  signals_.shear_blind =
+      config_.shear_blind_noise_n > 0.0 && signals_.sensor_shear_noise_n > config_.shear_blind_noise_n;
 }
 
-void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate, bool live) {
+void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double friction_estimate,
+                               bool live) {
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   // Normal-weighted ratio per beam orientation: sum(fn ft) / sum(fn^2) equals the traction ratio
   // when shear is proportional to pressure, and gives units without contact (noise only) no weight.
@@ -278,7 +287,8 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     }
   } else if (state.total_fn_n > kMinSetNormalN) {
     // Unknown orientations: each total sees about half of the contact, hence the factor 2.
-    component[0] = 2.0 * std::hypot(state.total_shear_axial_n, state.total_shear_circumferential_n) / state.total_fn_n;
+    component[0] =
+        2.0 * std::hypot(state.total_shear_axial_n, state.total_shear_circumferential_n) / state.total_fn_n;
     variance_per_noise[0] = 4.0 * count / (state.total_fn_n * state.total_fn_n);
   }
   double noise_sigma = 0.0;
@@ -292,8 +302,9 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
     // Delta method: variance of the magnitude from the components' variances, reduced by the
     // low-pass; the learned shear noise sets the scale.
     if (signals_.ratio > 0.0) {
-      const double variance = (axial * axial * variance_per_noise[0] + circumferential * circumferential *
-                               variance_per_noise[1]) / (signals_.ratio * signals_.ratio);
+      const double variance = (axial * axial * variance_per_noise[0] +
+                               circumferential * circumferential * variance_per_noise[1]) /
+                              (signals_.ratio * signals_.ratio);
       noise_sigma = signals_.noise_rms_n * std::sqrt(variance * ratio_variance_reduction_);
     }
   } else {
@@ -323,7 +334,8 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
         weight * (ratio_circumferential_ * grip_n - signals_.preload_shear_circumferential_n);
     have_preload_ = preload_frames_ >= std::max(settle_samples_, 1);
   }
-  const bool no_estimate = (config_.preload_reference && !have_preload_) || grip_n <= config_.ratio_min_grip_n;
+  const bool no_estimate =
+      (config_.preload_reference && !have_preload_) || grip_n <= config_.ratio_min_grip_n;
   const auto load_ratio = [&](double axial, double circumferential) {
     return std::hypot(axial * grip_for_load_n - signals_.preload_shear_axial_n,
                       circumferential * grip_for_load_n - signals_.preload_shear_circumferential_n) /
@@ -333,7 +345,8 @@ void SlipDetector::UpdateRatio(const TactileState& state, double grip_n, double 
   signals_.instant_load_ratio = no_estimate ? 0.0 : load_ratio(component[0], component[1]);
   signals_.tangential_load_n = signals_.shear_blind ? 0.0 : signals_.load_ratio * std::max(grip_n, 0.0);
   signals_.contact_shear_n = signals_.shear_blind ? 0.0 : signals_.ratio * std::max(grip_n, 0.0);
-  signals_.ratio_threshold = config_.ratio_slip_fraction * friction_estimate + config_.ratio_noise_sigmas * noise_sigma;
+  signals_.ratio_threshold =
+      config_.ratio_slip_fraction * friction_estimate + config_.ratio_noise_sigmas * noise_sigma;
 }
 
 void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) {
@@ -347,7 +360,8 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
   double weight_energy[2] = {0.0, 0.0};
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
-    const double highpassed = shear_highpass_[static_cast<size_t>(i)].Update(state.ft_n[static_cast<size_t>(i)]);
+    const double highpassed =
+        shear_highpass_[static_cast<size_t>(i)].Update(state.ft_n[static_cast<size_t>(i)]);
     const double weight = std::max(state.fn_n[static_cast<size_t>(i)], 0.0);
     const int set = (!signals_.orientation_consistent || IsAxial(i)) ? 0 : 1;
     weighted[set] += weight * highpassed;
@@ -373,7 +387,8 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
     if (learn_noise) {
       ++noise_samples_;
       const double threshold_energy = config_.vibration_factor * config_.vibration_factor * noise_energy_;
-      const double clipped = noise_samples_ <= kNoisePrimeFrames ? sample : std::min(sample, threshold_energy);
+      const double clipped =
+          noise_samples_ <= kNoisePrimeFrames ? sample : std::min(sample, threshold_energy);
       const double alpha = std::max(noise_floor_alpha_, 1.0 / static_cast<double>(noise_samples_));
       noise_energy_ += alpha * (clipped - noise_energy_);
     }
@@ -382,9 +397,9 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
   // The floor: the fixed bound (the contact's own mechanical vibration, noise-free signals) or, on a
   // noisier readout, a multiple of the noise the readout measured at its tare (known from the first
   // frame of contact, before the learned floor has converged, and untouched by the contact).
-  const double floor_n = std::max(config_.vibration_min_rms_n, config_.vibration_noise_sigmas *
-                                                                   signals_.sensor_shear_noise_n *
-                                                                   std::sqrt(highpass_power_fraction_));
+  const double floor_n =
+      std::max(config_.vibration_min_rms_n, config_.vibration_noise_sigmas * signals_.sensor_shear_noise_n *
+                                                std::sqrt(highpass_power_fraction_));
   signals_.vibration_threshold_n = std::max(config_.vibration_factor * signals_.noise_rms_n, floor_n);
 }
 
@@ -402,7 +417,8 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
     const double weight = std::max(
-        state.fn_n[static_cast<size_t>(i)] - kCentroidDeadbandFraction * config_.contact_unit_threshold_n, 0.0);
+        state.fn_n[static_cast<size_t>(i)] - kCentroidDeadbandFraction * config_.contact_unit_threshold_n,
+        0.0);
     if (weight <= 0.0) continue;
     const double row = i / config_.grid_columns;
     const double column = i % config_.grid_columns;
@@ -434,8 +450,9 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
   // when it has them, else taken equal to the learned shear noise, an upper bound for this sensor
   // where k_t < k_n): sigma_c = sigma_fn x
   // sqrt(sum |p - c|^2) / sum w, through the low-pass, and x sqrt(2) for a difference of two samples.
-  const double spread = std::max(0.0, position_square_sum - 2.0 * (raw.row * position_sum[0] + raw.column * position_sum[1]) +
-                                          loaded * (raw.row * raw.row + raw.column * raw.column));
+  const double spread =
+      std::max(0.0, position_square_sum - 2.0 * (raw.row * position_sum[0] + raw.column * position_sum[1]) +
+                        loaded * (raw.row * raw.row + raw.column * raw.column));
   // With the readout's figures the learned (live) shear noise is scaled by their normal/shear ratio,
   // so the centroid follows a noise burst as the learned floor does, with the right proportion.
   const double normal_noise_n =
@@ -446,8 +463,10 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
           : signals_.noise_rms_n;
   const double difference_sigma =
       normal_noise_n * std::sqrt(spread * centroid_variance_reduction_ * 2.0) / weight_sum;
-  signals_.centroid_shift_threshold = config_.centroid_shift_units + config_.centroid_noise_sigmas * difference_sigma;
-  signals_.centroid_drift_threshold = config_.centroid_drift_units + config_.centroid_noise_sigmas * difference_sigma;
+  signals_.centroid_shift_threshold =
+      config_.centroid_shift_units + config_.centroid_noise_sigmas * difference_sigma;
+  signals_.centroid_drift_threshold =
+      config_.centroid_drift_units + config_.centroid_noise_sigmas * difference_sigma;
   centroid_history_.Push(now);
   signals_.centroid_row = now.row;
   signals_.centroid_column = now.column;
@@ -455,14 +474,16 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
   // On a flexing finger the contact rolls along the pad as the grip changes: a grip relaxed by more
   // than the band below the reference's grip takes a new reference. A rising grip does not: it is
   // the controller answering a growing load or a slip, when a slide must still be measured whole.
-  const bool grip_moved = config_.centroid_grip_band > 0.0 &&
-                          centroid_reference_grip_n_ - grip_n > config_.centroid_grip_band * centroid_reference_grip_n_;
+  const bool grip_moved =
+      config_.centroid_grip_band > 0.0 &&
+      centroid_reference_grip_n_ - grip_n > config_.centroid_grip_band * centroid_reference_grip_n_;
   if (!live || !have_reference_ || grip_moved) {
     centroid_reference_ = now;
     centroid_reference_grip_n_ = grip_n;
     have_reference_ = true;
   }
-  signals_.centroid_drift_units = std::hypot(now.row - centroid_reference_.row, now.column - centroid_reference_.column);
+  signals_.centroid_drift_units =
+      std::hypot(now.row - centroid_reference_.row, now.column - centroid_reference_.column);
   if (centroid_history_.size() > centroid_window_samples_) {
     const Centroid& then = centroid_history_.Delayed(centroid_window_samples_);
     signals_.centroid_shift_units = std::hypot(now.row - then.row, now.column - then.column);

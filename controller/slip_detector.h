@@ -2,7 +2,8 @@
 /// SlipDetector: tells slip from the tactile signals alone, combining three cues the sensor offers.
 ///  1. Ratio: tangential load over normal load (shear/normal) against the friction estimate. It sees
 ///     slip coming when the load grows faster than the grip, and ignores smooth load changes.
-///  2. Vibration: high-passed shear energy of the contact (matched filter) against a noise floor that the detector
+///  2. Vibration: high-passed shear energy of the contact (matched filter) against a noise floor that the
+///  detector
 ///     learns on line (stick-slip and the release of stored shear at slip onset are broadband; the
 ///     inertial load of arm motion is not).
 ///  3. Centroid: movement of the normal-force centroid across the units (the contact travels).
@@ -22,15 +23,15 @@ namespace graspbed::controller {
 
 /// Settings of the slip detector (documented in docs/controller.md; exposed as controller parameters).
 struct SlipDetectorConfig {
-  double sample_rate_hz = 1000.0;       ///< tactile frame rate the filters are designed for [Hz]
-  int grid_columns = 4;                 ///< units per row in layout order (index = row * columns + column)
-  bool even_units_axial = true;         ///< units with (row + column) even have an axial beam
+  double sample_rate_hz = 1000.0;          ///< tactile frame rate the filters are designed for [Hz]
+  int grid_columns = 4;                    ///< units per row in layout order (index = row * columns + column)
+  bool even_units_axial = true;            ///< units with (row + column) even have an axial beam
   double contact_unit_threshold_n = 0.15;  ///< a unit is in contact above this normal force [N]
 
-  bool ratio_enabled = true;            ///< use the shear/normal ratio cue
-  double ratio_filter_s = 0.01;         ///< low-pass time constant of the ratio [s]
-  double ratio_slip_fraction = 0.9;     ///< ratio cue fires above this fraction of the friction estimate
-  double ratio_min_grip_n = 0.5;        ///< ratio is evaluated only above this measured grip [N]
+  bool ratio_enabled = true;         ///< use the shear/normal ratio cue
+  double ratio_filter_s = 0.01;      ///< low-pass time constant of the ratio [s]
+  double ratio_slip_fraction = 0.9;  ///< ratio cue fires above this fraction of the friction estimate
+  double ratio_min_grip_n = 0.5;     ///< ratio is evaluated only above this measured grip [N]
   /// Once fired, the ratio cue holds until the ratio falls below this fraction of its threshold.
   double ratio_release_fraction = 0.85;
   /// The ratio threshold is raised by this many standard deviations of the ratio estimate (from the
@@ -52,30 +53,30 @@ struct SlipDetectorConfig {
   /// realistic profiles). The fixed bound stays either way: the contact's own mechanical vibration
   /// is not in the readout's figure.
   double vibration_noise_sigmas = 0.0;
-  double noise_floor_time_s = 0.5;      ///< time constant of the noise-floor estimate [s]
+  double noise_floor_time_s = 0.5;  ///< time constant of the noise-floor estimate [s]
   /// Per-unit shear noise the readout reports (RMS over valid units) above which the shear cues
   /// (ratio, vibration) and the tangential load are off: the sensor cannot resolve shear (the FEA's
   /// k_t behind a 12-bit divider: 0.9 N per unit), and only the centroid cue is left [N]; 0 = never.
   double shear_blind_noise_n = 0.4;
 
-  bool centroid_enabled = true;         ///< use the contact-centroid movement cue
-  double centroid_filter_s = 0.003;     ///< low-pass time constant of the centroid [s]
-  double centroid_window_s = 0.02;      ///< centroid movement is measured over this window [s]
-  double centroid_shift_units = 0.3;    ///< cue fires above this movement within the window [unit pitches]
+  bool centroid_enabled = true;       ///< use the contact-centroid movement cue
+  double centroid_filter_s = 0.003;   ///< low-pass time constant of the centroid [s]
+  double centroid_window_s = 0.02;    ///< centroid movement is measured over this window [s]
+  double centroid_shift_units = 0.3;  ///< cue fires above this movement within the window [unit pitches]
   /// Cue also fires when the centroid has drifted this far from where it was when the cues were
   /// armed (slow slides) [unit pitches]; the reference then moves to the current centroid.
   double centroid_drift_units = 0.4;
   /// Both centroid thresholds are raised by this many standard deviations of the centroid
   /// movement expected from noise (light contacts on a noisy sensor).
   double centroid_noise_sigmas = 3.0;
-  double centroid_min_weight_n = 0.2;   ///< minimum contact normal force for a centroid [N]
+  double centroid_min_weight_n = 0.2;  ///< minimum contact normal force for a centroid [N]
   /// The drift reference is taken afresh when the grip has changed by more than this fraction of
   /// the grip at the reference: a flexing finger's pad rolls on the object as the squeeze changes,
   /// so the contact moves with the grip without slipping. A slide under a steady grip is still
   /// measured from one reference; 0 = off (the reference stays put whatever the grip).
   double centroid_grip_band = 0.15;
 
-  double settle_s = 0.05;               ///< cues stay silent at least this long after Restart() [s]
+  double settle_s = 0.05;  ///< cues stay silent at least this long after Restart() [s]
   /// After settle_s the cues stay silent until the contact is quiet (vibration statistic below its
   /// threshold: the ringing of the contact's onset has died away), at most this long after
   /// Restart() [s]. A flexing finger's pad seats with a shear transient that outlasts settle_s.
@@ -95,7 +96,7 @@ struct SlipDetectorConfig {
 
 /// What the detector saw in the newest frame. Which cues fired is reported separately.
 struct SlipSignals {
-  double ratio = 0.0;                  ///< filtered tangential/normal load ratio [-]
+  double ratio = 0.0;  ///< filtered tangential/normal load ratio [-]
   /// The filtered ratio's part from load added since the grasp settled: |ratio vector x grip -
   /// preload shear| / grip [-] (equal to ratio with preload_reference off). The ratio cue and
   /// tangential_load_n use it.
@@ -109,8 +110,8 @@ struct SlipSignals {
   double instant_ratio = 0.0;
   /// The same from this frame's ratio alone, unfiltered [-].
   double instant_load_ratio = 0.0;
-  double ratio_threshold = 0.0;        ///< ratio above which the ratio cue fires [-]
-  double tangential_load_n = 0.0;      ///< load_ratio times measured grip: load added since the grasp settled [N]
+  double ratio_threshold = 0.0;    ///< ratio above which the ratio cue fires [-]
+  double tangential_load_n = 0.0;  ///< load_ratio times measured grip: load added since the grasp settled [N]
   /// The whole filtered shear the contact holds, preload included: ratio x measured grip [N]. The
   /// friction must hold all of it, so the grip is coupled to this; the cue watches the load's part.
   double contact_shear_n = 0.0;
@@ -124,22 +125,22 @@ struct SlipSignals {
   /// instead of the learned shear noise itself (an upper bound: k_t < k_n, 5x with the FEA's).
   double sensor_shear_noise_n = 0.0;
   double sensor_normal_noise_n = 0.0;
-  double centroid_row = 0.0;           ///< filtered normal-force centroid, row index (along the axis)
-  double centroid_column = 0.0;        ///< filtered normal-force centroid, column index (around)
-  double centroid_shift_units = 0.0;   ///< centroid movement over the window [unit pitches]
-  double centroid_drift_units = 0.0;   ///< centroid movement since the reference was taken [unit pitches]
+  double centroid_row = 0.0;              ///< filtered normal-force centroid, row index (along the axis)
+  double centroid_column = 0.0;           ///< filtered normal-force centroid, column index (around)
+  double centroid_shift_units = 0.0;      ///< centroid movement over the window [unit pitches]
+  double centroid_drift_units = 0.0;      ///< centroid movement since the reference was taken [unit pitches]
   double centroid_shift_threshold = 0.0;  ///< current threshold of the windowed movement [unit pitches]
   double centroid_drift_threshold = 0.0;  ///< current threshold of the drift [unit pitches]
-  int contact_units = 0;               ///< valid units above the contact threshold
-  bool in_contact = false;             ///< a unit above the threshold, or the grip above 3x the threshold
-  bool orientation_consistent = true;  ///< layout assumption matched the state's shear totals
+  int contact_units = 0;                  ///< valid units above the contact threshold
+  bool in_contact = false;                ///< a unit above the threshold, or the grip above 3x the threshold
+  bool orientation_consistent = true;     ///< layout assumption matched the state's shear totals
   /// The readout's shear noise is above shear_blind_noise_n: ratio and vibration cues are off and
   /// tangential_load_n is 0 (the controller has to grip without knowing the load).
   bool shear_blind = false;
-  bool ratio_slip = false;             ///< ratio cue fired
-  bool vibration_slip = false;         ///< vibration cue fired
-  bool centroid_slip = false;          ///< centroid cue fired
-  bool settled = false;                ///< cues are armed (settle time over)
+  bool ratio_slip = false;      ///< ratio cue fired
+  bool vibration_slip = false;  ///< vibration cue fired
+  bool centroid_slip = false;   ///< centroid cue fired
+  bool settled = false;         ///< cues are armed (settle time over)
 
   bool any() const { return ratio_slip || vibration_slip || centroid_slip; }
 };
@@ -200,7 +201,7 @@ class SlipDetector {
   LowPassFilter ratio_circumferential_filter_;
   double ratio_variance_reduction_ = 1.0;
   double highpass_power_fraction_ = 1.0;  // white-noise power the shear high-pass keeps [-]
-  bool noise_known_seen_ = false;          // the state's noise figures last summarised
+  bool noise_known_seen_ = false;         // the state's noise figures last summarised
   uint32_t noise_generation_seen_ = 0;
   double centroid_variance_reduction_ = 1.0;
   std::array<HighPassBiquad, sensor::kMaxUnits> shear_highpass_{};

@@ -55,10 +55,18 @@ void CheckRoundTrip(const DecodedPacket& packet) {
   std::array<uint8_t, kMaxWirePacketSize> wire;
   size_t size = 0;
   switch (packet.type) {
-    case PacketType::kTactileFrame: size = EncodePacket(packet.frame, wire); break;
-    case PacketType::kHello: size = EncodePacket(packet.hello, wire); break;
-    case PacketType::kMotorCommand: size = EncodePacket(packet.motor, wire); break;
-    case PacketType::kStreamControl: size = EncodePacket(packet.stream, wire); break;
+    case PacketType::kTactileFrame:
+      size = EncodePacket(packet.frame, wire);
+      break;
+    case PacketType::kHello:
+      size = EncodePacket(packet.hello, wire);
+      break;
+    case PacketType::kMotorCommand:
+      size = EncodePacket(packet.motor, wire);
+      break;
+    case PacketType::kStreamControl:
+      size = EncodePacket(packet.stream, wire);
+      break;
   }
   Check(size > 0);  // anything the decoder accepts fits on the wire
   StreamDecoder decoder;
@@ -111,7 +119,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     Check(length.has_value());
     std::array<uint8_t, kMaxPacketSize> twice;
     const auto again = CobsDecode(std::span<const uint8_t>(encoded.data(), *length), twice);
-    Check(again.has_value() && *again == *decoded && std::equal(out.begin(), out.begin() + *decoded, twice.begin()));
+    Check(again.has_value() && *again == *decoded &&
+          std::equal(out.begin(), out.begin() + *decoded, twice.begin()));
   }
   return 0;
 }

@@ -90,12 +90,13 @@ int main(int argc, char** argv) {
   const std::map<std::string, Bytes> seeds = {
       {"hello_then_frames_20", Join({Hello(0, 20), Frame(0, 20, 0), Frame(1, 20, 1000), Frame(2, 20, 2000)})},
       {"frame_1_unit", Frame(7, 1, 7000, graspbed::hardware::kFlagAdcOverrun)},
-      {"frame_62_units", Frame(9, 62, 9000, graspbed::hardware::kFlagAdcOverrun | graspbed::hardware::kFlagSupplyFault)},
+      {"frame_62_units",
+       Frame(9, 62, 9000, graspbed::hardware::kFlagAdcOverrun | graspbed::hardware::kFlagSupplyFault)},
       {"frames_9_units_gap", Join({Frame(1, 9, 1000), Frame(3, 9, 3000), Frame(2, 9, 2000)})},
       {"motor_and_stream", Join({Wire(motor), Wire(stream)})},
       {"unknown_type_and_version", Join({WireBody({0x33, 1, 0, 0, 0xab, 0xcd}), WireBody(foreign_version)})},
-      {"garbage_between", Join({Bytes{0x13, 0x37, 0x42}, Frame(4, 20, 4000), Bytes(40, 0xff), Bytes{0x00},
-                                Frame(5, 20, 5000)})},
+      {"garbage_between",
+       Join({Bytes{0x13, 0x37, 0x42}, Frame(4, 20, 4000), Bytes(40, 0xff), Bytes{0x00}, Frame(5, 20, 5000)})},
       {"wrapping_sequence", Join({Frame(65535, 4, 0xFFFFFC18u), Frame(0, 4, 0)})},
   };
   int index = 0;

@@ -32,7 +32,8 @@ void EmulatorConfig::Validate() const {
     throw std::invalid_argument("emulator config: " + field + " = " + std::to_string(value) + ": " + reason);
   };
   if (link_path.empty()) throw std::invalid_argument("emulator config: link_path is empty");
-  if (unit_count < 1 || unit_count > kMaxUnitsOnWire) fail("unit_count", unit_count, "must be in 1..62 (512-byte packets)");
+  if (unit_count < 1 || unit_count > kMaxUnitsOnWire)
+    fail("unit_count", unit_count, "must be in 1..62 (512-byte packets)");
   if (frame_rate_hz < 1 || frame_rate_hz > 10000) fail("frame_rate_hz", frame_rate_hz, "must be in 1..10000");
   if (!(hello_period_s > 0)) fail("hello_period_s", hello_period_s, "must be > 0");
   if (!(connect_delay_s >= 0)) fail("connect_delay_s", connect_delay_s, "must be >= 0");
@@ -68,14 +69,16 @@ void DeviceEmulator::OpenPty() {
   if (lstat(config_.link_path.c_str(), &info) == 0) {
     if (!S_ISLNK(info.st_mode)) {
       ::close(master);
-      throw std::runtime_error("emulator: " + config_.link_path + " exists and is not a symlink; refusing to replace it");
+      throw std::runtime_error("emulator: " + config_.link_path +
+                               " exists and is not a symlink; refusing to replace it");
     }
     ::unlink(config_.link_path.c_str());
   }
   if (symlink(name, config_.link_path.c_str()) != 0) {
     const int error = errno;
     ::close(master);
-    throw std::runtime_error("emulator: cannot create symlink " + config_.link_path + ": " + std::strerror(error));
+    throw std::runtime_error("emulator: cannot create symlink " + config_.link_path + ": " +
+                             std::strerror(error));
   }
   master_fd_ = master;
   slave_path_ = name;
@@ -91,7 +94,8 @@ void DeviceEmulator::ClosePty() {
     // Only remove the link if it is still ours.
     char target[256] = {};
     const ssize_t n = readlink(config_.link_path.c_str(), target, sizeof(target) - 1);
-    if (n > 0 && slave_path_ == std::string(target, static_cast<size_t>(n))) ::unlink(config_.link_path.c_str());
+    if (n > 0 && slave_path_ == std::string(target, static_cast<size_t>(n)))
+      ::unlink(config_.link_path.c_str());
     symlink_made_ = false;
   }
   if (master_fd_ >= 0) ::close(master_fd_);
@@ -199,7 +203,8 @@ void DeviceEmulator::Tick(int64_t now_ns) {
   const uint64_t device_tick = tick_ - time_base_tick_;
   const double device_time_s = static_cast<double>(device_tick) * period_s;
   frame_.unit_count = config_.unit_count;
-  source_(device_time_s, stats_.streaming && !paused_, &frame_);  // every period, so a simulation behind it keeps real time
+  source_(device_time_s, stats_.streaming && !paused_,
+          &frame_);  // every period, so a simulation behind it keeps real time
 
   if (master_fd_ < 0) {  // vanished
     CheckWatchdog(now_ns);
@@ -252,8 +257,8 @@ void DeviceEmulator::Tick(int64_t now_ns) {
       --drop_frames_;
       ++stats_.frames_dropped;
     } else {
-      FromRawFrame(frame_, sequence, static_cast<uint32_t>(device_tick * static_cast<uint64_t>(1e6 * period_s)),
-                   &wire_frame_);
+      FromRawFrame(frame_, sequence,
+                   static_cast<uint32_t>(device_tick * static_cast<uint64_t>(1e6 * period_s)), &wire_frame_);
       if (frame_unit_count_ > 0) wire_frame_.unit_count = static_cast<uint8_t>(frame_unit_count_);
       std::array<uint8_t, kMaxWirePacketSize> out;
       size_t size = EncodePacket(wire_frame_, out);

@@ -20,14 +20,14 @@
 namespace graspbed::hardware {
 
 struct EmulatorConfig {
-  std::string link_path;            ///< where the symlink to the pty slave is created (removed on Stop)
-  int unit_count = 20;              ///< units reported in HELLO and carried in frames (1..64)
-  int frame_rate_hz = 1000;         ///< nominal frame rate [Hz]
-  double hello_period_s = 1.0;      ///< HELLO repeat period while a host is connected [s]
-  double connect_delay_s = 0.02;    ///< HELLO this long after a host opens the port [s]
-  double watchdog_s = 0.1;          ///< motor off when no MOTOR_COMMAND for this long [s]
+  std::string link_path;          ///< where the symlink to the pty slave is created (removed on Stop)
+  int unit_count = 20;            ///< units reported in HELLO and carried in frames (1..64)
+  int frame_rate_hz = 1000;       ///< nominal frame rate [Hz]
+  double hello_period_s = 1.0;    ///< HELLO repeat period while a host is connected [s]
+  double connect_delay_s = 0.02;  ///< HELLO this long after a host opens the port [s]
+  double watchdog_s = 0.1;        ///< motor off when no MOTOR_COMMAND for this long [s]
   uint16_t firmware_version = 0x0100;
-  double nominal_r0_ohm = 3400.0;   ///< reported in HELLO [Ohm]
+  double nominal_r0_ohm = 3400.0;  ///< reported in HELLO [Ohm]
 
   /// Throws std::invalid_argument naming the field and value.
   void Validate() const;
@@ -42,12 +42,12 @@ struct EmulatedMotor {
 
 /// What the emulator has done; read with stats().
 struct EmulatorStats {
-  uint64_t frames_sent = 0;       ///< frames written to the pty (including corrupted ones)
-  uint64_t frames_dropped = 0;    ///< frames skipped by DropFrames (sequence numbers still advance)
-  uint64_t frames_corrupted = 0;  ///< frames sent with a flipped byte
-  uint64_t frames_overflowed = 0; ///< frames not sent because the host did not read (pty full)
+  uint64_t frames_sent = 0;        ///< frames written to the pty (including corrupted ones)
+  uint64_t frames_dropped = 0;     ///< frames skipped by DropFrames (sequence numbers still advance)
+  uint64_t frames_corrupted = 0;   ///< frames sent with a flipped byte
+  uint64_t frames_overflowed = 0;  ///< frames not sent because the host did not read (pty full)
   uint64_t hellos_sent = 0;
-  uint64_t motor_commands = 0;    ///< valid MOTOR_COMMANDs received
+  uint64_t motor_commands = 0;      ///< valid MOTOR_COMMANDs received
   uint64_t motor_off_commands = 0;  ///< of those, with enable = 0
   /// Longest time between two MOTOR_COMMANDs received while the motor ran [s] (what the watchdog sees).
   double max_command_interval_s = 0.0;
@@ -55,8 +55,8 @@ struct EmulatorStats {
   uint64_t stream_starts = 0;
   uint64_t stream_stops = 0;
   uint64_t watchdog_trips = 0;
-  uint64_t connects = 0;          ///< times a host opened the port
-  uint64_t host_corrupt = 0;      ///< host packets refused by our decoder
+  uint64_t connects = 0;      ///< times a host opened the port
+  uint64_t host_corrupt = 0;  ///< host packets refused by our decoder
   uint16_t last_frame_sequence = 0;
   bool streaming = false;
   bool host_connected = false;

@@ -73,8 +73,9 @@ void FrameLogger::Write() {
   std::snprintf(buffer, sizeof(buffer), "%u,%.6f", entry_.frame.sequence, entry_.frame.time_s);
   out_ << buffer;
   for (int k = 0; k < unit_count_; ++k) {
-    std::snprintf(buffer, sizeof(buffer), ",%.3f,%.3f,%.5f,%.5f,%d", entry_.frame.r1_ohm[k], entry_.frame.r2_ohm[k],
-                  state_.fn_n[k], state_.ft_n[k], state_.validity[k] == sensor::UnitValidity::kValid ? 1 : 0);
+    std::snprintf(buffer, sizeof(buffer), ",%.3f,%.3f,%.5f,%.5f,%d", entry_.frame.r1_ohm[k],
+                  entry_.frame.r2_ohm[k], state_.fn_n[k], state_.ft_n[k],
+                  state_.validity[k] == sensor::UnitValidity::kValid ? 1 : 0);
     out_ << buffer;
   }
   out_ << '\n';

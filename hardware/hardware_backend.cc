@@ -3,10 +3,9 @@
 namespace graspbed::hardware {
 
 HardwareBackend::HardwareBackend(const HardwareConfig& config, int unit_count, std::string layout_name)
-    : link_(std::make_shared<SerialLink>(config.port, config,
-                                         config.motor_port.empty() ? LinkRole::kSensorAndMotor
-                                                                   : LinkRole::kSensor,
-                                         unit_count, std::move(layout_name))),
+    : link_(std::make_shared<SerialLink>(
+          config.port, config, config.motor_port.empty() ? LinkRole::kSensorAndMotor : LinkRole::kSensor,
+          unit_count, std::move(layout_name))),
       unit_count_(unit_count) {}
 
 HardwareBackend::~HardwareBackend() { Stop(); }

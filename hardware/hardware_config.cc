@@ -23,8 +23,8 @@ void HardwareConfig::Validate() const {
   Require(disconnect_timeout_s > stale_timeout_s, "disconnect_timeout_s", disconnect_timeout_s,
           "must be > stale_timeout_s");
   Require(reconnect_backoff_s > 0, "reconnect_backoff_s", reconnect_backoff_s, "must be > 0");
-  Require(reconnect_backoff_max_s >= reconnect_backoff_s, "reconnect_backoff_max_s",
-          reconnect_backoff_max_s, "must be >= reconnect_backoff_s");
+  Require(reconnect_backoff_max_s >= reconnect_backoff_s, "reconnect_backoff_max_s", reconnect_backoff_max_s,
+          "must be >= reconnect_backoff_s");
   Require(poll_interval_s > 0 && poll_interval_s <= 0.1, "poll_interval_s", poll_interval_s,
           "must be in (0, 0.1]");
   Require(write_timeout_s > 0, "write_timeout_s", write_timeout_s, "must be > 0");
@@ -49,8 +49,7 @@ HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map) {
   if (config.reconnect_backoff_max_s < config.reconnect_backoff_s) {
     map.Fail("reconnect_backoff_max_s", "must be >= reconnect_backoff_s");
   }
-  config.poll_interval_s =
-      map.GetNumber("poll_interval_s", config.poll_interval_s, {0.0, 0.1, true});
+  config.poll_interval_s = map.GetNumber("poll_interval_s", config.poll_interval_s, {0.0, 0.1, true});
   config.write_timeout_s = map.GetNumber("write_timeout_s", config.write_timeout_s, positive);
   map.RejectUnknownKeys();
   config.Validate();

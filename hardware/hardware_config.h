@@ -14,14 +14,14 @@ struct HardwareConfig {
   std::string port;
   /// Separate serial device for the hand electronics' motor link; "" = the same port as the sensor.
   std::string motor_port;
-  int baud = 2000000;                   ///< [bit/s]; 1 kHz x 20 units needs >= 2 Mbaud on a UART
-  double hello_timeout_s = 3.0;         ///< Start() gives up when no HELLO came within this [s]
-  double stale_timeout_s = 0.05;        ///< no valid frame for this long: ReadStatus::kStale [s]
-  double disconnect_timeout_s = 0.5;    ///< no valid frame for this long: kDisconnected [s]
-  double reconnect_backoff_s = 0.05;    ///< first wait before reopening a vanished port [s]
-  double reconnect_backoff_max_s = 1.0; ///< the wait doubles up to this [s]
-  double poll_interval_s = 0.002;       ///< I/O thread's longest sleep in poll() [s]
-  double write_timeout_s = 0.02;        ///< longest wait for room in the output queue [s]
+  int baud = 2000000;                    ///< [bit/s]; 1 kHz x 20 units needs >= 2 Mbaud on a UART
+  double hello_timeout_s = 3.0;          ///< Start() gives up when no HELLO came within this [s]
+  double stale_timeout_s = 0.05;         ///< no valid frame for this long: ReadStatus::kStale [s]
+  double disconnect_timeout_s = 0.5;     ///< no valid frame for this long: kDisconnected [s]
+  double reconnect_backoff_s = 0.05;     ///< first wait before reopening a vanished port [s]
+  double reconnect_backoff_max_s = 1.0;  ///< the wait doubles up to this [s]
+  double poll_interval_s = 0.002;        ///< I/O thread's longest sleep in poll() [s]
+  double write_timeout_s = 0.02;         ///< longest wait for room in the output queue [s]
 
   /// Throws common::ConfigError naming the field and value.
   void Validate() const;

@@ -23,11 +23,16 @@ std::string Trim(const std::string& text) {
 }
 
 bool ParseCommand(const std::string& word, IntentCommand* command) {
-  if (word == "close" || word == "c") *command = IntentCommand::kClose;
-  else if (word == "open" || word == "o") *command = IntentCommand::kOpen;
-  else if (word == "idle" || word == "i") *command = IntentCommand::kIdle;
-  else if (word == "quit" || word == "q") *command = IntentCommand::kQuit;
-  else return false;
+  if (word == "close" || word == "c")
+    *command = IntentCommand::kClose;
+  else if (word == "open" || word == "o")
+    *command = IntentCommand::kOpen;
+  else if (word == "idle" || word == "i")
+    *command = IntentCommand::kIdle;
+  else if (word == "quit" || word == "q")
+    *command = IntentCommand::kQuit;
+  else
+    return false;
   return true;
 }
 
@@ -63,8 +68,8 @@ IntentInput::IntentInput(IntentInputConfig config) : config_(std::move(config)) 
     // after another (each `echo close > PATH`) is read without reopening.
     fifo_fd_ = ::open(config_.fifo_path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
     if (fifo_fd_ < 0) {
-      throw std::invalid_argument("--intent-fifo " + config_.fifo_path + ": cannot open (" + std::strerror(errno) +
-                                  ")");
+      throw std::invalid_argument("--intent-fifo " + config_.fifo_path + ": cannot open (" +
+                                  std::strerror(errno) + ")");
     }
   }
   if (config_.read_stdin) {

@@ -27,8 +27,8 @@ const char* IntentCommandName(IntentCommand command);
 /// One command as received.
 struct IntentInputEvent {
   IntentCommand command = IntentCommand::kIdle;
-  std::string source;      ///< "key", "stdin" or "fifo"
-  double received_s = 0.0; ///< on the clock given to Start() [s]
+  std::string source;       ///< "key", "stdin" or "fifo"
+  double received_s = 0.0;  ///< on the clock given to Start() [s]
 };
 
 struct IntentInputConfig {
@@ -80,11 +80,11 @@ class IntentInput {
   std::chrono::steady_clock::time_point start_;
   std::thread thread_;
   std::atomic<bool> stop_{false};
-  mutable std::mutex mutex_;               ///< guards events_ against events()'s copy
+  mutable std::mutex mutex_;              ///< guards events_ against events()'s copy
   std::vector<IntentInputEvent> events_;  ///< reserved to kMaxEvents: never reallocated
   std::atomic<size_t> published_{0};      ///< entries of events_ complete and readable by Poll()
   std::atomic<uint64_t> overflows_{0};
-  size_t taken_ = 0;                      ///< loop thread only
+  size_t taken_ = 0;  ///< loop thread only
 };
 
 }  // namespace graspbed::hardware

@@ -31,8 +31,8 @@ size_t Finish(std::array<uint8_t, kMaxPacketSize>& scratch, size_t body_size, st
   PutU16(scratch.data() + body_size, crc);
   const size_t packet_size = body_size + kCrcSize;
   if (out.size() < CobsMaxEncodedSize(packet_size) + 1) return 0;
-  const auto encoded = CobsEncode(std::span<const uint8_t>(scratch.data(), packet_size),
-                                  out.first(out.size() - 1));
+  const auto encoded =
+      CobsEncode(std::span<const uint8_t>(scratch.data(), packet_size), out.first(out.size() - 1));
   if (!encoded) return 0;
   out[*encoded] = 0x00;
   return *encoded + 1;
@@ -91,15 +91,24 @@ size_t EncodeBody(std::span<const uint8_t> body, std::span<uint8_t> out) {
 
 const char* ToString(PacketError error) {
   switch (error) {
-    case PacketError::kNone: return "none";
-    case PacketError::kCobs: return "cobs";
-    case PacketError::kCrc: return "crc";
-    case PacketError::kTooShort: return "too short";
-    case PacketError::kTooLong: return "too long";
-    case PacketError::kBadLength: return "bad length";
-    case PacketError::kBadUnitCount: return "bad unit count";
-    case PacketError::kUnknownVersion: return "unknown version";
-    case PacketError::kUnknownType: return "unknown type";
+    case PacketError::kNone:
+      return "none";
+    case PacketError::kCobs:
+      return "cobs";
+    case PacketError::kCrc:
+      return "crc";
+    case PacketError::kTooShort:
+      return "too short";
+    case PacketError::kTooLong:
+      return "too long";
+    case PacketError::kBadLength:
+      return "bad length";
+    case PacketError::kBadUnitCount:
+      return "bad unit count";
+    case PacketError::kUnknownVersion:
+      return "unknown version";
+    case PacketError::kUnknownType:
+      return "unknown type";
   }
   return "?";
 }
@@ -200,8 +209,6 @@ int16_t EffortToWire(double effort) {
   return static_cast<int16_t>(std::lround(std::clamp(effort, -1.0, 1.0) * 32767.0));
 }
 
-double EffortFromWire(int16_t effort) {
-  return std::clamp(static_cast<double>(effort) / 32767.0, -1.0, 1.0);
-}
+double EffortFromWire(int16_t effort) { return std::clamp(static_cast<double>(effort) / 32767.0, -1.0, 1.0); }
 
 }  // namespace graspbed::hardware

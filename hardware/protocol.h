@@ -52,9 +52,9 @@ inline constexpr uint8_t kMotorBrake = 0x02;
 /// 0x01 TACTILE_FRAME: one sample of every unit.
 struct TactileFramePacket {
   uint16_t sequence = 0;
-  uint32_t device_time_us = 0;  ///< device clock at the sample [us], wraps at 2^32
-  uint8_t unit_count = 0;       ///< 1..64
-  uint8_t flags = 0;            ///< kFlagAdcOverrun | kFlagSupplyFault
+  uint32_t device_time_us = 0;                         ///< device clock at the sample [us], wraps at 2^32
+  uint8_t unit_count = 0;                              ///< 1..64
+  uint8_t flags = 0;                                   ///< kFlagAdcOverrun | kFlagSupplyFault
   std::array<uint32_t, kMaxFrameUnits> r1_milliohm{};  ///< layout order; 0xFFFFFFFF open, 0 short
   std::array<uint32_t, kMaxFrameUnits> r2_milliohm{};
 };
@@ -64,7 +64,7 @@ struct HelloPacket {
   uint16_t sequence = 0;
   uint16_t firmware_version = 0;
   uint8_t unit_count = 0;
-  uint16_t nominal_rate_hz = 0;  ///< nominal frame rate [Hz]
+  uint16_t nominal_rate_hz = 0;      ///< nominal frame rate [Hz]
   uint32_t nominal_r0_milliohm = 0;  ///< nominal unstrained gauge resistance [milliohm]
 };
 
@@ -82,7 +82,9 @@ struct StreamControlPacket {
 };
 
 /// Body sizes (header included, CRC excluded) [bytes].
-inline constexpr size_t TactileFrameBodySize(int unit_count) { return 10 + 8 * static_cast<size_t>(unit_count); }
+inline constexpr size_t TactileFrameBodySize(int unit_count) {
+  return 10 + 8 * static_cast<size_t>(unit_count);
+}
 inline constexpr size_t kHelloBodySize = 16;
 inline constexpr size_t kMotorCommandBodySize = 8;
 inline constexpr size_t kStreamControlBodySize = 5;

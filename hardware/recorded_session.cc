@@ -79,7 +79,8 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
   session.path = path;
   const bool signals = table.Find("time_s").has_value();
   if (!signals && !table.Find("device_time_s")) {
-    throw ConfigError(path + ":1: neither a run's signals.csv (time_s, r1_ohm_0, ...) nor a frame log (seq, "
+    throw ConfigError(path +
+                      ":1: neither a run's signals.csv (time_s, r1_ohm_0, ...) nor a frame log (seq, "
                       "device_time_s, r1_0, ...)");
   }
   session.kind = signals ? RecordedSession::Kind::kRunSignals : RecordedSession::Kind::kFrameLog;
@@ -127,8 +128,8 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
       time_s -= first_time_s;
     }
     if (!std::isfinite(time_s) || (session.ticks() > 0 && time_s < session.time_s.back())) {
-      throw ConfigError(path + ":" + std::to_string(line_number) + ": " + table.header()[time_column] + " = " +
-                        row[time_column] + ": times must be finite and not decrease");
+      throw ConfigError(path + ":" + std::to_string(line_number) + ": " + table.header()[time_column] +
+                        " = " + row[time_column] + ": times must be finite and not decrease");
     }
     const size_t tick = session.ticks();
     session.time_s.push_back(time_s);
@@ -139,8 +140,10 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
     sensor::ReadStatus status = sensor::ReadStatus::kOk;
     if (status_column) {
       const double code = table.Number(row, *status_column, line_number);
-      if (code != std::floor(code) || code < 0 || code > static_cast<double>(sensor::ReadStatus::kDisconnected)) {
-        throw ConfigError(path + ":" + std::to_string(line_number) + ": read_status = " + row[*status_column] +
+      if (code != std::floor(code) || code < 0 ||
+          code > static_cast<double>(sensor::ReadStatus::kDisconnected)) {
+        throw ConfigError(path + ":" + std::to_string(line_number) +
+                          ": read_status = " + row[*status_column] +
                           ": expected 0 (ok), 1 (no new frame), 2 (stale) or 3 (disconnected)");
       }
       status = static_cast<sensor::ReadStatus>(static_cast<int>(code));
@@ -157,10 +160,12 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
     session.status.push_back(status);
     session.sequence.push_back(seq_column ? static_cast<uint32_t>(table.Number(row, *seq_column, line_number))
                                           : static_cast<uint32_t>(tick));
-    session.frame_time_s.push_back(frame_time_column ? table.Number(row, *frame_time_column, line_number) : time_s);
-    session.flags.push_back(flags_column ? static_cast<uint8_t>(table.Number(row, *flags_column, line_number)) : 0);
-    session.session.push_back(session_column ? static_cast<uint64_t>(table.Number(row, *session_column, line_number))
-                                             : 0);
+    session.frame_time_s.push_back(frame_time_column ? table.Number(row, *frame_time_column, line_number)
+                                                     : time_s);
+    session.flags.push_back(flags_column ? static_cast<uint8_t>(table.Number(row, *flags_column, line_number))
+                                         : 0);
+    session.session.push_back(
+        session_column ? static_cast<uint64_t>(table.Number(row, *session_column, line_number)) : 0);
     if (intent_column) session.intent.push_back(row[*intent_column]);
     if (phase_column) session.phase.push_back(row[*phase_column]);
     if (commands) {

@@ -28,14 +28,14 @@ struct RecordedSession {
   Kind kind = Kind::kRunSignals;
   std::string path;
   int unit_count = 0;
-  std::vector<double> time_s;          ///< per tick: the loop's clock [s]
+  std::vector<double> time_s;              ///< per tick: the loop's clock [s]
   std::vector<sensor::ReadStatus> status;  ///< per tick: what the backend returned
-  std::vector<uint64_t> session;       ///< per tick: device session (re-tare on change)
-  std::vector<uint32_t> sequence;      ///< per tick: frame sequence number
-  std::vector<double> frame_time_s;    ///< per tick: the frame's own sample time [s]
-  std::vector<uint8_t> flags;          ///< per tick: frame flags
-  std::vector<double> r1_ohm;          ///< ticks x unit_count, row-major [Ohm]
-  std::vector<double> r2_ohm;          ///< ticks x unit_count, row-major [Ohm]
+  std::vector<uint64_t> session;           ///< per tick: device session (re-tare on change)
+  std::vector<uint32_t> sequence;          ///< per tick: frame sequence number
+  std::vector<double> frame_time_s;        ///< per tick: the frame's own sample time [s]
+  std::vector<uint8_t> flags;              ///< per tick: frame flags
+  std::vector<double> r1_ohm;              ///< ticks x unit_count, row-major [Ohm]
+  std::vector<double> r2_ohm;              ///< ticks x unit_count, row-major [Ohm]
   /// Per tick: the intent then ("close", "open", "idle"); empty when the recording has none.
   std::vector<std::string> intent;
   /// Per tick: the command written and the controller's phase; empty when not recorded.

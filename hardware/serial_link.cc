@@ -27,8 +27,8 @@ uint32_t PackMotor(const hand::HandCommand& command) {
 
 }  // namespace
 
-SerialLink::SerialLink(std::string path, const HardwareConfig& config, LinkRole role,
-                       int expected_units, std::string layout_name)
+SerialLink::SerialLink(std::string path, const HardwareConfig& config, LinkRole role, int expected_units,
+                       std::string layout_name)
     : path_(std::move(path)),
       config_(config),
       role_(role),
@@ -71,9 +71,8 @@ void SerialLink::Start() {
   started_ = true;
 
   std::unique_lock lock(info_mutex_);
-  const bool answered = info_cv_.wait_for(lock, std::chrono::duration<double>(config_.hello_timeout_s), [&] {
-    return connected_.load() || refused_.load();
-  });
+  const bool answered = info_cv_.wait_for(lock, std::chrono::duration<double>(config_.hello_timeout_s),
+                                          [&] { return connected_.load() || refused_.load(); });
   if (connected_.load()) return;
   const std::string error = refused_.load() ? error_ : std::string();
   lock.unlock();
@@ -316,10 +315,16 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
 
 void SerialLink::HandlePacket(const DecodedPacket& packet) {
   switch (packet.type) {
-    case PacketType::kHello: HandleHello(packet.hello); break;
-    case PacketType::kTactileFrame: HandleFrame(packet.frame); break;
+    case PacketType::kHello:
+      HandleHello(packet.hello);
+      break;
+    case PacketType::kTactileFrame:
+      HandleFrame(packet.frame);
+      break;
     case PacketType::kMotorCommand:
-    case PacketType::kStreamControl: ++extra_unknown_; break;  // host-to-device types: not for us
+    case PacketType::kStreamControl:
+      ++extra_unknown_;
+      break;  // host-to-device types: not for us
   }
 }
 

@@ -117,7 +117,7 @@ class SerialLink {
 
   SerialPort port_;
   StreamDecoder decoder_;
-  DecodedPacket packet_;  // decoder output, reused
+  DecodedPacket packet_;      // decoder output, reused
   sensor::RawFrame scratch_;  // converted frame before publishing, reused
   int wake_fd_ = -1;
   std::thread thread_;
@@ -146,8 +146,8 @@ class SerialLink {
   std::atomic<int64_t> last_frame_ns_{0};
   std::atomic<uint32_t> pending_motor_{0};  // bit 31: pending; bits 8..23 effort; bits 0..7 flags
   std::atomic<uint64_t> motor_sent_{0};
-  std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0},
-      counter_unknown_{0}, counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
+  std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0}, counter_unknown_{0},
+      counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
 
   mutable std::mutex frame_mutex_;  // guards slot_, slot_id_, slot_session_; the loop only try_locks it
   sensor::RawFrame slot_;

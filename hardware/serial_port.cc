@@ -20,11 +20,10 @@ struct BaudEntry {
   speed_t speed;
 };
 constexpr BaudEntry kBauds[] = {
-    {9600, B9600},       {19200, B19200},     {38400, B38400},     {57600, B57600},
-    {115200, B115200},   {230400, B230400},   {460800, B460800},   {500000, B500000},
-    {576000, B576000},   {921600, B921600},   {1000000, B1000000}, {1152000, B1152000},
-    {1500000, B1500000}, {2000000, B2000000}, {2500000, B2500000}, {3000000, B3000000},
-    {3500000, B3500000}, {4000000, B4000000},
+    {9600, B9600},       {19200, B19200},     {38400, B38400},     {57600, B57600},     {115200, B115200},
+    {230400, B230400},   {460800, B460800},   {500000, B500000},   {576000, B576000},   {921600, B921600},
+    {1000000, B1000000}, {1152000, B1152000}, {1500000, B1500000}, {2000000, B2000000}, {2500000, B2500000},
+    {3000000, B3000000}, {3500000, B3500000}, {4000000, B4000000},
 };
 
 std::string Errno(int error) { return std::strerror(error); }
@@ -78,14 +77,16 @@ void SerialPort::Open(const std::string& path, int baud) {
         throw PortError(PortErrorKind::kMissing,
                         "serial port " + path + " does not exist (" + Errno(error) +
                             "): is the device plugged in and the path right? (for the emulator, start "
-                            "`graspbed emulate --link " + path + "` first)");
+                            "`graspbed emulate --link " +
+                            path + "` first)");
       case EACCES:
       case EPERM:
         throw PortError(PortErrorKind::kPermission, PermissionMessage(path));
       case EBUSY:
         throw PortError(PortErrorKind::kBusy, "serial port " + path +
                                                   " is busy: another program holds it exclusively "
-                                                  "(find it with `fuser " + path + "`)");
+                                                  "(find it with `fuser " +
+                                                  path + "`)");
       default:
         throw PortError(PortErrorKind::kOther, "serial port " + path + ": open failed: " + Errno(error));
     }
@@ -172,8 +173,8 @@ IoResult SerialPort::Write(std::span<const uint8_t> data, int timeout_ms) {
       result.status = errno == EIO ? IoStatus::kHangup : IoStatus::kError;
       return result;
     }
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-        deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       result.status = IoStatus::kTimeout;
       return result;

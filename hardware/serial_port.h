@@ -36,7 +36,7 @@ enum class IoStatus {
 
 struct IoResult {
   IoStatus status = IoStatus::kOk;
-  size_t bytes = 0;  ///< bytes read or written
+  size_t bytes = 0;    ///< bytes read or written
   bool woken = false;  ///< Read(): the wake fd became readable (and was drained)
 };
 

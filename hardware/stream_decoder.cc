@@ -18,15 +18,28 @@ void StreamDecoder::Fail(PacketError error) {
   last_error_ = error;
   if (!synced_) return;
   switch (error) {
-    case PacketError::kCobs: ++stats_.cobs_errors; break;
-    case PacketError::kCrc: ++stats_.crc_errors; break;
-    case PacketError::kTooLong: ++stats_.too_long; break;
-    case PacketError::kUnknownVersion: ++stats_.unknown_version; break;
-    case PacketError::kUnknownType: ++stats_.unknown_type; break;
+    case PacketError::kCobs:
+      ++stats_.cobs_errors;
+      break;
+    case PacketError::kCrc:
+      ++stats_.crc_errors;
+      break;
+    case PacketError::kTooLong:
+      ++stats_.too_long;
+      break;
+    case PacketError::kUnknownVersion:
+      ++stats_.unknown_version;
+      break;
+    case PacketError::kUnknownType:
+      ++stats_.unknown_type;
+      break;
     case PacketError::kTooShort:
     case PacketError::kBadLength:
-    case PacketError::kBadUnitCount: ++stats_.length_errors; break;
-    case PacketError::kNone: break;
+    case PacketError::kBadUnitCount:
+      ++stats_.length_errors;
+      break;
+    case PacketError::kNone:
+      break;
   }
 }
 

@@ -32,7 +32,9 @@ namespace {
 
 namespace py = pybind11;
 
-py::object ToPython(const nlohmann::json& value) { return py::module_::import("json").attr("loads")(value.dump()); }
+py::object ToPython(const nlohmann::json& value) {
+  return py::module_::import("json").attr("loads")(value.dump());
+}
 
 std::vector<scenario::Override> ParseOverrides(const std::vector<std::string>& texts) {
   std::vector<scenario::Override> overrides;
@@ -54,17 +56,21 @@ ControllerChoice ChooseController(const py::object& controller, bool single_run)
   ControllerChoice choice;
   if (controller.is_none()) return choice;
   if (py::isinstance<py::str>(controller)) {
-    choice.overrides.push_back({"controller.name", controller::ResolvePluginName(controller.cast<std::string>(), ".")});
+    choice.overrides.push_back(
+        {"controller.name", controller::ResolvePluginName(controller.cast<std::string>(), ".")});
     return choice;
   }
   const bool instance = py::hasattr(controller, "update") && !py::isinstance<py::type>(controller);
   if (!instance && !PyCallable_Check(controller.ptr())) {
-    throw py::type_error("controller: expected None, a controller name, a controller object (with update()) or a "
-                         "class / factory making one; got " + std::string(py::repr(controller)));
+    throw py::type_error(
+        "controller: expected None, a controller name, a controller object (with update()) or a "
+        "class / factory making one; got " +
+        std::string(py::repr(controller)));
   }
   if (instance && !single_run) {
-    throw py::type_error("controller: runs of a suite or sweep each need their own controller: pass its class (or "
-                         "a function that makes one), not an instance");
+    throw py::type_error(
+        "controller: runs of a suite or sweep each need their own controller: pass its class (or "
+        "a function that makes one), not an instance");
   }
   const py::object type = instance ? py::reinterpret_borrow<py::object>(controller.get_type()) : controller;
   choice.label = "python:" + std::string(py::str(py::getattr(type, "__name__", py::str("controller"))));
@@ -95,22 +101,25 @@ struct CollectedSignals {
     text.assign(text_names.size(), std::vector<std::string>(log.rows()));
     for (size_t row = 0; row < log.rows(); ++row) {
       for (size_t c = 0; c < numeric_names.size(); ++c) numeric[c][row] = log.At(row, c);
-      for (size_t c = 0; c < text_names.size(); ++c) text[c][row] = log.TextAt(row, c) ? log.TextAt(row, c) : "";
+      for (size_t c = 0; c < text_names.size(); ++c)
+        text[c][row] = log.TextAt(row, c) ? log.TextAt(row, c) : "";
     }
   }
   py::dict ToDict() {
     py::dict columns;
     for (size_t c = 0; c < numeric_names.size(); ++c) {
-      columns[py::str(numeric_names[c])] = py::array_t<double>(static_cast<py::ssize_t>(numeric[c].size()), numeric[c].data());
+      columns[py::str(numeric_names[c])] =
+          py::array_t<double>(static_cast<py::ssize_t>(numeric[c].size()), numeric[c].data());
     }
     py::module_ numpy = py::module_::import("numpy");
-    for (size_t c = 0; c < text_names.size(); ++c) columns[py::str(text_names[c])] = numpy.attr("array")(text[c]);
+    for (size_t c = 0; c < text_names.size(); ++c)
+      columns[py::str(text_names[c])] = numpy.attr("array")(text[c]);
     return columns;
   }
 };
 
-py::dict Run(const std::string& scenario_path, const std::vector<std::string>& overrides, const py::object& controller,
-             const std::string& out_dir, bool plots) {
+py::dict Run(const std::string& scenario_path, const std::vector<std::string>& overrides,
+             const py::object& controller, const std::string& out_dir, bool plots) {
   ControllerChoice choice = ChooseController(controller, true);
   std::vector<scenario::Override> all = choice.overrides;
   for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
@@ -155,8 +164,8 @@ py::dict Suite(const std::vector<std::string>& files, const std::vector<std::str
   return ToPython(scenario::SuiteJson(result));
 }
 
-py::dict Sweep(const std::string& spec_path, const py::object& controller, int jobs, const std::string& out_dir,
-               const std::string& shard) {
+py::dict Sweep(const std::string& spec_path, const py::object& controller, int jobs,
+               const std::string& out_dir, const std::string& shard) {
   ControllerChoice choice = ChooseController(controller, jobs == 1);
   scenario::SweepSpec spec = scenario::LoadSweepSpec(spec_path);
   spec.fixed.insert(spec.fixed.begin(), choice.overrides.begin(), choice.overrides.end());
@@ -186,7 +195,7 @@ py::dict Sweep(const std::string& spec_path, const py::object& controller, int j
 }
 
 py::dict Score(const std::vector<py::object>& controllers, const std::string& set_dir, int jobs, int limit,
-              const std::string& out_dir) {
+               const std::string& out_dir) {
   scenario::ScorecardOptions options;
   options.controllers.clear();
   options.jobs = jobs;
@@ -200,8 +209,8 @@ py::dict Score(const std::vector<py::object>& controllers, const std::string& se
       options.controllers.push_back(choice.overrides.at(0).value);
     }
   }
-  const scenario::ScorecardSet set =
-      scenario::LoadScorecardSet((set_dir.empty() ? common::DataPath("scenarios/scorecard") : set_dir) + "/set.yaml");
+  const scenario::ScorecardSet set = scenario::LoadScorecardSet(
+      (set_dir.empty() ? common::DataPath("scenarios/scorecard") : set_dir) + "/set.yaml");
   scenario::Scorecard scorecard;
   {
     py::gil_scoped_release release;
@@ -221,7 +230,8 @@ double TimeControllerUpdate(const py::object& controller, int ticks) {
   if (py::isinstance<py::str>(controller)) {
     made = controller::MakeController(controller::ResolvePluginName(controller.cast<std::string>(), "."), {});
   } else {
-    made = std::make_unique<PythonController>(controller, "python:" + std::string(py::str(controller.get_type().attr("__name__"))));
+    made = std::make_unique<PythonController>(
+        controller, "python:" + std::string(py::str(controller.get_type().attr("__name__"))));
   }
   sensor::TactileState state;
   state.unit_count = 20;
@@ -264,40 +274,67 @@ PYBIND11_MODULE(_graspbed, m) {
              return controller::HandCommand{grip_effort, enable, brake};
            }),
            py::arg("grip_effort") = 0.0, py::arg("enable") = true, py::arg("brake") = false)
-      .def_readwrite("grip_effort", &controller::HandCommand::grip_effort, "[-1, 1] of stall torque; + closes")
+      .def_readwrite("grip_effort", &controller::HandCommand::grip_effort,
+                     "[-1, 1] of stall torque; + closes")
       .def_readwrite("enable", &controller::HandCommand::enable, "False: motor off (coasts)")
       .def_readwrite("brake", &controller::HandCommand::brake, "True: hold position with the brake")
       .def("__repr__", [](const controller::HandCommand& c) {
-        return "HandCommand(grip_effort=" + std::to_string(c.grip_effort) + ", enable=" + (c.enable ? "True" : "False") +
-               ", brake=" + (c.brake ? "True" : "False") + ")";
+        return "HandCommand(grip_effort=" + std::to_string(c.grip_effort) +
+               ", enable=" + (c.enable ? "True" : "False") + ", brake=" + (c.brake ? "True" : "False") + ")";
       });
 
   // Read-only: the arrays are numpy views (write=False) onto the state of the current tick. Valid
   // during update(); copy (numpy.copy) what a controller keeps across ticks.
-  py::class_<TactileStateView>(m, "TactileState",
-                               "Per-unit forces estimated from one sensor frame (read-only; valid during update())")
+  py::class_<TactileStateView>(
+      m, "TactileState", "Per-unit forces estimated from one sensor frame (read-only; valid during update())")
       .def_property_readonly("sequence", [](const TactileStateView& v) { return v.state->sequence; })
-      .def_property_readonly("time_s", [](const TactileStateView& v) { return v.state->time_s; }, "sample time [s]")
+      .def_property_readonly(
+          "time_s", [](const TactileStateView& v) { return v.state->time_s; }, "sample time [s]")
       .def_property_readonly("unit_count", [](const TactileStateView& v) { return v.state->unit_count; })
-      .def_property_readonly("stale", [](const TactileStateView& v) { return v.state->stale; },
-                             "no new frame within the stale timeout")
+      .def_property_readonly(
+          "stale", [](const TactileStateView& v) { return v.state->stale; },
+          "no new frame within the stale timeout")
       .def_property_readonly("valid_count", [](const TactileStateView& v) { return v.state->valid_count; })
-      .def_property_readonly("total_fn_n", [](const TactileStateView& v) { return v.state->total_fn_n; },
-                             "sum of Fn over valid units [N]")
+      .def_property_readonly(
+          "total_fn_n", [](const TactileStateView& v) { return v.state->total_fn_n; },
+          "sum of Fn over valid units [N]")
       .def_property_readonly("total_shear_axial_n",
                              [](const TactileStateView& v) { return v.state->total_shear_axial_n; })
       .def_property_readonly("total_shear_circumferential_n",
                              [](const TactileStateView& v) { return v.state->total_shear_circumferential_n; })
-      .def_property_readonly("contact_count", [](const TactileStateView& v) { return v.state->contact_count; })
+      .def_property_readonly("contact_count",
+                             [](const TactileStateView& v) { return v.state->contact_count; })
       .def_property_readonly("noise_known", [](const TactileStateView& v) { return v.state->noise_known; })
-      .def_property_readonly("fn_n", [](TactileStateView& v) { v.Refresh(); return v.fn_n; },
-                             "normal force per unit [N], unit frame (numpy, read-only view)")
-      .def_property_readonly("ft_n", [](TactileStateView& v) { v.Refresh(); return v.ft_n; },
-                             "shear per unit along its beam axis [N] (numpy, read-only view)")
-      .def_property_readonly("validity", [](TactileStateView& v) { v.Refresh(); return v.validity; },
-                             "per unit: 0 valid, 1 open, 2 short, 3 out of range, 4 implausible, 5 not tared")
-      .def_property_readonly("fn_noise_n", [](TactileStateView& v) { v.Refresh(); return v.fn_noise_n; })
-      .def_property_readonly("ft_noise_n", [](TactileStateView& v) { v.Refresh(); return v.ft_noise_n; });
+      .def_property_readonly(
+          "fn_n",
+          [](TactileStateView& v) {
+            v.Refresh();
+            return v.fn_n;
+          },
+          "normal force per unit [N], unit frame (numpy, read-only view)")
+      .def_property_readonly(
+          "ft_n",
+          [](TactileStateView& v) {
+            v.Refresh();
+            return v.ft_n;
+          },
+          "shear per unit along its beam axis [N] (numpy, read-only view)")
+      .def_property_readonly(
+          "validity",
+          [](TactileStateView& v) {
+            v.Refresh();
+            return v.validity;
+          },
+          "per unit: 0 valid, 1 open, 2 short, 3 out of range, 4 implausible, 5 not tared")
+      .def_property_readonly("fn_noise_n",
+                             [](TactileStateView& v) {
+                               v.Refresh();
+                               return v.fn_noise_n;
+                             })
+      .def_property_readonly("ft_noise_n", [](TactileStateView& v) {
+        v.Refresh();
+        return v.ft_noise_n;
+      });
 
   m.def("_run", &Run, py::arg("scenario"), py::arg("overrides"), py::arg("controller"), py::arg("out_dir"),
         py::arg("plots"));

@@ -23,9 +23,12 @@ py::object ReadOnlyView(const T* data, int count, const std::shared_ptr<sensor::
 
 const char* IntentName(controller::GraspIntent intent) {
   switch (intent) {
-    case controller::GraspIntent::kClose: return "close";
-    case controller::GraspIntent::kOpen: return "open";
-    case controller::GraspIntent::kIdle: break;
+    case controller::GraspIntent::kClose:
+      return "close";
+    case controller::GraspIntent::kOpen:
+      return "open";
+    case controller::GraspIntent::kIdle:
+      break;
   }
   return "idle";
 }
@@ -137,7 +140,8 @@ controller::HandCommand PythonController::ToCommand(const py::handle& result) co
                          "): expected a graspbed.HandCommand, a number (grip effort) or a dict");
   }
   if (!std::isfinite(command.grip_effort) || command.grip_effort < -1.0 || command.grip_effort > 1.0) {
-    Fail("update()", "returned grip_effort = " + std::to_string(command.grip_effort) + ": must be in [-1, 1]");
+    Fail("update()",
+         "returned grip_effort = " + std::to_string(command.grip_effort) + ": must be in [-1, 1]");
   }
   return command;
 }
@@ -172,9 +176,10 @@ void PythonController::ReadTelemetry(const py::handle& result) {
       } else if (name == "safe_hold") {
         telemetry_.safe_hold = value.cast<bool>();
       } else {
-        Fail("telemetry()", "unknown key '" + name +
-                                "' (valid: phase, grip_target_n, friction_estimate, slip_detected, slip_cues, slip_events, "
-                                "safe_hold)");
+        Fail("telemetry()",
+             "unknown key '" + name +
+                 "' (valid: phase, grip_target_n, friction_estimate, slip_detected, slip_cues, slip_events, "
+                 "safe_hold)");
       }
     }
   } catch (const py::cast_error& error) {

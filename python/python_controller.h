@@ -61,7 +61,7 @@ class PythonController final : public controller::GraspController {
 
   std::string label_;
   pybind11::object controller_;
-  pybind11::object update_;     ///< bound method, looked up once
+  pybind11::object update_;            ///< bound method, looked up once
   pybind11::object telemetry_method_;  ///< bound method or None
   pybind11::object view_object_;       ///< the TactileStateView handed to update()
   TactileStateView* view_ = nullptr;   ///< owned by view_object_
@@ -69,7 +69,7 @@ class PythonController final : public controller::GraspController {
   /// A telemetry string as a pointer that stays valid (kept in strings_); `last` caches the object.
   const char* Intern(const pybind11::handle& value, pybind11::object* last, const char* current);
 
-  std::set<std::string> strings_;  ///< telemetry strings seen, so telemetry_.phase/slip_cues stay valid
+  std::set<std::string> strings_;    ///< telemetry strings seen, so telemetry_.phase/slip_cues stay valid
   pybind11::object last_phase_;      ///< the phase object of the last telemetry() (skips the lookup)
   pybind11::object last_slip_cues_;  ///< the same for slip_cues
 };

@@ -81,7 +81,8 @@ void SaveCalibration(const Calibration& calibration, const std::string& path) {
   std::ostringstream text;
   text.precision(std::numeric_limits<double>::max_digits10);
   text << "# graspbed sensor calibration: per-unit constants of the inversion (paper eq. 4),\n"
-       << "# Fn = (dR1/R1 + dR2/R2) / (2 G kn) - fn_offset_n, Ft = (dR1/R1 - dR2/R2) / (2 G kt) - ft_offset_n.\n"
+       << "# Fn = (dR1/R1 + dR2/R2) / (2 G kn) - fn_offset_n, Ft = (dR1/R1 - dR2/R2) / (2 G kt) - "
+          "ft_offset_n.\n"
        << "# Units in layout order. Format: docs/sensor.md.\n"
        << "units:\n";
   for (const UnitCalibration& unit : calibration.units) {
@@ -132,10 +133,12 @@ std::vector<CalibrationSample> LoadCalibrationLog(const std::string& path, int u
           throw ConfigError(where + "header column '" + name +
                             "': unknown column; valid: unit, fn_n, ft_n, dr1_rel, dr2_rel, r1_ohm, r2_ohm");
         }
-        if (!column.emplace(name, i).second) throw ConfigError(where + "header column '" + name + "' given twice");
+        if (!column.emplace(name, i).second)
+          throw ConfigError(where + "header column '" + name + "' given twice");
       }
       for (const char* name : {"unit", "fn_n", "ft_n"}) {
-        if (!column.count(name)) throw ConfigError(where + "header: missing column '" + std::string(name) + "'");
+        if (!column.count(name))
+          throw ConfigError(where + "header: missing column '" + std::string(name) + "'");
       }
       const bool relative = column.count("dr1_rel") && column.count("dr2_rel");
       in_ohm = column.count("r1_ohm") && column.count("r2_ohm");
@@ -183,7 +186,8 @@ std::vector<CalibrationSample> LoadCalibrationLog(const std::string& path, int u
   if (header.empty()) throw ConfigError(path + ": empty calibration log (no header)");
   if (in_ohm) {
     // Each unit's reference is the mean of its zero-load readings.
-    std::vector<double> sum1(static_cast<size_t>(unit_count), 0.0), sum2(static_cast<size_t>(unit_count), 0.0);
+    std::vector<double> sum1(static_cast<size_t>(unit_count), 0.0),
+        sum2(static_cast<size_t>(unit_count), 0.0);
     std::vector<int> zeros(static_cast<size_t>(unit_count), 0);
     for (size_t i = 0; i < samples.size(); ++i) {
       if (samples[i].fn_n == 0.0 && samples[i].ft_n == 0.0) {
@@ -206,7 +210,8 @@ std::vector<CalibrationSample> LoadCalibrationLog(const std::string& path, int u
   return samples;
 }
 
-CalibrationFit FitCalibration(const std::vector<CalibrationSample>& samples, int unit_count, double gauge_factor) {
+CalibrationFit FitCalibration(const std::vector<CalibrationSample>& samples, int unit_count,
+                              double gauge_factor) {
   if (unit_count < 1 || unit_count > kMaxUnits) {
     throw std::invalid_argument("calibration fit: unit count " + std::to_string(unit_count) + " outside 1.." +
                                 std::to_string(kMaxUnits));
@@ -241,8 +246,8 @@ CalibrationFit FitCalibration(const std::vector<CalibrationSample>& samples, int
                                   " samples without independent Fn, Ft and zero-load variation; need at "
                                   "least 3 with both loads varied");
     }
-    const Eigen::Vector3d normal = qr.solve(mean);        // [G kn, coupling, G kn fn_offset]
-    const Eigen::Vector3d shear = qr.solve(difference);   // [coupling, G kt, G kt ft_offset]
+    const Eigen::Vector3d normal = qr.solve(mean);       // [G kn, coupling, G kn fn_offset]
+    const Eigen::Vector3d shear = qr.solve(difference);  // [coupling, G kt, G kt ft_offset]
     if (!(normal(0) > 0.0) || !(shear(1) > 0.0)) {
       throw std::invalid_argument("calibration fit: unit " + std::to_string(unit) +
                                   " has a non-positive sensitivity (check the sign of the loads and which "

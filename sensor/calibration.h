@@ -16,11 +16,11 @@ namespace graspbed::sensor {
 
 /// Constants of one unit's inversion.
 struct UnitCalibration {
-  double gauge_factor = 100;    ///< G [-]
-  double kn_per_n = 5.5e-4;     ///< strain per N of normal force [1/N]
-  double kt_per_n = 4.1e-4;     ///< strain per N of shear along the beam [1/N]
-  double fn_offset_n = 0;       ///< normal-force reading at zero load [N]
-  double ft_offset_n = 0;       ///< shear reading at zero load [N]
+  double gauge_factor = 100;  ///< G [-]
+  double kn_per_n = 5.5e-4;   ///< strain per N of normal force [1/N]
+  double kt_per_n = 4.1e-4;   ///< strain per N of shear along the beam [1/N]
+  double fn_offset_n = 0;     ///< normal-force reading at zero load [N]
+  double ft_offset_n = 0;     ///< shear reading at zero load [N]
 };
 
 /// Calibration of every unit, in layout order.
@@ -46,12 +46,12 @@ void SaveCalibration(const Calibration& calibration, const std::string& path);
 
 /// One row of a calibration log: a known load on one unit and what the readout saw.
 struct CalibrationSample {
-  int unit = 0;            ///< layout index
-  double fn_n = 0.0;       ///< applied normal force [N]
-  double ft_n = 0.0;       ///< applied shear along the beam [N]
-  double dr1_rel = 0.0;    ///< dR1/R1 read for that load [-]
-  double dr2_rel = 0.0;    ///< dR2/R2 read for that load [-]
-  int line = 0;            ///< line in the log file (for messages)
+  int unit = 0;          ///< layout index
+  double fn_n = 0.0;     ///< applied normal force [N]
+  double ft_n = 0.0;     ///< applied shear along the beam [N]
+  double dr1_rel = 0.0;  ///< dR1/R1 read for that load [-]
+  double dr2_rel = 0.0;  ///< dR2/R2 read for that load [-]
+  int line = 0;          ///< line in the log file (for messages)
 };
 
 /// Quality of the fit of one unit.

@@ -32,24 +32,25 @@ InversionConfig LoadInversionConfig(const common::YamlMap& map) {
   config.contact_threshold_n =
       map.GetNumber("contact_threshold_n", config.contact_threshold_n, NumberRule::Between(0.0, 1000.0));
   config.rated_force_n = map.GetNumber("rated_force_n", config.rated_force_n, {0.0, 1000.0, true});
-  config.out_of_range_margin_fraction =
-      map.GetNumber("out_of_range_margin_fraction", config.out_of_range_margin_fraction,
-                    NumberRule::Between(0.0, 100.0));
+  config.out_of_range_margin_fraction = map.GetNumber(
+      "out_of_range_margin_fraction", config.out_of_range_margin_fraction, NumberRule::Between(0.0, 100.0));
   map.RejectUnknownKeys();
   return config;
 }
 
 UnitForces InvertUnit(const UnitCalibration& calibration, double dr1_rel, double dr2_rel) {
-  return {(dr1_rel + dr2_rel) / (2.0 * calibration.gauge_factor * calibration.kn_per_n) - calibration.fn_offset_n,
-          (dr1_rel - dr2_rel) / (2.0 * calibration.gauge_factor * calibration.kt_per_n) - calibration.ft_offset_n};
+  return {
+      (dr1_rel + dr2_rel) / (2.0 * calibration.gauge_factor * calibration.kn_per_n) - calibration.fn_offset_n,
+      (dr1_rel - dr2_rel) / (2.0 * calibration.gauge_factor * calibration.kt_per_n) -
+          calibration.ft_offset_n};
 }
 
 Inversion::Inversion(const Layout& layout, const Calibration& calibration, const InversionConfig& config)
     : config_(config), unit_count_(layout.unit_count()) {
   config_.Validate();
   if (unit_count_ < 1 || unit_count_ > kMaxUnits) {
-    throw std::invalid_argument("inversion: layout has " + std::to_string(unit_count_) + " units; expected 1.." +
-                                std::to_string(kMaxUnits));
+    throw std::invalid_argument("inversion: layout has " + std::to_string(unit_count_) +
+                                " units; expected 1.." + std::to_string(kMaxUnits));
   }
   if (calibration.unit_count() != unit_count_) {
     throw std::invalid_argument("inversion: calibration has " + std::to_string(calibration.unit_count()) +
@@ -64,8 +65,10 @@ Inversion::Inversion(const Layout& layout, const Calibration& calibration, const
             constants.kn_per_n, "must be > 0");
     Require(constants.kt_per_n > 0.0 && std::isfinite(constants.kt_per_n), prefix + "kt_per_n",
             constants.kt_per_n, "must be > 0");
-    Require(std::isfinite(constants.fn_offset_n), prefix + "fn_offset_n", constants.fn_offset_n, "must be finite");
-    Require(std::isfinite(constants.ft_offset_n), prefix + "ft_offset_n", constants.ft_offset_n, "must be finite");
+    Require(std::isfinite(constants.fn_offset_n), prefix + "fn_offset_n", constants.fn_offset_n,
+            "must be finite");
+    Require(std::isfinite(constants.ft_offset_n), prefix + "ft_offset_n", constants.ft_offset_n,
+            "must be finite");
     calibration_[unit] = constants;
     const UnitPose& pose = layout.units[static_cast<size_t>(unit)];
     orientation_[unit] = pose.orientation;
@@ -96,7 +99,8 @@ void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
       state->r1_noise_ohm[unit] = frame.r1_noise_ohm[unit];
       state->r2_noise_ohm[unit] = frame.r2_noise_ohm[unit];
       state->fn_noise_n[unit] = frame.sum_noise_rel[unit] / (calibration.gauge_factor * calibration.kn_per_n);
-      state->ft_noise_n[unit] = frame.diff_noise_rel[unit] / (calibration.gauge_factor * calibration.kt_per_n);
+      state->ft_noise_n[unit] =
+          frame.diff_noise_rel[unit] / (calibration.gauge_factor * calibration.kt_per_n);
     }
     state->noise_generation = frame.noise_generation;
   }
@@ -112,7 +116,8 @@ void Inversion::Invert(const ReadoutFrame& frame, TactileState* state) const {
     const UnitForces forces = InvertUnit(calibration, frame.dr1_rel[unit], frame.dr2_rel[unit]);
     state->fn_n[unit] = forces.fn_n;
     state->ft_n[unit] = forces.ft_n;
-    if (std::abs(forces.fn_n) > limit_n || std::abs(forces.ft_n) > limit_n) validity = UnitValidity::kOutOfRange;
+    if (std::abs(forces.fn_n) > limit_n || std::abs(forces.ft_n) > limit_n)
+      validity = UnitValidity::kOutOfRange;
     state->validity[unit] = validity;
     // An overloaded unit is certainly touching; it just is not counted in the totals.
     if (forces.fn_n > config_.contact_threshold_n) ++state->contact_count;

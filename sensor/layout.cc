@@ -21,20 +21,16 @@ using common::YamlMap;
 constexpr double kMmToM = 1e-3;
 
 // 10-point Gauss-Legendre nodes and weights on [-1, 1].
-constexpr std::array<double, 5> kGaussNodes = {0.1488743389816312, 0.4333953941292472,
-                                               0.6794095682990244, 0.8650633666889845,
-                                               0.9739065285171717};
-constexpr std::array<double, 5> kGaussWeights = {0.2955242247147529, 0.2692667193099963,
-                                                 0.2190863625159820, 0.1494513491505806,
-                                                 0.0666713443086881};
+constexpr std::array<double, 5> kGaussNodes = {0.1488743389816312, 0.4333953941292472, 0.6794095682990244,
+                                               0.8650633666889845, 0.9739065285171717};
+constexpr std::array<double, 5> kGaussWeights = {0.2955242247147529, 0.2692667193099963, 0.2190863625159820,
+                                                 0.1494513491505806, 0.0666713443086881};
 // Sub-intervals per radian: the integrand is analytic, so 10-point rules on 16 pieces per radian
 // are exact to rounding for any sensible aspect ratio.
 constexpr int kPiecesPerRadian = 16;
 
 // |d(y, z)/dt| for (y, z) = (a sin t, -b cos t).
-double Speed(double a, double b, double t) {
-  return std::hypot(a * std::cos(t), b * std::sin(t));
-}
+double Speed(double a, double b, double t) { return std::hypot(a * std::cos(t), b * std::sin(t)); }
 
 std::string FormatMm(double value_m) {
   std::ostringstream out;
@@ -45,8 +41,10 @@ std::string FormatMm(double value_m) {
 HolderGeometry ReadHolder(const YamlMap& root) {
   HolderGeometry holder;
   if (const auto map = root.GetMap("holder")) {
-    holder.major_axis_m = map->GetNumber("major_axis_mm", holder.major_axis_m / kMmToM, NumberRule::Positive()) * kMmToM;
-    holder.minor_axis_m = map->GetNumber("minor_axis_mm", holder.minor_axis_m / kMmToM, NumberRule::Positive()) * kMmToM;
+    holder.major_axis_m =
+        map->GetNumber("major_axis_mm", holder.major_axis_m / kMmToM, NumberRule::Positive()) * kMmToM;
+    holder.minor_axis_m =
+        map->GetNumber("minor_axis_mm", holder.minor_axis_m / kMmToM, NumberRule::Positive()) * kMmToM;
     holder.length_m = map->GetNumber("length_mm", holder.length_m / kMmToM, NumberRule::Positive()) * kMmToM;
     map->RejectUnknownKeys();
   }
@@ -78,8 +76,7 @@ BeamOrientation ParseOrientation(const std::string& name) {
 }
 
 BeamOrientation Other(BeamOrientation orientation) {
-  return orientation == BeamOrientation::kAxial ? BeamOrientation::kCircumferential
-                                                : BeamOrientation::kAxial;
+  return orientation == BeamOrientation::kAxial ? BeamOrientation::kCircumferential : BeamOrientation::kAxial;
 }
 
 // Where each unit came from in the file, so geometric checks can name the key at fault.
@@ -94,8 +91,7 @@ void ReadGrid(const YamlMap& grid, Layout* layout, std::vector<UnitSource>* sour
   const std::vector<double> arc_mm = grid.GetNumberList("arc_positions_mm", {});
   if (axial_mm.empty()) grid.Fail("axial_positions_mm", "missing required key (list of row positions)");
   if (arc_mm.empty()) grid.Fail("arc_positions_mm", "missing required key (list of column positions)");
-  const std::string pattern =
-      grid.RequireString("orientation", {"checkerboard", "axial", "circumferential"});
+  const std::string pattern = grid.RequireString("orientation", {"checkerboard", "axial", "circumferential"});
   BeamOrientation even = BeamOrientation::kAxial;
   if (pattern == "checkerboard") {
     even = ParseOrientation(grid.GetString("even_orientation", "axial", kOrientationNames));
@@ -138,9 +134,8 @@ void ReadGrid(const YamlMap& grid, Layout* layout, std::vector<UnitSource>* sour
 
 // Mesa footprint of a unit in (axial, arc) surface coordinates [m].
 std::pair<double, double> MesaExtent(const UnitGeometry& unit, BeamOrientation orientation) {
-  return orientation == BeamOrientation::kAxial
-             ? std::pair{unit.mesa_length_m, unit.mesa_width_m}
-             : std::pair{unit.mesa_width_m, unit.mesa_length_m};
+  return orientation == BeamOrientation::kAxial ? std::pair{unit.mesa_length_m, unit.mesa_width_m}
+                                                : std::pair{unit.mesa_width_m, unit.mesa_length_m};
 }
 
 Layout Load(const YamlMap& root) {
@@ -186,19 +181,17 @@ Layout Load(const YamlMap& root) {
     const UnitSource& source = sources[i];
     const auto [extent_axial_m, extent_arc_m] = MesaExtent(layout.unit, pose.orientation);
     const std::string which = "unit " + std::to_string(i) + " (row " + std::to_string(pose.row) +
-                              ", column " + std::to_string(pose.column) + ", " +
-                              ToString(pose.orientation) + ")";
+                              ", column " + std::to_string(pose.column) + ", " + ToString(pose.orientation) +
+                              ")";
     if (std::abs(pose.arc_position_m) + extent_arc_m / 2 > half_arc_m) {
-      source.map->Fail(source.arc_key,
-                       which + ": mesa at arc " + FormatMm(pose.arc_position_m) + " +- " +
-                           FormatMm(extent_arc_m / 2) + " leaves the palmar half (|arc| <= " +
-                           FormatMm(half_arc_m) + ")");
+      source.map->Fail(source.arc_key, which + ": mesa at arc " + FormatMm(pose.arc_position_m) + " +- " +
+                                           FormatMm(extent_arc_m / 2) +
+                                           " leaves the palmar half (|arc| <= " + FormatMm(half_arc_m) + ")");
     }
     if (std::abs(pose.axial_position_m) + extent_axial_m / 2 > layout.holder.length_m / 2) {
-      source.map->Fail(source.axial_key,
-                       which + ": mesa at x " + FormatMm(pose.axial_position_m) + " +- " +
-                           FormatMm(extent_axial_m / 2) + " leaves the holder (|x| <= " +
-                           FormatMm(layout.holder.length_m / 2) + ")");
+      source.map->Fail(source.axial_key, which + ": mesa at x " + FormatMm(pose.axial_position_m) + " +- " +
+                                             FormatMm(extent_axial_m / 2) + " leaves the holder (|x| <= " +
+                                             FormatMm(layout.holder.length_m / 2) + ")");
     }
     for (size_t j = 0; j < i; ++j) {
       const UnitPose& other = layout.units[j];

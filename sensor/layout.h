@@ -26,13 +26,13 @@ struct HolderGeometry {
 
 /// Dimensions of one sensing unit (paper Fig. 2), used by the model and the FEA.
 struct UnitGeometry {
-  double beam_length_m = 3e-3;     ///< along the beam axis [m]
-  double beam_width_m = 2e-3;      ///< across the beam axis [m]
+  double beam_length_m = 3e-3;  ///< along the beam axis [m]
+  double beam_width_m = 2e-3;   ///< across the beam axis [m]
   double beam_thickness_m = 0.2e-3;
   double brace_height_m = 3e-3;
-  double mesa_length_m = 1.0e-3;   ///< mesa along the beam axis [m] (not in the paper; chosen)
-  double mesa_width_m = 2e-3;      ///< mesa across the beam axis [m]
-  double mesa_height_m = 0.5e-3;   ///< mesa thickness above the beam [m]
+  double mesa_length_m = 1.0e-3;  ///< mesa along the beam axis [m] (not in the paper; chosen)
+  double mesa_width_m = 2e-3;     ///< mesa across the beam axis [m]
+  double mesa_height_m = 0.5e-3;  ///< mesa thickness above the beam [m]
 };
 
 /// Where one unit sits and how it is oriented. Vectors are unit length, holder frame.
@@ -41,7 +41,7 @@ struct UnitPose {
   int column = 0;                 ///< index around the circumference (0 = most towards -y)
   double axial_position_m = 0.0;  ///< x of the unit centre [m]
   double arc_position_m = 0.0;    ///< arc length from the palmar midline, + towards +y [m]
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< unit centre on the holder surface [m]
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();      ///< unit centre on the holder surface [m]
   Eigen::Vector3d inward_normal = Eigen::Vector3d::UnitZ();  ///< into the holder; +Fn pushes along it
   Eigen::Vector3d beam_axis = Eigen::Vector3d::UnitX();      ///< +Ft direction, tangent to the surface
   BeamOrientation orientation = BeamOrientation::kAxial;
@@ -69,8 +69,8 @@ Layout LoadLayoutFromString(const std::string& text, const std::string& source_n
 /// A point on the holder's elliptic surface with its local frame, holder frame.
 struct HolderSurfacePoint {
   double angle_rad = 0.0;  ///< ellipse parameter t: (y, z) = (a sin t, -b cos t); 0 on the palmar midline
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();      ///< on the surface [m]
-  Eigen::Vector3d inward_normal = Eigen::Vector3d::UnitZ();  ///< unit, perpendicular to the surface
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();                ///< on the surface [m]
+  Eigen::Vector3d inward_normal = Eigen::Vector3d::UnitZ();            ///< unit, perpendicular to the surface
   Eigen::Vector3d circumferential_tangent = Eigen::Vector3d::UnitY();  ///< unit, towards +y at the midline
 };
 

@@ -25,10 +25,10 @@ enum FrameFlag : uint8_t {
 
 /// One sample of all units. Values are what the ADC reports, never ground truth.
 struct RawFrame {
-  uint32_t sequence = 0;         ///< +1 per frame from the source, wraps at 2^16 on the wire
-  double time_s = 0.0;           ///< sample time on the source's clock [s]
-  int unit_count = 0;            ///< number of valid entries in r1_ohm/r2_ohm
-  uint8_t flags = 0;             ///< FrameFlag bits
+  uint32_t sequence = 0;                   ///< +1 per frame from the source, wraps at 2^16 on the wire
+  double time_s = 0.0;                     ///< sample time on the source's clock [s]
+  int unit_count = 0;                      ///< number of valid entries in r1_ohm/r2_ohm
+  uint8_t flags = 0;                       ///< FrameFlag bits
   std::array<double, kMaxUnits> r1_ohm{};  ///< R1 per unit in layout order [Ohm]; inf = open, 0 = short
   std::array<double, kMaxUnits> r2_ohm{};  ///< R2 per unit in layout order [Ohm]; inf = open, 0 = short
 };

@@ -22,12 +22,18 @@ void Require(bool ok, const char* field, double value, const char* reason) {
 // Severity order when two channels disagree: the more specific hardware fault wins.
 int Severity(UnitValidity validity) {
   switch (validity) {
-    case UnitValidity::kOpen: return 5;
-    case UnitValidity::kShort: return 4;
-    case UnitValidity::kNotTared: return 3;
-    case UnitValidity::kImplausible: return 2;
-    case UnitValidity::kOutOfRange: return 1;
-    case UnitValidity::kValid: return 0;
+    case UnitValidity::kOpen:
+      return 5;
+    case UnitValidity::kShort:
+      return 4;
+    case UnitValidity::kNotTared:
+      return 3;
+    case UnitValidity::kImplausible:
+      return 2;
+    case UnitValidity::kOutOfRange:
+      return 1;
+    case UnitValidity::kValid:
+      return 0;
   }
   return 0;
 }
@@ -54,7 +60,8 @@ void ReadoutConfig::Validate() const {
           "must be > 0");
   Require(adc_full_scale_ohm >= 0.0 && std::isfinite(adc_full_scale_ohm), "adc_full_scale_ohm",
           adc_full_scale_ohm, "must be >= 0 (0 = unknown)");
-  Require(adc_min_ohm >= 0.0 && std::isfinite(adc_min_ohm), "adc_min_ohm", adc_min_ohm, "must be >= 0 (0 = none)");
+  Require(adc_min_ohm >= 0.0 && std::isfinite(adc_min_ohm), "adc_min_ohm", adc_min_ohm,
+          "must be >= 0 (0 = none)");
   Require(adc_full_scale_ohm == 0.0 || adc_min_ohm < adc_full_scale_ohm, "adc_min_ohm", adc_min_ohm,
           "must be < adc_full_scale_ohm");
 }
@@ -63,20 +70,24 @@ ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig&
   ReadoutConfig config = defaults;
   const ReadoutConfig& d = defaults;
   config.baseline_frames = map.GetInt("baseline_frames", d.baseline_frames, 1, 1000000);
-  config.short_circuit_ohm = map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::Between(0.0, 1e6));
+  config.short_circuit_ohm =
+      map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::Between(0.0, 1e6));
   config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", d.open_circuit_ohm, {0.0, 1e9, true});
   config.min_plausible_fraction =
       map.GetNumber("min_plausible_fraction", d.min_plausible_fraction, NumberRule::Between(0.0, 0.999));
-  config.max_plausible_fraction = map.GetNumber("max_plausible_fraction", d.max_plausible_fraction,
-                                                {1.0, 1000.0, true});
-  config.max_baseline_deviation_fraction = map.GetNumber(
-      "max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, {0.0, 100.0, true});
-  config.min_mean_dr_rel = map.GetNumber("min_mean_dr_rel", d.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
+  config.max_plausible_fraction =
+      map.GetNumber("max_plausible_fraction", d.max_plausible_fraction, {1.0, 1000.0, true});
+  config.max_baseline_deviation_fraction =
+      map.GetNumber("max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, {0.0, 100.0, true});
+  config.min_mean_dr_rel =
+      map.GetNumber("min_mean_dr_rel", d.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
   config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", d.max_abs_dr_rel, {0.0, 1000.0, true});
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Between(0.0, 1e8));
+  config.adc_full_scale_ohm =
+      map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Between(0.0, 1e8));
   config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::Between(0.0, 1e8));
   if (config.adc_full_scale_ohm > 0.0 && !(config.adc_min_ohm < config.adc_full_scale_ohm)) {
-    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm", "needs adc_min_ohm < adc_full_scale_ohm");
+    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm",
+             "needs adc_min_ohm < adc_full_scale_ohm");
   }
   map.RejectUnknownKeys();
   if (!(config.open_circuit_ohm > config.short_circuit_ohm)) {
@@ -111,14 +122,17 @@ void Readout::Reset() {
 }
 
 void Readout::SetBaseline(std::span<const double> r1_ohm, std::span<const double> r2_ohm) {
-  if (r1_ohm.size() != static_cast<size_t>(unit_count_) || r2_ohm.size() != static_cast<size_t>(unit_count_)) {
+  if (r1_ohm.size() != static_cast<size_t>(unit_count_) ||
+      r2_ohm.size() != static_cast<size_t>(unit_count_)) {
     throw std::invalid_argument("readout: baseline has " + std::to_string(r1_ohm.size()) + "/" +
                                 std::to_string(r2_ohm.size()) + " values for " + std::to_string(unit_count_) +
                                 " units");
   }
   for (size_t unit = 0; unit < r1_ohm.size(); ++unit) {
-    Require(r1_ohm[unit] > 0.0 && std::isfinite(r1_ohm[unit]), "baseline r1_ohm", r1_ohm[unit], "must be finite and > 0");
-    Require(r2_ohm[unit] > 0.0 && std::isfinite(r2_ohm[unit]), "baseline r2_ohm", r2_ohm[unit], "must be finite and > 0");
+    Require(r1_ohm[unit] > 0.0 && std::isfinite(r1_ohm[unit]), "baseline r1_ohm", r1_ohm[unit],
+            "must be finite and > 0");
+    Require(r2_ohm[unit] > 0.0 && std::isfinite(r2_ohm[unit]), "baseline r2_ohm", r2_ohm[unit],
+            "must be finite and > 0");
   }
   Reset();
   const double limit_ohm = config_.max_baseline_deviation_fraction * nominal_r0_ohm_;
@@ -248,9 +262,8 @@ void Readout::Process(const RawFrame& frame, ReadoutFrame* out) {
         n.xy += x * y;
       }
       const UnitValidity worst = Worse(v1, v2);
-      out->validity[unit] = worst == UnitValidity::kOpen || worst == UnitValidity::kShort
-                                ? worst
-                                : UnitValidity::kNotTared;
+      out->validity[unit] =
+          worst == UnitValidity::kOpen || worst == UnitValidity::kShort ? worst : UnitValidity::kNotTared;
       out->dr1_rel[unit] = 0.0;
       out->dr2_rel[unit] = 0.0;
     }

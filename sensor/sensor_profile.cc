@@ -13,12 +13,12 @@ constexpr double kBoltzmannJ_K = 1.380649e-23;
 // The gauge behind every realistic chain; docs/sensor.md gives the source of each number.
 GaugeNonIdeal RealGauge() {
   GaugeNonIdeal gauge;
-  gauge.r0_spread_fraction = 0.02;             // silicon gauges from one lot, +-6 % at 3 sigma
-  gauge.sensitivity_spread_fraction = 0.05;    // beam thickness +-5 um (strain ~ 1/t^2) and G spread
+  gauge.r0_spread_fraction = 0.02;               // silicon gauges from one lot, +-6 % at 3 sigma
+  gauge.sensitivity_spread_fraction = 0.05;      // beam thickness +-5 um (strain ~ 1/t^2) and G spread
   gauge.temperature_coefficient_per_k = 1.5e-3;  // p-type silicon piezoresistor, ~1e19 /cm^3
-  gauge.temperature_ramp_k_per_s = 0.01;       // fingertip warming 0.6 K/min after the tare
-  gauge.cross_talk_shear_fraction = 0.035;     // gauge bonded by hand, +-2 deg: sin 2 deg
-  gauge.cross_talk_offset_per_mm = 0.0;        // not derived (needs the FEA's off-centre case)
+  gauge.temperature_ramp_k_per_s = 0.01;         // fingertip warming 0.6 K/min after the tare
+  gauge.cross_talk_shear_fraction = 0.035;       // gauge bonded by hand, +-2 deg: sin 2 deg
+  gauge.cross_talk_offset_per_mm = 0.0;          // not derived (needs the FEA's off-centre case)
   gauge.ambient_range_k = 10.0;
   gauge.overload_factor = 1.2;
   return gauge;
@@ -112,7 +112,8 @@ const SensorProfile& FindSensorProfile(const std::string& name) {
   throw std::invalid_argument("no sensor profile '" + name + "'; valid profiles: " + valid);
 }
 
-ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gauge, const UnitConstants& nominal) {
+ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gauge,
+                            const UnitConstants& nominal) {
   ChainDerivation d;
   const double r0 = nominal.r0_ohm;
   const double r_ref = chain.reference_fraction * r0;
@@ -129,7 +130,8 @@ ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gaug
   const double r0_low = r0 * (1.0 - 3.0 * gauge.r0_spread_fraction);
   const double thermal = std::abs(gauge.temperature_coefficient_per_k) * gauge.ambient_range_k;
   const double g = nominal.gauge_factor;
-  d.range_high_ohm = r0_high * (1.0 + thermal) * (1.0 + g * (nominal.kn_per_n + nominal.kt_per_n) * sensitivity * force_n);
+  d.range_high_ohm =
+      r0_high * (1.0 + thermal) * (1.0 + g * (nominal.kn_per_n + nominal.kt_per_n) * sensitivity * force_n);
   d.range_low_ohm =
       std::max(0.0, r0_low * (1.0 - thermal) * (1.0 - g * nominal.kt_per_n * sensitivity * force_n));
 
@@ -150,7 +152,8 @@ ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gaug
 
   const double bandwidth_hz = chain.noise_bandwidth_hz;
   d.johnson_uv_rms = 1e6 * std::sqrt(4.0 * kBoltzmannJ_K * chain.temperature_k * d.source_ohm * bandwidth_hz);
-  const double amplifier_nv = std::hypot(chain.amplifier_input_noise_nv_rthz, chain.amplifier_output_noise_nv_rthz / d.gain);
+  const double amplifier_nv =
+      std::hypot(chain.amplifier_input_noise_nv_rthz, chain.amplifier_output_noise_nv_rthz / d.gain);
   d.amplifier_uv_rms = 1e-3 * amplifier_nv * std::sqrt(bandwidth_hz);
   if (chain.adc_enob_bits > 0.0) {
     // ENOB counts quantisation too: total rms error 2^(bits - ENOB) / sqrt(12) LSB; the strain
@@ -161,8 +164,8 @@ ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gaug
   } else {
     d.adc_uv_rms = std::hypot(chain.adc_noise_floor_uv_rms, chain.adc_noise_gain1_uv_rms / d.gain);
   }
-  const double total_uv = std::sqrt(d.johnson_uv_rms * d.johnson_uv_rms + d.amplifier_uv_rms * d.amplifier_uv_rms +
-                                    d.adc_uv_rms * d.adc_uv_rms);
+  const double total_uv = std::sqrt(d.johnson_uv_rms * d.johnson_uv_rms +
+                                    d.amplifier_uv_rms * d.amplifier_uv_rms + d.adc_uv_rms * d.adc_uv_rms);
   d.noise_ohm = 1e-6 * total_uv / d.slope_v_per_ohm;
   return d;
 }

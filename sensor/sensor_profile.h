@@ -32,7 +32,7 @@ enum class ChainTopology {
 /// One readout chain, in datasheet figures. Units in the names.
 struct ReadoutChain {
   ChainTopology topology = ChainTopology::kQuarterBridge;
-  double excitation_v = 2.5;       ///< bridge/divider excitation, also the ADC reference [V]
+  double excitation_v = 2.5;  ///< bridge/divider excitation, also the ADC reference [V]
   /// Reference (completion) resistor as a fraction of the nominal R0 [-]; 1 = matched.
   double reference_fraction = 1.0;
   /// Amplifier input-referred voltage noise density eNI and output noise density eNO (referred to
@@ -42,8 +42,8 @@ struct ReadoutChain {
   /// Largest gain the amplifier or PGA offers [-]; the chain uses the largest power of two that
   /// keeps the channel's whole range (see ChainDerivation) inside the ADC span. 1 = no gain stage.
   double max_gain = 1.0;
-  int adc_bits = 16;               ///< ADC resolution [bits]
-  double adc_span_v = 5.0;         ///< ADC input span at gain 1, peak to peak [V]
+  int adc_bits = 16;        ///< ADC resolution [bits]
+  double adc_span_v = 5.0;  ///< ADC input span at gain 1, peak to peak [V]
   /// SAR-class ADC: effective number of bits (datasheet SINAD), giving its noise beyond
   /// quantisation; 0 = use the delta-sigma figures below.
   double adc_enob_bits = 0.0;
@@ -53,7 +53,7 @@ struct ReadoutChain {
   double adc_noise_gain1_uv_rms = 0.0;
   /// Equivalent noise bandwidth for the analog noise densities (anti-alias or digital filter) [Hz].
   double noise_bandwidth_hz = 500.0;
-  double temperature_k = 300.0;    ///< board temperature for the resistors' Johnson noise [K]
+  double temperature_k = 300.0;  ///< board temperature for the resistors' Johnson noise [K]
 };
 
 /// The gauge's own non-idealities (the same gauge behind every chain).
@@ -81,18 +81,18 @@ struct SensorProfile {
 
 /// What a chain works out to for given gauge constants (all at the operating point R0).
 struct ChainDerivation {
-  double slope_v_per_ohm = 0.0;     ///< d(input voltage)/dR at R0 [V/Ohm]
-  double source_ohm = 0.0;          ///< resistance the amplifier/ADC input sees (Johnson noise) [Ohm]
-  double range_low_ohm = 0.0;       ///< lowest channel resistance the window must hold [Ohm]
-  double range_high_ohm = 0.0;      ///< highest [Ohm]
-  double gain = 1.0;                ///< amplifier/PGA gain chosen [-]
-  double window_low_ohm = 0.0;      ///< where the ADC clips, low (>= 0) [Ohm]
-  double window_high_ohm = 0.0;     ///< where the ADC clips, high (<= 4 R0) [Ohm]
-  double lsb_at_r0_ohm = 0.0;       ///< one ADC step at R0, referred to the gauge [Ohm]
-  double johnson_uv_rms = 0.0;      ///< source resistance noise over the bandwidth [uV rms]
-  double amplifier_uv_rms = 0.0;    ///< amplifier noise over the bandwidth, input-referred [uV rms]
-  double adc_uv_rms = 0.0;          ///< ADC noise (beyond quantisation), input-referred [uV rms]
-  double noise_ohm = 0.0;           ///< all of it at R0, referred to the gauge (strain model noise_ohm) [Ohm]
+  double slope_v_per_ohm = 0.0;   ///< d(input voltage)/dR at R0 [V/Ohm]
+  double source_ohm = 0.0;        ///< resistance the amplifier/ADC input sees (Johnson noise) [Ohm]
+  double range_low_ohm = 0.0;     ///< lowest channel resistance the window must hold [Ohm]
+  double range_high_ohm = 0.0;    ///< highest [Ohm]
+  double gain = 1.0;              ///< amplifier/PGA gain chosen [-]
+  double window_low_ohm = 0.0;    ///< where the ADC clips, low (>= 0) [Ohm]
+  double window_high_ohm = 0.0;   ///< where the ADC clips, high (<= 4 R0) [Ohm]
+  double lsb_at_r0_ohm = 0.0;     ///< one ADC step at R0, referred to the gauge [Ohm]
+  double johnson_uv_rms = 0.0;    ///< source resistance noise over the bandwidth [uV rms]
+  double amplifier_uv_rms = 0.0;  ///< amplifier noise over the bandwidth, input-referred [uV rms]
+  double adc_uv_rms = 0.0;        ///< ADC noise (beyond quantisation), input-referred [uV rms]
+  double noise_ohm = 0.0;         ///< all of it at R0, referred to the gauge (strain model noise_ohm) [Ohm]
 };
 
 /// Names of the shipped profiles, `ideal` first.
@@ -101,7 +101,8 @@ std::vector<std::string> SensorProfileNames();
 const SensorProfile& FindSensorProfile(const std::string& name);
 
 /// Works out a chain for gauges with the `nominal` constants and the gauge non-idealities.
-ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gauge, const UnitConstants& nominal);
+ChainDerivation DeriveChain(const ReadoutChain& chain, const GaugeNonIdeal& gauge,
+                            const UnitConstants& nominal);
 
 /// The strain model settings of a profile for gauges with `nominal` constants (kept in the
 /// result). `ideal` returns the default (all effects off) config.

@@ -24,9 +24,7 @@ void Require(bool ok, const char* field, double value, const char* reason) {
   if (!ok) throw std::invalid_argument(Describe(field, value, reason));
 }
 
-double Clip(double value, double limit) {
-  return limit > 0.0 ? std::clamp(value, -limit, limit) : value;
-}
+double Clip(double value, double limit) { return limit > 0.0 ? std::clamp(value, -limit, limit) : value; }
 
 }  // namespace
 
@@ -41,8 +39,10 @@ void StrainModelConfig::Validate() const {
   Require(nominal.r0_ohm > 0.0 && std::isfinite(nominal.r0_ohm), "r0_ohm", nominal.r0_ohm, "must be > 0");
   Require(nominal.gauge_factor > 0.0 && std::isfinite(nominal.gauge_factor), "gauge_factor",
           nominal.gauge_factor, "must be > 0");
-  Require(nominal.kn_per_n > 0.0 && std::isfinite(nominal.kn_per_n), "kn_per_n", nominal.kn_per_n, "must be > 0");
-  Require(nominal.kt_per_n > 0.0 && std::isfinite(nominal.kt_per_n), "kt_per_n", nominal.kt_per_n, "must be > 0");
+  Require(nominal.kn_per_n > 0.0 && std::isfinite(nominal.kn_per_n), "kn_per_n", nominal.kn_per_n,
+          "must be > 0");
+  Require(nominal.kt_per_n > 0.0 && std::isfinite(nominal.kt_per_n), "kt_per_n", nominal.kt_per_n,
+          "must be > 0");
   Require(nominal.rated_force_n > 0.0 && std::isfinite(nominal.rated_force_n), "rated_force_n",
           nominal.rated_force_n, "must be > 0");
   Require(r0_spread_fraction >= 0.0 && r0_spread_fraction <= 0.3, "r0_spread_fraction", r0_spread_fraction,
@@ -57,7 +57,8 @@ void StrainModelConfig::Validate() const {
           "must be >= 0 and < adc_full_scale_ohm");
   Require(std::isfinite(temperature_coefficient_per_k) && std::abs(temperature_coefficient_per_k) < 0.1,
           "temperature_coefficient_per_k", temperature_coefficient_per_k, "must be in (-0.1, 0.1)");
-  Require(std::isfinite(temperature_offset_k), "temperature_offset_k", temperature_offset_k, "must be finite");
+  Require(std::isfinite(temperature_offset_k), "temperature_offset_k", temperature_offset_k,
+          "must be finite");
   Require(std::isfinite(temperature_ramp_k_per_s), "temperature_ramp_k_per_s", temperature_ramp_k_per_s,
           "must be finite");
   Require(saturation_force_n >= 0.0 && std::isfinite(saturation_force_n), "saturation_force_n",
@@ -84,9 +85,10 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
   nominal.kn_per_n = map.GetNumber("kn_per_n", d.nominal.kn_per_n, {0.0, 1.0, true});
   nominal.kt_per_n = map.GetNumber("kt_per_n", d.nominal.kt_per_n, {0.0, 1.0, true});
   nominal.rated_force_n = map.GetNumber("rated_force_n", d.nominal.rated_force_n, {0.0, 1000.0, true});
-  config.r0_spread_fraction = map.GetNumber("r0_spread_fraction", d.r0_spread_fraction, NumberRule::Between(0.0, 0.3));
-  config.sensitivity_spread_fraction =
-      map.GetNumber("sensitivity_spread_fraction", d.sensitivity_spread_fraction, NumberRule::Between(0.0, 0.3));
+  config.r0_spread_fraction =
+      map.GetNumber("r0_spread_fraction", d.r0_spread_fraction, NumberRule::Between(0.0, 0.3));
+  config.sensitivity_spread_fraction = map.GetNumber(
+      "sensitivity_spread_fraction", d.sensitivity_spread_fraction, NumberRule::Between(0.0, 0.3));
   config.noise_ohm = map.GetNumber("noise_ohm", d.noise_ohm, NumberRule::Between(0.0, 1e6));
   config.adc_bits = map.GetInt("adc_bits", d.adc_bits, 0, 32);
   config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, {0.0, 1e8, true});
@@ -96,12 +98,14 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
              "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" + std::to_string(config.adc_min_ohm) +
                  " vs " + std::to_string(config.adc_full_scale_ohm) + ")");
   }
-  config.temperature_coefficient_per_k =
-      map.GetNumber("temperature_coefficient_per_k", d.temperature_coefficient_per_k, NumberRule::Between(-0.0999, 0.0999));
-  config.temperature_offset_k = map.GetNumber("temperature_offset_k", d.temperature_offset_k, NumberRule::Between(-200.0, 200.0));
+  config.temperature_coefficient_per_k = map.GetNumber(
+      "temperature_coefficient_per_k", d.temperature_coefficient_per_k, NumberRule::Between(-0.0999, 0.0999));
+  config.temperature_offset_k =
+      map.GetNumber("temperature_offset_k", d.temperature_offset_k, NumberRule::Between(-200.0, 200.0));
   config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", d.temperature_ramp_k_per_s,
-                    NumberRule::Between(-100.0, 100.0));
-  config.saturation_force_n = map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::Between(0.0, 1000.0));
+                                                  NumberRule::Between(-100.0, 100.0));
+  config.saturation_force_n =
+      map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::Between(0.0, 1000.0));
   config.cross_talk_shear_fraction =
       map.GetNumber("cross_talk_shear_fraction", d.cross_talk_shear_fraction, NumberRule::Between(-1, 1));
   config.cross_talk_offset_per_mm =
@@ -138,7 +142,8 @@ StrainModel::StrainModel(const Layout& layout, const StrainModelConfig& config, 
   }
   // Codes 0 .. 2^bits - 1 span min .. full scale; the top code also means "at or above full scale".
   adc_max_code_ = std::ldexp(1.0, config_.adc_bits) - 1.0;
-  adc_lsb_ohm_ = config_.adc_bits > 0 ? (config_.adc_full_scale_ohm - config_.adc_min_ohm) / adc_max_code_ : 0.0;
+  adc_lsb_ohm_ =
+      config_.adc_bits > 0 ? (config_.adc_full_scale_ohm - config_.adc_min_ohm) / adc_max_code_ : 0.0;
   const size_t count = static_cast<size_t>(unit_count_);
   r0_r1_.resize(count);
   r0_r2_.resize(count);

@@ -16,9 +16,9 @@ namespace graspbed::sensor {
 
 /// Load on one unit's mesa, resolved in the unit frame.
 struct UnitLoad {
-  double fn_n = 0.0;            ///< normal force along the inward normal, + pressing in [N]
-  double ft_n = 0.0;            ///< shear along the beam axis [N]
-  double cross_shear_n = 0.0;   ///< shear across the beam axis (normal x beam) [N]
+  double fn_n = 0.0;                 ///< normal force along the inward normal, + pressing in [N]
+  double ft_n = 0.0;                 ///< shear along the beam axis [N]
+  double cross_shear_n = 0.0;        ///< shear across the beam axis (normal x beam) [N]
   double offset_along_beam_m = 0.0;  ///< where the normal load acts, from the mesa centre [m]
 };
 

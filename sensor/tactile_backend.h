@@ -19,13 +19,13 @@ enum class ReadStatus {
 
 /// Fault and traffic counters every backend keeps; reported at the end of a run.
 struct BackendCounters {
-  uint64_t frames = 0;          ///< frames delivered
-  uint64_t corrupt = 0;         ///< packets dropped for CRC, COBS or length errors
-  uint64_t dropped = 0;         ///< frames missing from the sequence (gaps)
-  uint64_t unknown_packets = 0; ///< packets of an unknown type, ignored
-  uint64_t reconnects = 0;      ///< times the link was re-established
-  uint64_t stale_periods = 0;   ///< times the stream went stale
-  uint64_t sessions = 0;        ///< device sessions (a reboot starts a new one; readout re-tares)
+  uint64_t frames = 0;           ///< frames delivered
+  uint64_t corrupt = 0;          ///< packets dropped for CRC, COBS or length errors
+  uint64_t dropped = 0;          ///< frames missing from the sequence (gaps)
+  uint64_t unknown_packets = 0;  ///< packets of an unknown type, ignored
+  uint64_t reconnects = 0;       ///< times the link was re-established
+  uint64_t stale_periods = 0;    ///< times the stream went stale
+  uint64_t sessions = 0;         ///< device sessions (a reboot starts a new one; readout re-tares)
 };
 
 /// A source of RawFrames. Owners of devices: not copyable, not movable.

@@ -22,12 +22,18 @@ enum class UnitValidity : uint8_t {
 /// the controller API, which plugins compile against without linking graspbed.
 inline const char* ToString(UnitValidity validity) {
   switch (validity) {
-    case UnitValidity::kValid: return "valid";
-    case UnitValidity::kOpen: return "open";
-    case UnitValidity::kShort: return "short";
-    case UnitValidity::kOutOfRange: return "out_of_range";
-    case UnitValidity::kImplausible: return "implausible";
-    case UnitValidity::kNotTared: return "not_tared";
+    case UnitValidity::kValid:
+      return "valid";
+    case UnitValidity::kOpen:
+      return "open";
+    case UnitValidity::kShort:
+      return "short";
+    case UnitValidity::kOutOfRange:
+      return "out_of_range";
+    case UnitValidity::kImplausible:
+      return "implausible";
+    case UnitValidity::kNotTared:
+      return "not_tared";
   }
   return "unknown";
 }
@@ -37,12 +43,13 @@ struct TactileState {
   uint32_t sequence = 0;  ///< sequence number of the RawFrame this came from
   double time_s = 0.0;    ///< sample time of that frame [s]
   int unit_count = 0;
-  bool stale = false;     ///< true when no new frame arrived within the stale timeout
-  std::array<double, kMaxUnits> fn_n{};  ///< normal force per unit, + pressing into the holder [N], unit frame
+  bool stale = false;  ///< true when no new frame arrived within the stale timeout
+  std::array<double, kMaxUnits>
+      fn_n{};  ///< normal force per unit, + pressing into the holder [N], unit frame
   std::array<double, kMaxUnits> ft_n{};  ///< shear per unit along its beam axis [N], unit frame
   std::array<UnitValidity, kMaxUnits> validity{};
-  int valid_count = 0;                   ///< units with validity == kValid
-  double total_fn_n = 0.0;               ///< sum of fn over valid units [N]
+  int valid_count = 0;      ///< units with validity == kValid
+  double total_fn_n = 0.0;  ///< sum of fn over valid units [N]
   /// Sum of ft over valid units whose beam runs along the holder axis [N], holder frame (+x distal).
   double total_shear_axial_n = 0.0;
   /// Sum of ft over valid units whose beam runs around the circumference [N] (+ towards holder +y).

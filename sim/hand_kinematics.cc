@@ -35,15 +35,20 @@ double Bisect(const std::function<double(double)>& f, double target, double lo, 
 }  // namespace
 
 ProstheticKinematics::ProstheticKinematics(const FingerConfig& finger, const ThumbConfig& thumb,
-                                           double holder_length_m, double holder_half_depth_m, double mesa_height_m)
-    : finger_(finger), thumb_(thumb), holder_length_m_(holder_length_m),
+                                           double holder_length_m, double holder_half_depth_m,
+                                           double mesa_height_m)
+    : finger_(finger),
+      thumb_(thumb),
+      holder_length_m_(holder_length_m),
       pad_depth_m_(holder_half_depth_m + mesa_height_m) {
   // Nominal pinch: the distal phalanx points straight down, so the pad meets a vertical face squarely.
   const double ratio = 1.0 + finger_.pip_mcp_ratio;
-  const double mcp_nominal = (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) / ratio;
+  const double mcp_nominal =
+      (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) / ratio;
   if (!(mcp_nominal > kMcpMinRad && mcp_nominal < kMcpMaxRad)) {
     throw std::invalid_argument("hand.finger: the pad cannot meet an object squarely (MCP would need " +
-                                std::to_string(mcp_nominal) + " rad); check dip_flexion_rad, mcp_rest_angle_rad");
+                                std::to_string(mcp_nominal) +
+                                " rad); check dip_flexion_rad, mcp_rest_angle_rad");
   }
   // Place the MCP so that the square pad sits at x = -nominal/2, and the thumb base so that its tip
   // meets the object's other face at the same height.
@@ -109,7 +114,8 @@ double ProstheticKinematics::PadLeverArmM(double mcp_rad) const {
 
 double ProstheticKinematics::ThumbLeverArmM(double flexion_rad) const {
   constexpr double kStep = 1e-6;
-  return (ThumbTip(flexion_rad - kStep).point_xz.x() - ThumbTip(flexion_rad + kStep).point_xz.x()) / (2.0 * kStep);
+  return (ThumbTip(flexion_rad - kStep).point_xz.x() - ThumbTip(flexion_rad + kStep).point_xz.x()) /
+         (2.0 * kStep);
 }
 
 double ProstheticKinematics::MaxApertureM() const {

@@ -18,7 +18,7 @@ namespace graspbed::sim {
 
 /// A point of contact on a digit and the direction it faces, hand frame (x-z plane).
 struct DigitContact {
-  Eigen::Vector2d point_xz{0.0, 0.0};   ///< contact point [m], (x, z) in H
+  Eigen::Vector2d point_xz{0.0, 0.0};  ///< contact point [m], (x, z) in H
   /// Angle of the surface's outward normal from H +x, towards -z positive [rad]: 0 faces the thumb
   /// squarely (index pad), pi faces the index (thumb tip).
   double normal_angle_rad = 0.0;

@@ -20,22 +20,22 @@ constexpr double kPalmHalfHeightM = 0.015;
 constexpr double kLinkLengthM = 0.04;          // palm -> holder top
 constexpr double kLinkHalfThicknessM = 0.003;  // along the closing direction
 constexpr double kLinkHalfWidthM = 0.005;
-constexpr double kLinkSetBackM = 0.0025;       // link face behind the mesa tops
+constexpr double kLinkSetBackM = 0.0025;  // link face behind the mesa tops
 constexpr double kThumbPadHalfThicknessM = 0.004;
 constexpr double kThumbPadHalfWidthM = 0.007;
-constexpr double kStrokeMarginM = 0.002;       // digits stop this far short of touching when closed
+constexpr double kStrokeMarginM = 0.002;  // digits stop this far short of touching when closed
 
 // Shared by both hands.
-constexpr double kMesaRootDepthM = 0.2e-3;     // mesa box reaches this far into its groove
-constexpr int kHolderSegments = 48;            // polygon sides of the elliptic holder mesh
+constexpr double kMesaRootDepthM = 0.2e-3;  // mesa box reaches this far into its groove
+constexpr int kHolderSegments = 48;         // polygon sides of the elliptic holder mesh
 
 // Prosthetic hand [m]. The rounded fingertip: an ellipsoid cap on the holder's distal end.
 constexpr double kTipCapLengthM = 0.005;
-constexpr double kProximalRadiusM = 0.0055;    // proximal phalanx capsule
-constexpr double kMiddleRadiusM = 0.004;       // middle phalanx capsule
+constexpr double kProximalRadiusM = 0.0055;  // proximal phalanx capsule
+constexpr double kMiddleRadiusM = 0.004;     // middle phalanx capsule
 constexpr double kThumbProximalRadiusM = 0.0075;
-constexpr double kPalmMarginM = 0.012;         // palm box beyond the MCP and the thumb base
-constexpr double kPalmHalfWidthM = 0.012;      // palm box along H y
+constexpr double kPalmMarginM = 0.012;     // palm box beyond the MCP and the thumb base
+constexpr double kPalmHalfWidthM = 0.012;  // palm box along H y
 // Pinch height: a box or upright cylinder is pinched this far below its top, so the middle
 // phalanx passes over the object; the pad never comes closer to the table than kMinPadHeightM
 // (holder half length + tip cap + 3 mm).
@@ -114,8 +114,9 @@ void WriteHolderGeoms(Writer& w, const sensor::Layout& layout, const std::string
     << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
   if (tip_cap) {
     o << indent << "<geom name=\"fingertip_cap\" type=\"ellipsoid\" size=\""
-      << w.Vec(kTipCapLengthM, 0.5 * layout.holder.major_axis_m, 0.5 * layout.holder.minor_axis_m) << "\" pos=\""
-      << w.Vec(0.5 * layout.holder.length_m, 0, 0) << "\" mass=\"0.001\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+      << w.Vec(kTipCapLengthM, 0.5 * layout.holder.major_axis_m, 0.5 * layout.holder.minor_axis_m)
+      << "\" pos=\"" << w.Vec(0.5 * layout.holder.length_m, 0, 0)
+      << "\" mass=\"0.001\" rgba=\"0.85 0.82 0.75 1\"/>\n";
   }
   // Mesas: boxes in the holder frame; local x = beam axis, local z = outward normal; the top face is
   // mesa_height above the surface point, the root sits a little inside the groove.
@@ -127,16 +128,19 @@ void WriteHolderGeoms(Writer& w, const sensor::Layout& layout, const std::string
     const Eigen::Vector3d cross = outward.cross(beam);
     const Eigen::Vector3d center = unit.position_m + outward * (layout.unit.mesa_height_m - 0.5 * mesa_total);
     o << indent << "<geom name=\"unit_" << i << "\" type=\"box\" size=\""
-      << w.Vec(0.5 * layout.unit.mesa_length_m, 0.5 * layout.unit.mesa_width_m, 0.5 * mesa_total) << "\" pos=\""
-      << w.Vec(center) << "\" xyaxes=\"" << w.Vec(beam) << " " << w.Vec(cross) << "\" mass=\"0.0001\""
-      << " rgba=\"" << (unit.orientation == sensor::BeamOrientation::kAxial ? "0.85 0.2 0.2 1" : "0.2 0.35 0.85 1")
+      << w.Vec(0.5 * layout.unit.mesa_length_m, 0.5 * layout.unit.mesa_width_m, 0.5 * mesa_total)
+      << "\" pos=\"" << w.Vec(center) << "\" xyaxes=\"" << w.Vec(beam) << " " << w.Vec(cross)
+      << "\" mass=\"0.0001\""
+      << " rgba=\""
+      << (unit.orientation == sensor::BeamOrientation::kAxial ? "0.85 0.2 0.2 1" : "0.2 0.35 0.85 1")
       << "\"/>\n";
   }
   o << indent << "<site name=\"finger_pad\" pos=\"" << w.Vec(0, 0, -MesaTopOffset(layout))
     << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
 }
 
-void WriteJawHand(Writer& w, const sensor::Layout& layout, const SceneConfig& scene, const HandPlacement& place) {
+void WriteJawHand(Writer& w, const sensor::Layout& layout, const SceneConfig& scene,
+                  const HandPlacement& place) {
   std::ostringstream& o = w.out();
   const HandConfig& hand = scene.hand;
   const JawGeometry g = ComputeJawGeometry(layout, place.open_gap_m);
@@ -155,8 +159,8 @@ void WriteJawHand(Writer& w, const sensor::Layout& layout, const SceneConfig& sc
   const double digit_tip_mass = 0.5 * hand.digit_mass_kg;
   o << "        <body name=\"finger\" pos=\"" << w.Vec(g.finger_open_x_m, 0, 0) << "\">\n";
   o << "          <joint name=\"finger_slide\" type=\"slide\" axis=\"1 0 0\" limited=\"true\" range=\"0 "
-    << w.Num(g.stroke_m) << "\" armature=\"" << w.Num(hand.motor.armature_kg) << "\" damping=\"" << w.Num(digit_damping)
-    << "\"/>\n";
+    << w.Num(g.stroke_m) << "\" armature=\"" << w.Num(hand.motor.armature_kg) << "\" damping=\""
+    << w.Num(digit_damping) << "\"/>\n";
   const double link_center_z = -kPalmHalfHeightM - 0.5 * kLinkLengthM;
   const double link_center_x = g.mesa_top_offset_m - kLinkSetBackM - kLinkHalfThicknessM;
   o << "          <geom name=\"finger_link\" type=\"box\" size=\""
@@ -172,16 +176,16 @@ void WriteJawHand(Writer& w, const sensor::Layout& layout, const SceneConfig& sc
   // Thumb: a flat pad opposite the holder, slides towards -x.
   o << "        <body name=\"thumb\" pos=\"" << w.Vec(g.thumb_pad_open_x_m, 0, 0) << "\">\n";
   o << "          <joint name=\"thumb_slide\" type=\"slide\" axis=\"-1 0 0\" limited=\"true\" range=\"0 "
-    << w.Num(g.stroke_m) << "\" armature=\"" << w.Num(hand.motor.armature_kg) << "\" damping=\"" << w.Num(digit_damping)
-    << "\"/>\n";
+    << w.Num(g.stroke_m) << "\" armature=\"" << w.Num(hand.motor.armature_kg) << "\" damping=\""
+    << w.Num(digit_damping) << "\"/>\n";
   o << "          <geom name=\"thumb_link\" type=\"box\" size=\""
     << w.Vec(kLinkHalfThicknessM, kLinkHalfWidthM, 0.5 * kLinkLengthM) << "\" pos=\""
     << w.Vec(kLinkSetBackM + kLinkHalfThicknessM, 0, link_center_z) << "\" mass=\"" << w.Num(digit_link_mass)
     << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
   o << "          <geom name=\"thumb_pad\" type=\"box\" size=\""
     << w.Vec(kThumbPadHalfThicknessM, kThumbPadHalfWidthM, half_length) << "\" pos=\""
-    << w.Vec(kThumbPadHalfThicknessM, 0, -g.holder_center_below_wrist_m) << "\" mass=\"" << w.Num(digit_tip_mass)
-    << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+    << w.Vec(kThumbPadHalfThicknessM, 0, -g.holder_center_below_wrist_m) << "\" mass=\""
+    << w.Num(digit_tip_mass) << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
   o << "          <site name=\"thumb_pad\" pos=\"" << w.Vec(0, 0, -g.holder_center_below_wrist_m)
     << "\" size=\"0.001\" rgba=\"1 1 0 0.5\"/>\n";
   o << "        </body>\n";
@@ -195,7 +199,8 @@ void WriteJawTransmission(Writer& w, const SceneConfig& scene) {
   o << "  <tendon>\n    <fixed name=\"grip\">\n      <joint joint=\"finger_slide\" coef=\"1\"/>\n"
     << "      <joint joint=\"thumb_slide\" coef=\"1\"/>\n    </fixed>\n  </tendon>\n";
   o << "  <equality>\n";
-  o << "    <joint name=\"digit_coupling\" joint1=\"thumb_slide\" joint2=\"finger_slide\" polycoef=\"0 1 0 0 0\""
+  o << "    <joint name=\"digit_coupling\" joint1=\"thumb_slide\" joint2=\"finger_slide\" polycoef=\"0 1 0 0 "
+       "0\""
     << " solref=\"0.002 1\"/>\n";
   o << "    <joint name=\"grip_brake\" joint1=\"finger_slide\" polycoef=\"0 0 0 0 0\" active=\"false\""
     << " solref=\"0.002 1\"/>\n";
@@ -204,7 +209,8 @@ void WriteJawTransmission(Writer& w, const SceneConfig& scene) {
   const double stall = scene.hand.motor.stall_force_n;
   o << "  <actuator>\n";
   o << "    <general name=\"grip_motor\" tendon=\"grip\" ctrllimited=\"true\" ctrlrange=\"-1 1\" gainprm=\""
-    << w.Num(stall) << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall) << "\"/>\n";
+    << w.Num(stall) << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall)
+    << "\"/>\n";
 }
 
 // xyaxes of a phalanx frame whose local x (towards the tip) points along (dx, 0, dz) of its parent
@@ -245,28 +251,28 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   const double index_damping = motor.damping_n_m_s + place.stall_effort[0] / place.no_load_speed[0];
   const double thumb_damping = motor.damping_n_m_s + place.stall_effort[1] / place.no_load_speed[1];
   const double pip0 = finger.pip_mcp_ratio * mcp0;
-  o << "        <body name=\"finger\" pos=\"" << w.Vec(kin.mcp_xz().x(), 0, kin.mcp_xz().y()) << "\" xyaxes=\""
-    << IndexAxes(w, finger.mcp_rest_angle_rad + mcp0) << "\">\n";
+  o << "        <body name=\"finger\" pos=\"" << w.Vec(kin.mcp_xz().x(), 0, kin.mcp_xz().y())
+    << "\" xyaxes=\"" << IndexAxes(w, finger.mcp_rest_angle_rad + mcp0) << "\">\n";
   o << "          <joint name=\"index_mcp\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(mcp0)
     << "\" limited=\"true\" range=\"" << w.Num(ProstheticKinematics::kMcpMinRad) << " "
-    << w.Num(ProstheticKinematics::kMcpMaxRad) << "\" armature=\"" << w.Num(motor.armature_kg_m2) << "\" damping=\""
-    << w.Num(index_damping) << "\"/>\n";
-  o << "          <geom name=\"finger_proximal\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(finger.proximal_length_m)
-    << " 0 0\" size=\"" << w.Num(kProximalRadiusM) << "\" mass=\"" << w.Num(proximal_mass)
-    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
-  o << "          <body name=\"finger_middle\" pos=\"" << w.Vec(finger.proximal_length_m, 0, 0) << "\" quat=\""
-    << w.AxisAngle(0, 1, 0, pip0) << "\">\n";
+    << w.Num(ProstheticKinematics::kMcpMaxRad) << "\" armature=\"" << w.Num(motor.armature_kg_m2)
+    << "\" damping=\"" << w.Num(index_damping) << "\"/>\n";
+  o << "          <geom name=\"finger_proximal\" type=\"capsule\" fromto=\"0 0 0 "
+    << w.Num(finger.proximal_length_m) << " 0 0\" size=\"" << w.Num(kProximalRadiusM) << "\" mass=\""
+    << w.Num(proximal_mass) << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "          <body name=\"finger_middle\" pos=\"" << w.Vec(finger.proximal_length_m, 0, 0)
+    << "\" quat=\"" << w.AxisAngle(0, 1, 0, pip0) << "\">\n";
   o << "            <joint name=\"index_pip\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(pip0)
     << "\" damping=\"" << w.Num(motor.damping_n_m_s) << "\"/>\n";
-  o << "            <geom name=\"finger_middle\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(finger.middle_length_m)
-    << " 0 0\" size=\"" << w.Num(kMiddleRadiusM) << "\" mass=\"" << w.Num(middle_mass)
-    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "            <geom name=\"finger_middle\" type=\"capsule\" fromto=\"0 0 0 "
+    << w.Num(finger.middle_length_m) << " 0 0\" size=\"" << w.Num(kMiddleRadiusM) << "\" mass=\""
+    << w.Num(middle_mass) << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
   // Distal phalanx = the holder, turned by the fixed DIP flexion; its frame sits at its centre.
   const double half_length = 0.5 * layout.holder.length_m;
   const double dip = finger.dip_flexion_rad;
   o << "            <body name=\"holder\" pos=\""
-    << w.Vec(finger.middle_length_m + half_length * std::cos(dip), 0, -half_length * std::sin(dip)) << "\" quat=\""
-    << w.AxisAngle(0, 1, 0, dip) << "\">\n";
+    << w.Vec(finger.middle_length_m + half_length * std::cos(dip), 0, -half_length * std::sin(dip))
+    << "\" quat=\"" << w.AxisAngle(0, 1, 0, dip) << "\">\n";
   WriteHolderGeoms(w, layout, "              ", distal_mass, true);
   o << "            </body>\n";
   o << "          </body>\n";
@@ -285,14 +291,14 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
     << "\" limited=\"true\" range=\"" << w.Num(ProstheticKinematics::kThumbMinRad) << " "
     << w.Num(ProstheticKinematics::kThumbMaxRad) << "\" armature=\"" << w.Num(motor.armature_kg_m2)
     << "\" damping=\"" << w.Num(thumb_damping) << "\"/>\n";
-  o << "            <geom name=\"thumb_proximal\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(thumb.proximal_length_m)
-    << " 0 0\" size=\"" << w.Num(kThumbProximalRadiusM) << "\" mass=\"" << w.Num(0.6 * hand.digit_mass_kg)
-    << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
-  o << "            <body name=\"thumb_distal\" pos=\"" << w.Vec(thumb.proximal_length_m, 0, 0) << "\" quat=\""
-    << w.AxisAngle(0, 1, 0, thumb.ip_flexion_rad) << "\">\n";
-  o << "              <geom name=\"thumb_pad\" type=\"capsule\" fromto=\"0 0 0 " << w.Num(thumb.distal_length_m)
-    << " 0 0\" size=\"" << w.Num(thumb.tip_radius_m) << "\" mass=\"" << w.Num(0.4 * hand.digit_mass_kg)
-    << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
+  o << "            <geom name=\"thumb_proximal\" type=\"capsule\" fromto=\"0 0 0 "
+    << w.Num(thumb.proximal_length_m) << " 0 0\" size=\"" << w.Num(kThumbProximalRadiusM) << "\" mass=\""
+    << w.Num(0.6 * hand.digit_mass_kg) << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
+  o << "            <body name=\"thumb_distal\" pos=\"" << w.Vec(thumb.proximal_length_m, 0, 0)
+    << "\" quat=\"" << w.AxisAngle(0, 1, 0, thumb.ip_flexion_rad) << "\">\n";
+  o << "              <geom name=\"thumb_pad\" type=\"capsule\" fromto=\"0 0 0 "
+    << w.Num(thumb.distal_length_m) << " 0 0\" size=\"" << w.Num(thumb.tip_radius_m) << "\" mass=\""
+    << w.Num(0.4 * hand.digit_mass_kg) << "\" rgba=\"0.85 0.82 0.75 1\"/>\n";
   // The tip's face towards the index (H -x) in the nominal pinch, in the distal segment's frame.
   const double distal_nominal = 0.5 * std::numbers::pi + ProstheticKinematics::kThumbLeanRad;
   o << "              <site name=\"thumb_pad\" pos=\""
@@ -374,15 +380,17 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     // this width, and the height at which their contacts meet the object.
     const double half_width = 0.5 * place.object_width_m;
     place.contact_joint = {kin.McpForPadX(-half_width), kin.ThumbForTipX(half_width)};
-    place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m), kin.ThumbForTipX(0.5 * place.open_gap_m)};
-    const double contact_z =
-        0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() + kin.ThumbTip(place.contact_joint[1]).point_xz.y());
+    place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m),
+                            kin.ThumbForTipX(0.5 * place.open_gap_m)};
+    const double contact_z = 0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() +
+                                    kin.ThumbTip(place.contact_joint[1]).point_xz.y());
     wrist = {object.initial_position_m[0], object.initial_position_m[1], PinchHeightM(object) - contact_z};
     // Motors sized so that at stall each digit presses stall_pinch_force_n on the object in this
     // grasp's contact posture: torque = force x lever arm there.
     place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),
                          std::abs(kin.ThumbLeverArmM(place.contact_joint[1]))};
-    for (int k = 0; k < 2; ++k) place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * place.lever_arm_m[k];
+    for (int k = 0; k < 2; ++k)
+      place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * place.lever_arm_m[k];
     const double omega = hand.digit_motor.no_load_speed_rad_s;
     place.no_load_speed = {omega, omega * place.lever_arm_m[0] / place.lever_arm_m[1]};
   }
@@ -400,11 +408,12 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
   o << "hand model " << ToString(scene.hand.model) << ", grasp " << ToString(scene.hand.grasp) << ", object "
     << ToString(scene.object.shape) << " " << mm(place.object_width_m) << " mm across, pre-shape aperture "
     << mm(place.open_gap_m) << " mm\n";
-  o << "wrist start (world) [mm]: " << mm(place.wrist_position_m[0]) << " " << mm(place.wrist_position_m[1]) << " "
-    << mm(place.wrist_position_m[2]) << "\n";
+  o << "wrist start (world) [mm]: " << mm(place.wrist_position_m[0]) << " " << mm(place.wrist_position_m[1])
+    << " " << mm(place.wrist_position_m[2]) << "\n";
   if (scene.hand.model == HandModel::kJaw) {
     o << "jaw: each digit travels " << mm(place.contact_joint[0]) << " mm to the object; stall force "
-      << scene.hand.motor.stall_force_n << " N; no-load gap speed " << scene.hand.motor.no_load_speed_m_s << " m/s\n";
+      << scene.hand.motor.stall_force_n << " N; no-load gap speed " << scene.hand.motor.no_load_speed_m_s
+      << " m/s\n";
     return o.str();
   }
   const ProstheticKinematics kin = MakeKinematics(layout, scene);
@@ -414,27 +423,29 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
     << mm(-ProstheticKinematics::kPalmDepthM) << " mm\n";
   o << "index: MCP at x " << mm(kin.mcp_xz().x()) << " z " << mm(kin.mcp_xz().y()) << " mm; proximal "
     << mm(f.proximal_length_m) << " mm, middle " << mm(f.middle_length_m) << " mm, distal = holder "
-    << mm(layout.holder.length_m) << " mm + " << mm(kTipCapLengthM) << " mm rounded tip; PIP = " << f.pip_mcp_ratio
-    << " x MCP; DIP fixed at " << deg(f.dip_flexion_rad) << " deg; proximal " << deg(f.mcp_rest_angle_rad)
-    << " deg below the palm at MCP 0; MCP range " << deg(ProstheticKinematics::kMcpMinRad) << " .. "
-    << deg(ProstheticKinematics::kMcpMaxRad) << " deg\n";
-  o << "thumb: base at x " << mm(kin.thumb_base_xz().x()) << " z " << mm(kin.thumb_base_xz().y()) << " mm; CMC-IP "
-    << mm(t.proximal_length_m) << " mm, IP-tip " << mm(t.distal_length_m) << " mm, tip radius " << mm(t.tip_radius_m)
-    << " mm, IP fixed at " << deg(t.ip_flexion_rad) << " deg; opposition " << deg(scene.ThumbOppositionRad())
-    << " deg; flexion range " << deg(ProstheticKinematics::kThumbMinRad) << " .. "
-    << deg(ProstheticKinematics::kThumbMaxRad) << " deg\n";
+    << mm(layout.holder.length_m) << " mm + " << mm(kTipCapLengthM)
+    << " mm rounded tip; PIP = " << f.pip_mcp_ratio << " x MCP; DIP fixed at " << deg(f.dip_flexion_rad)
+    << " deg; proximal " << deg(f.mcp_rest_angle_rad) << " deg below the palm at MCP 0; MCP range "
+    << deg(ProstheticKinematics::kMcpMinRad) << " .. " << deg(ProstheticKinematics::kMcpMaxRad) << " deg\n";
+  o << "thumb: base at x " << mm(kin.thumb_base_xz().x()) << " z " << mm(kin.thumb_base_xz().y())
+    << " mm; CMC-IP " << mm(t.proximal_length_m) << " mm, IP-tip " << mm(t.distal_length_m)
+    << " mm, tip radius " << mm(t.tip_radius_m) << " mm, IP fixed at " << deg(t.ip_flexion_rad)
+    << " deg; opposition " << deg(scene.ThumbOppositionRad()) << " deg; flexion range "
+    << deg(ProstheticKinematics::kThumbMinRad) << " .. " << deg(ProstheticKinematics::kThumbMaxRad)
+    << " deg\n";
   const double mcp_square =
       (0.5 * std::numbers::pi - f.dip_flexion_rad - f.mcp_rest_angle_rad) / (1.0 + f.pip_mcp_ratio);
-  o << "nominal pinch: " << mm(ProstheticKinematics::kNominalWidthM) << " mm, pad square to the object at MCP "
-    << deg(mcp_square) << " deg\n";
+  o << "nominal pinch: " << mm(ProstheticKinematics::kNominalWidthM)
+    << " mm, pad square to the object at MCP " << deg(mcp_square) << " deg\n";
   o << "                     MCP [deg]  thumb [deg]  pad tilt [deg]\n";
   o << "pre-shape            " << std::setw(9) << deg(place.preshape_joint[0]) << "  " << std::setw(11)
-    << deg(place.preshape_joint[1]) << "  " << std::setw(14) << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad)
-    << "\n";
+    << deg(place.preshape_joint[1]) << "  " << std::setw(14)
+    << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad) << "\n";
   o << "contact              " << std::setw(9) << deg(place.contact_joint[0]) << "  " << std::setw(11)
-    << deg(place.contact_joint[1]) << "  " << std::setw(14) << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad)
-    << "\n";
-  o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm, thumb " << mm(place.lever_arm_m[1]) << " mm\n";
+    << deg(place.contact_joint[1]) << "  " << std::setw(14)
+    << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad) << "\n";
+  o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm, thumb " << mm(place.lever_arm_m[1])
+    << " mm\n";
   o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
     << " N m (thumb) = " << scene.hand.digit_motor.stall_pinch_force_n << " N pinch; no-load "
     << place.no_load_speed[0] << " rad/s (index), " << place.no_load_speed[1] << " rad/s (thumb)\n";
@@ -460,13 +471,14 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   Writer w;
   std::ostringstream& o = w.out();
   o << "<!-- graspbed scene, generated by `graspbed model` from layout '" << layout.name << "', "
-    << ToString(hand.model) << " hand, " << ToString(hand.grasp) << " pre-shape. Do not edit: regenerate. -->\n";
+    << ToString(hand.model) << " hand, " << ToString(hand.grasp)
+    << " pre-shape. Do not edit: regenerate. -->\n";
   o << "<mujoco model=\"graspbed_" << layout.name << "\">\n";
   o << "  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n";
-  o << "  <option timestep=\"" << w.Num(physics.timestep_s) << "\" gravity=\"0 0 " << w.Num(-physics.gravity_m_s2)
-    << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal") << "\" impratio=\""
-    << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations << "\" iterations=\""
-    << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
+  o << "  <option timestep=\"" << w.Num(physics.timestep_s) << "\" gravity=\"0 0 "
+    << w.Num(-physics.gravity_m_s2) << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal")
+    << "\" impratio=\"" << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations
+    << "\" iterations=\"" << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
     << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
   // Sized for a pinch on all mesas (a few hundred constraint rows) with margin; MuJoCo 2.x allocates
   // njmax^2 doubles for the solver, so njmax 4000 would cost 128 MB per run for nothing.
@@ -474,9 +486,9 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
   o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
-    << "\" solimp=\"" << w.Num(object.solimp[0]) << " " << w.Num(object.solimp[1]) << " " << w.Num(object.solimp[2])
-    << " " << w.Num(object.solimp[3]) << " " << w.Num(object.solimp[4]) << "\" friction=\"" << w.Num(hand.friction)
-    << " 0.005 0.0001\"/>\n";
+    << "\" solimp=\"" << w.Num(object.solimp[0]) << " " << w.Num(object.solimp[1]) << " "
+    << w.Num(object.solimp[2]) << " " << w.Num(object.solimp[3]) << " " << w.Num(object.solimp[4])
+    << "\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
   // Prosthetic hand geoms (class "hand"): contype 2 / conaffinity 1 touch the object and the table
   // (contype 1 / conaffinity 3) but never each other: the linkage, not contact, keeps the digits
   // apart, and every pair the collision check skips is time saved.
@@ -498,7 +510,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
   if (physics.table) {
     o << "    <body name=\"table\">\n";
-    o << "      <geom name=\"table_geom\" type=\"box\" size=\"0.3 0.3 0.02\" pos=\"0 0 -0.02\" rgba=\"0.55 0.45 0.35 1\""
+    o << "      <geom name=\"table_geom\" type=\"box\" size=\"0.3 0.3 0.02\" pos=\"0 0 -0.02\" rgba=\"0.55 "
+         "0.45 0.35 1\""
       << " contype=\"1\" conaffinity=\"3\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
     o << "    </body>\n";
   }
@@ -521,8 +534,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   // The object: a free body whose geom has contact priority, so its friction and compliance govern.
   const double yaw = object.initial_yaw_rad;
   o << "    <body name=\"object\" pos=\""
-    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], ObjectCentreZ(object)) << "\" quat=\""
-    << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
+    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], ObjectCentreZ(object))
+    << "\" quat=\"" << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
   o << "      <freejoint name=\"object_free\"/>\n";
   o << "      <geom name=\"object_geom\" ";
   switch (object.shape) {
@@ -531,14 +544,15 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
         << w.Vec(0.5 * object.size_m[0], 0.5 * object.size_m[1], 0.5 * object.size_m[2]) << "\"";
       break;
     case ObjectShape::kCylinder:
-      o << "type=\"cylinder\" size=\"" << w.Num(0.5 * object.size_m[0]) << " " << w.Num(0.5 * object.size_m[2]) << "\"";
+      o << "type=\"cylinder\" size=\"" << w.Num(0.5 * object.size_m[0]) << " "
+        << w.Num(0.5 * object.size_m[2]) << "\"";
       break;
     case ObjectShape::kSphere:
       o << "type=\"sphere\" size=\"" << w.Num(0.5 * object.size_m[0]) << "\"";
       break;
   }
-  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim << "\" friction=\""
-    << w.Num(object.friction) << " " << w.Num(object.torsional_friction)
+  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim
+    << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction)
     << " 0.0001\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   o << "    </body>\n";
   o << "  </worldbody>\n";

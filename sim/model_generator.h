@@ -34,8 +34,8 @@ struct HandPlacement {
   /// thumb flexion [rad]; jaw: finger and thumb slide [m]).
   std::array<double, 2> preshape_joint{};
   std::array<double, 2> contact_joint{};
-  double open_gap_m = 0.0;       ///< pre-shape aperture between pad and thumb [m]
-  double object_width_m = 0.0;   ///< object extent across the grasp [m]
+  double open_gap_m = 0.0;      ///< pre-shape aperture between pad and thumb [m]
+  double object_width_m = 0.0;  ///< object extent across the grasp [m]
   /// Stall torque (prosthetic) [N m] or force (jaw) [N] per grip motor.
   std::array<double, 2> stall_effort{};
   /// Pad and thumb lever arms at contact (prosthetic) [m]; 1 for the jaw.

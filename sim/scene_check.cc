@@ -41,9 +41,9 @@ std::string GeomName(const mjModel* m, int geom) {
 std::string Describe(const mjModel* m, const char* what, const Overlap& overlap) {
   char depth[32];
   std::snprintf(depth, sizeof(depth), "%.2f", overlap.depth_m * 1e3);
-  return std::string("scene: ") + what + " by " + depth + " mm at the start (geoms " + GeomName(m, overlap.geom1) +
-         " and " + GeomName(m, overlap.geom2) + "; at most " + Number(kMaxInitialPenetrationM * 1e3) +
-         " mm allowed): ";
+  return std::string("scene: ") + what + " by " + depth + " mm at the start (geoms " +
+         GeomName(m, overlap.geom1) + " and " + GeomName(m, overlap.geom2) + "; at most " +
+         Number(kMaxInitialPenetrationM * 1e3) + " mm allowed): ";
 }
 
 }  // namespace
@@ -77,22 +77,25 @@ void CheckInitialPenetration(const Simulation& simulation) {
 
   const SceneConfig& scene = simulation.scene();
   const std::string size = "object.size_m = " + Triple(scene.object.size_m);
-  const std::string object_position = "object.initial_position_m = " + Triple(scene.object.initial_position_m);
+  const std::string object_position =
+      "object.initial_position_m = " + Triple(scene.object.initial_position_m);
   const std::string wrist = "hand.initial_wrist_position_m = " + Triple(scene.hand.initial_wrist_position_m);
   if (object_hand.geom1 >= 0) {
     // The pre-shape as the file gave it, or as it followed the object (open_gap_m absent = NaN).
     const std::string gap = std::isnan(scene.hand.open_gap_m)
-                                ? "auto = " + Number(scene.OpenGapM()) + " m (the object's width plus 2 x "
-                                      "hand.preshape_clearance_m = " + Number(scene.hand.preshape_clearance_m) + " m)"
+                                ? "auto = " + Number(scene.OpenGapM()) +
+                                      " m (the object's width plus 2 x "
+                                      "hand.preshape_clearance_m = " +
+                                      Number(scene.hand.preshape_clearance_m) + " m)"
                                 : Number(scene.hand.open_gap_m) + " m";
-    throw std::invalid_argument(Describe(m, "the object and the hand overlap", object_hand) + "the object (" + size +
-                                ", " + object_position + ") is not clear of the digits of the pre-shape " +
-                                "hand.open_gap_m = " + gap + " at " + wrist +
-                                "; a smaller object, a wider pre-shape or another position fixes it");
+    throw std::invalid_argument(
+        Describe(m, "the object and the hand overlap", object_hand) + "the object (" + size + ", " +
+        object_position + ") is not clear of the digits of the pre-shape " + "hand.open_gap_m = " + gap +
+        " at " + wrist + "; a smaller object, a wider pre-shape or another position fixes it");
   }
   if (object_table.geom1 >= 0) {
-    throw std::invalid_argument(Describe(m, "the object and the table overlap", object_table) + object_position +
-                                " puts the object into the table (with " + size +
+    throw std::invalid_argument(Describe(m, "the object and the table overlap", object_table) +
+                                object_position + " puts the object into the table (with " + size +
                                 "); give z < 0 to rest it on the table, or z at least its half height");
   }
   if (hand_table.geom1 >= 0) {

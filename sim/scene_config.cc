@@ -50,8 +50,8 @@ ObjectShape ParseShape(const std::string& text) {
   return ObjectShape::kSphere;  // GetString already restricted the value to the three names
 }
 
-std::array<double, 3> GetTriple(const common::YamlMap& map, std::string_view key, std::array<double, 3> fallback,
-                                common::NumberRule rule = {}) {
+std::array<double, 3> GetTriple(const common::YamlMap& map, std::string_view key,
+                                std::array<double, 3> fallback, common::NumberRule rule = {}) {
   const std::vector<double> list =
       map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3, rule);
   return {list[0], list[1], list[2]};
@@ -139,8 +139,9 @@ void SceneConfig::Validate() const {
   }
   RequireNonNegative("hand.preshape_clearance_m", hand.preshape_clearance_m);
   if (OpenGapM() <= ObjectWidthM()) {
-    Bad("hand.open_gap_m", OpenGapM(), "the pre-shape must be wider than the object (object.size_m across the grasp: " +
-                                           std::to_string(ObjectWidthM()) + " m)");
+    Bad("hand.open_gap_m", OpenGapM(),
+        "the pre-shape must be wider than the object (object.size_m across the grasp: " +
+            std::to_string(ObjectWidthM()) + " m)");
   }
   RequirePositive("hand.finger.proximal_length_m", hand.finger.proximal_length_m);
   RequirePositive("hand.finger.middle_length_m", hand.finger.middle_length_m);
@@ -189,13 +190,15 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
     ObjectConfig& o = scene.object;
     o.shape = ParseShape(object->GetString("shape", ToString(o.shape), {"box", "cylinder", "sphere"}));
     o.size_m = GetTriple(*object, "size_m", o.size_m, NumberRule::Between(0.0, kMaxObjectSizeM));
-    o.mass_kg = object->GetNumber("mass_kg", o.mass_kg, NumberRule::Between(kMinObjectMassKg, kMaxObjectMassKg));
+    o.mass_kg =
+        object->GetNumber("mass_kg", o.mass_kg, NumberRule::Between(kMinObjectMassKg, kMaxObjectMassKg));
     o.friction = object->GetNumber("friction", o.friction, {0.0, kMaxFriction, true});
-    o.torsional_friction =
-        object->GetNumber("torsional_friction", o.torsional_friction, NumberRule::Between(0.0, kMaxTorsionalFrictionM));
+    o.torsional_friction = object->GetNumber("torsional_friction", o.torsional_friction,
+                                             NumberRule::Between(0.0, kMaxTorsionalFrictionM));
     o.solref_timeconst_s =
         object->GetNumber("solref_timeconst_s", o.solref_timeconst_s, {0.0, kMaxSolrefTimeconstS, true});
-    o.solref_dampratio = object->GetNumber("solref_dampratio", o.solref_dampratio, {0.0, kMaxSolrefDampratio, true});
+    o.solref_dampratio =
+        object->GetNumber("solref_dampratio", o.solref_dampratio, {0.0, kMaxSolrefDampratio, true});
     const std::vector<double> solimp =
         object->GetNumberList("solimp", std::vector<double>(o.solimp.begin(), o.solimp.end()), 5,
                               NumberRule::Between(0.0, kMaxSolimpPower));
@@ -204,50 +207,59 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
                                      NumberRule::Between(-kMaxPositionM, kMaxPositionM));
     o.initial_yaw_rad =
         object->GetNumber("initial_yaw_rad", o.initial_yaw_rad, NumberRule::Between(-kMaxYawRad, kMaxYawRad));
-    o.crush_limit_n = object->GetNumber("crush_limit_n", o.crush_limit_n, NumberRule::Between(0.0, kMaxForceN));
+    o.crush_limit_n =
+        object->GetNumber("crush_limit_n", o.crush_limit_n, NumberRule::Between(0.0, kMaxForceN));
     object->RejectUnknownKeys();
   }
   if (auto hand = map.GetMap("hand")) {
     HandConfig& h = scene.hand;
     h.model = ParseHandModel(hand->GetString("model", ToString(h.model), {"prosthetic", "jaw"}));
     h.grasp = ParseGrasp(hand->GetString("grasp", ToString(h.grasp), {"pinch"}));
-    h.open_gap_m = hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM));
+    h.open_gap_m =
+        hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM));
     h.preshape_clearance_m =
         hand->GetNumber("preshape_clearance_m", h.preshape_clearance_m, NumberRule::Between(0.0, 0.05));
     h.palm_mass_kg =
         hand->GetNumber("palm_mass_kg", h.palm_mass_kg, NumberRule::Between(kMinPalmMassKg, kMaxPalmMassKg));
-    h.digit_mass_kg =
-        hand->GetNumber("digit_mass_kg", h.digit_mass_kg, NumberRule::Between(kMinDigitMassKg, kMaxDigitMassKg));
+    h.digit_mass_kg = hand->GetNumber("digit_mass_kg", h.digit_mass_kg,
+                                      NumberRule::Between(kMinDigitMassKg, kMaxDigitMassKg));
     h.friction = hand->GetNumber("friction", h.friction, {0.0, kMaxFriction, true});
     h.initial_wrist_position_m = GetTriple(*hand, "initial_wrist_position_m", h.initial_wrist_position_m,
                                            NumberRule::Between(-kMaxPositionM, kMaxPositionM));
     h.wrist_stiffness_n_m =
         hand->GetNumber("wrist_stiffness_n_m", h.wrist_stiffness_n_m, {0.0, kMaxWristStiffnessNM, true});
-    h.wrist_damping_n_s_m =
-        hand->GetNumber("wrist_damping_n_s_m", h.wrist_damping_n_s_m, NumberRule::Between(0.0, kMaxWristDampingNSM));
+    h.wrist_damping_n_s_m = hand->GetNumber("wrist_damping_n_s_m", h.wrist_damping_n_s_m,
+                                            NumberRule::Between(0.0, kMaxWristDampingNSM));
     if (auto motor = hand->GetMap("motor")) {
       MotorConfig& m = h.motor;
       m.stall_force_n = motor->GetNumber("stall_force_n", m.stall_force_n, {0.0, kMaxStallForceN, true});
-      m.no_load_speed_m_s = motor->GetNumber("no_load_speed_m_s", m.no_load_speed_m_s, {0.0, kMaxDigitSpeedMS, true});
-      m.armature_kg = motor->GetNumber("armature_kg", m.armature_kg, NumberRule::Between(0.0, kMaxArmatureKg));
+      m.no_load_speed_m_s =
+          motor->GetNumber("no_load_speed_m_s", m.no_load_speed_m_s, {0.0, kMaxDigitSpeedMS, true});
+      m.armature_kg =
+          motor->GetNumber("armature_kg", m.armature_kg, NumberRule::Between(0.0, kMaxArmatureKg));
       m.damping_n_s_m =
           motor->GetNumber("damping_n_s_m", m.damping_n_s_m, NumberRule::Between(0.0, kMaxMotorDampingNSM));
       motor->RejectUnknownKeys();
     }
     if (auto finger = hand->GetMap("finger")) {
       FingerConfig& f = h.finger;
-      f.proximal_length_m = finger->GetNumber("proximal_length_m", f.proximal_length_m, NumberRule::Between(0.02, 0.07));
-      f.middle_length_m = finger->GetNumber("middle_length_m", f.middle_length_m, NumberRule::Between(0.01, 0.05));
+      f.proximal_length_m =
+          finger->GetNumber("proximal_length_m", f.proximal_length_m, NumberRule::Between(0.02, 0.07));
+      f.middle_length_m =
+          finger->GetNumber("middle_length_m", f.middle_length_m, NumberRule::Between(0.01, 0.05));
       f.pip_mcp_ratio = finger->GetNumber("pip_mcp_ratio", f.pip_mcp_ratio, NumberRule::Between(0.5, 2.0));
-      f.dip_flexion_rad = finger->GetNumber("dip_flexion_rad", f.dip_flexion_rad, NumberRule::Between(0.0, 1.0));
+      f.dip_flexion_rad =
+          finger->GetNumber("dip_flexion_rad", f.dip_flexion_rad, NumberRule::Between(0.0, 1.0));
       f.mcp_rest_angle_rad =
           finger->GetNumber("mcp_rest_angle_rad", f.mcp_rest_angle_rad, NumberRule::Between(-0.6, 0.6));
       finger->RejectUnknownKeys();
     }
     if (auto thumb = hand->GetMap("thumb")) {
       ThumbConfig& t = h.thumb;
-      t.proximal_length_m = thumb->GetNumber("proximal_length_m", t.proximal_length_m, NumberRule::Between(0.02, 0.07));
-      t.distal_length_m = thumb->GetNumber("distal_length_m", t.distal_length_m, NumberRule::Between(0.01, 0.05));
+      t.proximal_length_m =
+          thumb->GetNumber("proximal_length_m", t.proximal_length_m, NumberRule::Between(0.02, 0.07));
+      t.distal_length_m =
+          thumb->GetNumber("distal_length_m", t.distal_length_m, NumberRule::Between(0.01, 0.05));
       t.tip_radius_m = thumb->GetNumber("tip_radius_m", t.tip_radius_m, NumberRule::Between(0.004, 0.015));
       t.ip_flexion_rad = thumb->GetNumber("ip_flexion_rad", t.ip_flexion_rad, NumberRule::Between(0.0, 1.2));
       t.opposition_rad = thumb->GetNumber("opposition_rad", t.opposition_rad, NumberRule::Between(-0.2, 1.7));
@@ -267,15 +279,18 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
   }
   if (auto physics = map.GetMap("physics")) {
     PhysicsConfig& p = scene.physics;
-    p.timestep_s = physics->GetNumber("timestep_s", p.timestep_s, NumberRule::Between(kMinTimestepS, kMaxTimestepS));
+    p.timestep_s =
+        physics->GetNumber("timestep_s", p.timestep_s, NumberRule::Between(kMinTimestepS, kMaxTimestepS));
     p.elliptic_cones = physics->GetBool("elliptic_cones", p.elliptic_cones);
     p.impratio = physics->GetNumber("impratio", p.impratio, NumberRule::Between(1.0, kMaxImpratio));
     p.noslip_iterations = physics->GetInt("noslip_iterations", p.noslip_iterations, 0, kMaxNoslipIterations);
     p.solver_iterations = physics->GetInt("solver_iterations", p.solver_iterations, 1, kMaxSolverIterations);
-    p.tolerance = physics->GetNumber("tolerance", p.tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance));
+    p.tolerance =
+        physics->GetNumber("tolerance", p.tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance));
     p.condim = physics->GetInt("condim", p.condim, 3, 6);
     if (p.condim == 5) physics->Fail("condim", "must be 3, 4 or 6");
-    p.gravity_m_s2 = physics->GetNumber("gravity_m_s2", p.gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2));
+    p.gravity_m_s2 =
+        physics->GetNumber("gravity_m_s2", p.gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2));
     p.table = physics->GetBool("table", p.table);
     physics->RejectUnknownKeys();
   }

@@ -19,40 +19,40 @@ namespace graspbed::sim {
 /// Bounds of the scene's values: what no real grasp scene has is refused at load (file:line:key),
 /// because MuJoCo turns it into NaN, a stalled clock or a run that never ends. docs/scenarios.md,
 /// "Bounds", lists them. Lower bounds of 0 exclusive are not repeated here.
-inline constexpr double kMinObjectSizeM = 0.001;      ///< used object.size_m entries [m]
-inline constexpr double kMaxObjectSizeM = 0.3;        ///< the table is 0.6 m square [m]
-inline constexpr double kMinObjectMassKg = 0.001;     ///< [kg]
-inline constexpr double kMaxObjectMassKg = 10.0;      ///< far beyond any prosthetic pinch [kg]
-inline constexpr double kMaxFriction = 10.0;          ///< Coulomb coefficient (rubber on rubber ~1-2)
-inline constexpr double kMaxTorsionalFrictionM = 0.1; ///< [m]
-inline constexpr double kMaxSolrefTimeconstS = 0.1;   ///< contact time constant [s]
-inline constexpr double kMaxSolrefDampratio = 10.0;   ///< [-]
-inline constexpr double kMaxSolimpWidthM = 0.1;       ///< solimp[2] [m]
-inline constexpr double kMaxSolimpPower = 10.0;       ///< solimp[4], >= 1 [-]
-inline constexpr double kMaxObjectOffsetM = 0.3;      ///< |object.initial_position_m x, y|: on the table [m]
-inline constexpr double kMaxPositionM = 1.0;          ///< any position coordinate, world frame [m]
-inline constexpr double kMaxYawRad = 10.0;            ///< |object.initial_yaw_rad| [rad]
-inline constexpr double kMaxForceN = 1000.0;          ///< force limits such as crush_limit_n [N]
-inline constexpr double kMinOpenGapM = 0.001;         ///< hand.open_gap_m [m]
-inline constexpr double kMaxOpenGapM = 0.2;           ///< [m]
-inline constexpr double kMinPalmMassKg = 0.01;        ///< [kg]
-inline constexpr double kMaxPalmMassKg = 10.0;        ///< [kg]
-inline constexpr double kMinDigitMassKg = 0.001;      ///< [kg]
-inline constexpr double kMaxDigitMassKg = 1.0;        ///< [kg]
-inline constexpr double kMaxWristStiffnessNM = 1e6;   ///< [N/m]
-inline constexpr double kMaxWristDampingNSM = 1e5;    ///< [N s/m]
-inline constexpr double kMaxStallForceN = 500.0;      ///< hand.motor.stall_force_n [N]
-inline constexpr double kMaxDigitSpeedMS = 5.0;       ///< hand.motor.no_load_speed_m_s [m/s]
-inline constexpr double kMaxArmatureKg = 10.0;        ///< [kg]
-inline constexpr double kMaxMotorDampingNSM = 1e4;    ///< [N s/m]
-inline constexpr double kMinTimestepS = 1e-5;         ///< physics.timestep_s [s]
-inline constexpr double kMaxTimestepS = 0.01;         ///< [s]
-inline constexpr double kMaxImpratio = 1000.0;        ///< [-]
+inline constexpr double kMinObjectSizeM = 0.001;       ///< used object.size_m entries [m]
+inline constexpr double kMaxObjectSizeM = 0.3;         ///< the table is 0.6 m square [m]
+inline constexpr double kMinObjectMassKg = 0.001;      ///< [kg]
+inline constexpr double kMaxObjectMassKg = 10.0;       ///< far beyond any prosthetic pinch [kg]
+inline constexpr double kMaxFriction = 10.0;           ///< Coulomb coefficient (rubber on rubber ~1-2)
+inline constexpr double kMaxTorsionalFrictionM = 0.1;  ///< [m]
+inline constexpr double kMaxSolrefTimeconstS = 0.1;    ///< contact time constant [s]
+inline constexpr double kMaxSolrefDampratio = 10.0;    ///< [-]
+inline constexpr double kMaxSolimpWidthM = 0.1;        ///< solimp[2] [m]
+inline constexpr double kMaxSolimpPower = 10.0;        ///< solimp[4], >= 1 [-]
+inline constexpr double kMaxObjectOffsetM = 0.3;       ///< |object.initial_position_m x, y|: on the table [m]
+inline constexpr double kMaxPositionM = 1.0;           ///< any position coordinate, world frame [m]
+inline constexpr double kMaxYawRad = 10.0;             ///< |object.initial_yaw_rad| [rad]
+inline constexpr double kMaxForceN = 1000.0;           ///< force limits such as crush_limit_n [N]
+inline constexpr double kMinOpenGapM = 0.001;          ///< hand.open_gap_m [m]
+inline constexpr double kMaxOpenGapM = 0.2;            ///< [m]
+inline constexpr double kMinPalmMassKg = 0.01;         ///< [kg]
+inline constexpr double kMaxPalmMassKg = 10.0;         ///< [kg]
+inline constexpr double kMinDigitMassKg = 0.001;       ///< [kg]
+inline constexpr double kMaxDigitMassKg = 1.0;         ///< [kg]
+inline constexpr double kMaxWristStiffnessNM = 1e6;    ///< [N/m]
+inline constexpr double kMaxWristDampingNSM = 1e5;     ///< [N s/m]
+inline constexpr double kMaxStallForceN = 500.0;       ///< hand.motor.stall_force_n [N]
+inline constexpr double kMaxDigitSpeedMS = 5.0;        ///< hand.motor.no_load_speed_m_s [m/s]
+inline constexpr double kMaxArmatureKg = 10.0;         ///< [kg]
+inline constexpr double kMaxMotorDampingNSM = 1e4;     ///< [N s/m]
+inline constexpr double kMinTimestepS = 1e-5;          ///< physics.timestep_s [s]
+inline constexpr double kMaxTimestepS = 0.01;          ///< [s]
+inline constexpr double kMaxImpratio = 1000.0;         ///< [-]
 inline constexpr int kMaxNoslipIterations = 1000;
 inline constexpr int kMaxSolverIterations = 1000;
-inline constexpr double kMinTolerance = 1e-15;        ///< physics.tolerance [-]
-inline constexpr double kMaxTolerance = 1e-2;         ///< [-]
-inline constexpr double kMaxGravityMS2 = 100.0;       ///< [m/s^2] (Jupiter: 24.8)
+inline constexpr double kMinTolerance = 1e-15;   ///< physics.tolerance [-]
+inline constexpr double kMaxTolerance = 1e-2;    ///< [-]
+inline constexpr double kMaxGravityMS2 = 100.0;  ///< [m/s^2] (Jupiter: 24.8)
 
 /// Shape of the graspable object.
 enum class ObjectShape { kBox, kCylinder, kSphere };
@@ -66,7 +66,7 @@ struct ObjectConfig {
   /// Box: full edge lengths x, y, z [m]. Cylinder: {diameter, unused, height} (axis along world z).
   /// Sphere: {diameter, unused, unused}.
   std::array<double, 3> size_m = {0.05, 0.05, 0.08};
-  double mass_kg = 0.1;      ///< [kg], inertia from a uniform solid of that shape
+  double mass_kg = 0.1;  ///< [kg], inertia from a uniform solid of that shape
   /// Coulomb friction coefficient of every contact with the object (the object's geom has contact
   /// priority, so its friction and compliance govern its contacts with the fingers and the table).
   double friction = 0.8;
@@ -190,23 +190,23 @@ struct HandConfig {
   /// compensated in the servo target, the held object's weight is not (it sags by m g / stiffness).
   double wrist_stiffness_n_m = 20000.0;
   double wrist_damping_n_s_m = 400.0;
-  MotorConfig motor;            ///< jaw fixture only
-  FingerConfig finger;          ///< prosthetic hand only
-  ThumbConfig thumb;            ///< prosthetic hand only
-  DigitMotorConfig digit_motor; ///< prosthetic hand only
+  MotorConfig motor;             ///< jaw fixture only
+  FingerConfig finger;           ///< prosthetic hand only
+  ThumbConfig thumb;             ///< prosthetic hand only
+  DigitMotorConfig digit_motor;  ///< prosthetic hand only
 };
 
 /// Solver and contact options (MuJoCo <option>); defaults chosen for grasping, docs/simulation.md.
 struct PhysicsConfig {
-  double timestep_s = 0.0005;       ///< physics step [s]
-  bool elliptic_cones = true;       ///< elliptic friction cones (pyramidal drops held objects)
-  double impratio = 10.0;           ///< friction-to-normal impedance ratio
-  int noslip_iterations = 3;        ///< post-solve friction projection; removes soft-contact creep
-  int solver_iterations = 100;      ///< Newton iterations
-  double tolerance = 1e-10;         ///< solver tolerance
-  int condim = 3;                   ///< contact dimensionality of object contacts (3, 4 or 6)
-  double gravity_m_s2 = 9.81;       ///< magnitude, along world -z [m/s^2]; 0 disables gravity
-  bool table = true;                ///< include the table (off for free-floating tests)
+  double timestep_s = 0.0005;   ///< physics step [s]
+  bool elliptic_cones = true;   ///< elliptic friction cones (pyramidal drops held objects)
+  double impratio = 10.0;       ///< friction-to-normal impedance ratio
+  int noslip_iterations = 3;    ///< post-solve friction projection; removes soft-contact creep
+  int solver_iterations = 100;  ///< Newton iterations
+  double tolerance = 1e-10;     ///< solver tolerance
+  int condim = 3;               ///< contact dimensionality of object contacts (3, 4 or 6)
+  double gravity_m_s2 = 9.81;   ///< magnitude, along world -z [m/s^2]; 0 disables gravity
+  bool table = true;            ///< include the table (off for free-floating tests)
 };
 
 /// Everything of the scene besides the layout.

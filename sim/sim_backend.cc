@@ -17,10 +17,12 @@ constexpr double kTimeSlackPeriods = 1e-6;
 
 void SimBackendConfig::Validate() const {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw std::invalid_argument("sim backend sample_rate_hz = " + std::to_string(sample_rate_hz) + ": must be > 0");
+    throw std::invalid_argument("sim backend sample_rate_hz = " + std::to_string(sample_rate_hz) +
+                                ": must be > 0");
   }
   if (!(latency_s >= 0.0) || latency_s > 10.0) {
-    throw std::invalid_argument("sim backend latency_s = " + std::to_string(latency_s) + ": must be in [0, 10]");
+    throw std::invalid_argument("sim backend latency_s = " + std::to_string(latency_s) +
+                                ": must be in [0, 10]");
   }
   if (!(max_latency_s >= 0.0) || max_latency_s > 10.0) {
     throw std::invalid_argument("sim backend max_latency_s = " + std::to_string(max_latency_s) +
@@ -36,10 +38,13 @@ void SimBackendConfig::Validate() const {
 SimBackendConfig LoadSimBackendConfig(const common::YamlMap& map, int unit_count) {
   using common::NumberRule;
   SimBackendConfig config;
-  config.sample_rate_hz = map.GetNumber("sample_rate_hz", config.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
+  config.sample_rate_hz =
+      map.GetNumber("sample_rate_hz", config.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
   config.latency_s = map.GetNumber("latency_s", config.latency_s, NumberRule::Between(0.0, 10.0));
-  config.drop_probability = map.GetNumber("drop_probability", config.drop_probability, NumberRule::Between(0.0, 1.0));
-  if (auto strain = map.GetMap("strain_model")) config.strain_model = sensor::LoadStrainModelConfig(*strain, unit_count);
+  config.drop_probability =
+      map.GetNumber("drop_probability", config.drop_probability, NumberRule::Between(0.0, 1.0));
+  if (auto strain = map.GetMap("strain_model"))
+    config.strain_model = sensor::LoadStrainModelConfig(*strain, unit_count);
   map.RejectUnknownKeys();
   return config;
 }

@@ -25,8 +25,8 @@ namespace graspbed::sim {
 
 /// Timing and transport of the simulated sensor.
 struct SimBackendConfig {
-  double sample_rate_hz = 1000.0;   ///< frames per second of simulated time
-  double latency_s = 0.0;           ///< sample -> available to Read() [s]; >= 0
+  double sample_rate_hz = 1000.0;  ///< frames per second of simulated time
+  double latency_s = 0.0;          ///< sample -> available to Read() [s]; >= 0
   /// Largest latency SetLatency() will be given during the run [s] (the frame ring is sized for
   /// it); values below latency_s count as latency_s.
   double max_latency_s = 0.0;
@@ -81,12 +81,12 @@ class SimBackend : public sensor::TactileBackend {
   sensor::StrainModel strain_model_;
   std::mt19937_64 drop_rng_;
   std::vector<sensor::UnitLoad> loads_;
-  std::vector<Slot> ring_;        ///< fixed capacity, allocated at construction
-  size_t ring_head_ = 0;          ///< next slot to write
-  size_t ring_size_ = 0;          ///< frames queued and not yet released
-  int64_t sample_index_ = 0;      ///< next sample: time = sample_index_ / sample_rate_hz
+  std::vector<Slot> ring_;    ///< fixed capacity, allocated at construction
+  size_t ring_head_ = 0;      ///< next slot to write
+  size_t ring_size_ = 0;      ///< frames queued and not yet released
+  int64_t sample_index_ = 0;  ///< next sample: time = sample_index_ / sample_rate_hz
   int drop_next_ = 0;
-  bool has_frame_ = false;        ///< newest_ holds a released frame not yet read
+  bool has_frame_ = false;  ///< newest_ holds a released frame not yet read
   sensor::RawFrame newest_;
   sensor::BackendCounters counters_;
 };

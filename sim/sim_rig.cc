@@ -18,8 +18,8 @@ void SimRigConfig::Validate() const {
   }
 }
 
-SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibration, const SimRigConfig& config,
-               std::unique_ptr<controller::GraspController> controller)
+SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibration,
+               const SimRigConfig& config, std::unique_ptr<controller::GraspController> controller)
     : config_((config.Validate(), config)),
       simulation_(layout, config_.scene),
       backend_(simulation_, config_.backend, config_.seed),
@@ -37,14 +37,16 @@ bool SimRig::Step() {
   const double period = 1.0 / config_.control_rate_hz;
   // Same slack as the backend's sampling, so a 1 kHz loop sees each 1 kHz frame at once.
   if (static_cast<double>(control_index_) * period > simulation_.time_s() + 1e-6 * period) return false;
-  while (static_cast<double>(control_index_) * period <= simulation_.time_s() + 1e-6 * period) ++control_index_;
+  while (static_cast<double>(control_index_) * period <= simulation_.time_s() + 1e-6 * period)
+    ++control_index_;
   loop_.Tick(simulation_.time_s());
   return true;
 }
 
 void SimRig::AdvanceTo(double time_s) {
   // A fault ends the run; Simulation::Step() advances the clock regardless, so this always ends.
-  while (!simulation_.fault().occurred && simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s()) Step();
+  while (!simulation_.fault().occurred && simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s())
+    Step();
 }
 
 }  // namespace graspbed::sim

@@ -78,7 +78,8 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     model_.reset(mj_loadXML(kFileName, vfs.get(), error, sizeof(error)));
   }
   mj_deleteVFS(vfs.get());
-  if (model_ == nullptr) throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+  if (model_ == nullptr)
+    throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
   data_.reset(mj_makeData(model_.get()));
   if (data_ == nullptr) throw std::runtime_error("MuJoCo could not allocate mjData");
 
@@ -153,7 +154,8 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
   for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
   mj_forward(model_.get(), data_.get());
-  initial_aperture_m_ = mju_dist3(data_->site_xpos + 3 * finger_pad_site_, data_->site_xpos + 3 * thumb_pad_site_);
+  initial_aperture_m_ =
+      mju_dist3(data_->site_xpos + 3 * finger_pad_site_, data_->site_xpos + 3 * thumb_pad_site_);
 }
 
 void Simulation::ModelDeleter::operator()(mjModel_* model) const { mj_deleteModel(model); }
@@ -184,7 +186,8 @@ void Simulation::SetWristTarget(const std::array<double, 3>& position_m) { wrist
 
 void Simulation::SetObjectExternalForce(const std::array<double, 3>& force_n) {
   for (double component : force_n) {
-    if (!std::isfinite(component)) throw std::invalid_argument("object external force: components must be finite");
+    if (!std::isfinite(component))
+      throw std::invalid_argument("object external force: components must be finite");
   }
   for (int k = 0; k < 3; ++k) {
     data_->xfrc_applied[6 * object_body_ + k] = force_n[k];
@@ -211,7 +214,8 @@ void Simulation::SetObjectFriction(double friction) {
 }
 
 void Simulation::ApplyControls() {
-  for (const GripDrive& drive : grip_drives_) data_->ctrl[drive.actuator] = brake_engaged_ ? 0.0 : grip_effort_;
+  for (const GripDrive& drive : grip_drives_)
+    data_->ctrl[drive.actuator] = brake_engaged_ ? 0.0 : grip_effort_;
   for (int k = 0; k < 3; ++k) {
     // Joint zero is the initial wrist position; z carries the hand's weight in the target.
     double target = wrist_target_[k] - model_->body_pos[3 * wrist_body_ + k];
@@ -262,8 +266,9 @@ void Simulation::CheckFault() {
       warning_seen_[w] = count;
       char cause[200];
       // The handler's text when MuJoCo printed one (first occurrence), else the stock text.
-      std::snprintf(cause, sizeof(cause), "MuJoCo warning: %.150s",
-                    tls_last_warning[0] != '\0' ? tls_last_warning : mju_warningText(w, data_->warning[w].lastinfo));
+      std::snprintf(
+          cause, sizeof(cause), "MuJoCo warning: %.150s",
+          tls_last_warning[0] != '\0' ? tls_last_warning : mju_warningText(w, data_->warning[w].lastinfo));
       RecordFault(cause);
     }
   }
@@ -307,7 +312,8 @@ void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
     const double sign = unit1 >= 0 ? -1.0 : 1.0;
     mjtNum force_holder[3];
     mju_mulMatTVec(force_holder, holder_rot, world, 3, 3);  // world -> holder frame
-    mjtNum rel[3] = {contact.pos[0] - holder_pos[0], contact.pos[1] - holder_pos[1], contact.pos[2] - holder_pos[2]};
+    mjtNum rel[3] = {contact.pos[0] - holder_pos[0], contact.pos[1] - holder_pos[1],
+                     contact.pos[2] - holder_pos[2]};
     mjtNum pos_holder[3];
     mju_mulMatTVec(pos_holder, holder_rot, rel, 3, 3);
     const auto& f = unit_frames_[unit];
@@ -368,9 +374,9 @@ GroundTruth Simulation::truth() const {
   }
   // Stall x effort minus the back-EMF term carried by the driven joint's damping, as pinch force.
   const GripDrive& drive = grip_drives_.front();
-  t.grip_motor_force_n =
-      (d->actuator_force[drive.actuator] - drive.stall * d->actuator_velocity[drive.actuator] / drive.no_load_speed) /
-      drive.lever_arm_m;
+  t.grip_motor_force_n = (d->actuator_force[drive.actuator] -
+                          drive.stall * d->actuator_velocity[drive.actuator] / drive.no_load_speed) /
+                         drive.lever_arm_m;
 
   double finger_on_object = 0.0;
   double thumb_on_object = 0.0;

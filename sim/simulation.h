@@ -29,25 +29,25 @@ namespace graspbed::sim {
 /// (MuJoCo has reset the state), so a run ends at the fault and no loop waits on time forever.
 struct PhysicsFault {
   bool occurred = false;
-  double time_s = 0.0;                 ///< simulation time at the start of the faulty step [s]
-  std::array<char, 160> cause{};       ///< NUL-terminated text: MuJoCo warning or "NaN in qpos" etc.
-  uint64_t warning_count = 0;          ///< MuJoCo warnings seen so far (all kinds)
+  double time_s = 0.0;            ///< simulation time at the start of the faulty step [s]
+  std::array<char, 160> cause{};  ///< NUL-terminated text: MuJoCo warning or "NaN in qpos" etc.
+  uint64_t warning_count = 0;     ///< MuJoCo warnings seen so far (all kinds)
   const char* cause_text() const { return cause.data(); }
 };
 
 /// Ground truth of one instant, never passed through the sensor path. World frame unless noted.
 struct GroundTruth {
   double time_s = 0.0;
-  std::array<double, 3> object_position_m{};       ///< object centre of mass [m]
-  std::array<double, 3> object_velocity_m_s{};     ///< linear velocity of the object centre [m/s]
+  std::array<double, 3> object_position_m{};              ///< object centre of mass [m]
+  std::array<double, 3> object_velocity_m_s{};            ///< linear velocity of the object centre [m/s]
   std::array<double, 3> object_angular_velocity_rad_s{};  ///< [rad/s]
   /// Lowest point of the object above the table top [m] (0 when resting on it).
   double object_height_above_table_m = 0.0;
-  std::array<double, 3> wrist_position_m{};        ///< actual wrist position [m]
+  std::array<double, 3> wrist_position_m{};  ///< actual wrist position [m]
   /// How far the aperture between the finger's pad and the thumb's contact face (sites finger_pad,
   /// thumb_pad) has closed since the start [m], either hand model.
   double grip_closure_m = 0.0;
-  double grip_velocity_m_s = 0.0;                  ///< closing speed of that aperture [m/s]
+  double grip_velocity_m_s = 0.0;  ///< closing speed of that aperture [m/s]
   /// The (index) grip motor's drive, back-EMF included, as the pinch force it makes [N]: the jaw's
   /// tendon force; the index motor's torque over the pad's lever arm in the contact posture.
   double grip_motor_force_n = 0.0;
@@ -181,10 +181,10 @@ class Simulation {
   struct GripDrive {
     int actuator = -1;
     int brake_equality = -1;
-    int brake_joint_qpos = -1;  ///< qpos address of the joint the brake holds
-    double stall = 0.0;         ///< stall torque [N m] or force [N]
-    double no_load_speed = 1.0; ///< [rad/s] or [m/s]
-    double lever_arm_m = 1.0;   ///< drive -> pinch force [m] (1 for the jaw)
+    int brake_joint_qpos = -1;   ///< qpos address of the joint the brake holds
+    double stall = 0.0;          ///< stall torque [N m] or force [N]
+    double no_load_speed = 1.0;  ///< [rad/s] or [m/s]
+    double lever_arm_m = 1.0;    ///< drive -> pinch force [m] (1 for the jaw)
   };
   std::vector<GripDrive> grip_drives_;
   std::array<int, 3> wrist_actuators_{-1, -1, -1};
@@ -204,7 +204,7 @@ class Simulation {
   std::array<double, 3> wrist_target_{};
   std::array<double, 3> external_force_{};  ///< on the object [N], re-applied every step
   PhysicsFault fault_;
-  double step_start_time_s_ = 0.0;  ///< simulation time when the current Step() began [s]
+  double step_start_time_s_ = 0.0;          ///< simulation time when the current Step() began [s]
   std::array<uint64_t, 8> warning_seen_{};  ///< per MuJoCo warning kind, last count seen
 };
 

@@ -22,12 +22,12 @@ using graspbed::controller::HandCommand;
 using graspbed::sensor::TactileState;
 
 struct ThresholdGripConfig {
-  double target_grip_n = 3.0;      ///< squeeze to hold [N], sum of Fn over the fingertip's units
-  double approach_effort = 0.3;    ///< effort while closing without contact [-]
-  double contact_n = 0.2;          ///< squeeze that counts as contact [N]
-  double gain_per_n_s = 0.3;       ///< effort change per N of error per second [1/(N s)]
-  double open_effort = 0.5;        ///< effort magnitude while opening [-]
-  int min_valid_units = 4;         ///< fewer valid units than this: hold (safe hold) [-]
+  double target_grip_n = 3.0;    ///< squeeze to hold [N], sum of Fn over the fingertip's units
+  double approach_effort = 0.3;  ///< effort while closing without contact [-]
+  double contact_n = 0.2;        ///< squeeze that counts as contact [N]
+  double gain_per_n_s = 0.3;     ///< effort change per N of error per second [1/(N s)]
+  double open_effort = 0.5;      ///< effort magnitude while opening [-]
+  int min_valid_units = 4;       ///< fewer valid units than this: hold (safe hold) [-]
 };
 
 class ThresholdGripController final : public GraspController {
@@ -47,7 +47,8 @@ class ThresholdGripController final : public GraspController {
   HandCommand Update(const TactileState& state, double time_s) override {
     const double dt_s = last_time_s_ < 0.0 ? 0.0 : std::clamp(time_s - last_time_s_, 0.0, 0.01);
     last_time_s_ = time_s;
-    const double target_n = ceiling_n_ > 0.0 ? std::min(config_.target_grip_n, ceiling_n_) : config_.target_grip_n;
+    const double target_n =
+        ceiling_n_ > 0.0 ? std::min(config_.target_grip_n, ceiling_n_) : config_.target_grip_n;
     telemetry_.grip_target_n = target_n;
     telemetry_.safe_hold = false;
     HandCommand command;
@@ -75,7 +76,8 @@ class ThresholdGripController final : public GraspController {
           effort_ = config_.approach_effort;
         } else {
           telemetry_.phase = "holding";
-          effort_ = std::clamp(effort_ + config_.gain_per_n_s * (target_n - state.total_fn_n) * dt_s, 0.0, 1.0);
+          effort_ =
+              std::clamp(effort_ + config_.gain_per_n_s * (target_n - state.total_fn_n) * dt_s, 0.0, 1.0);
         }
         break;
     }
@@ -103,7 +105,8 @@ std::vector<ControllerParameter> ThresholdGripParameters() {
       {"contact_n", d.contact_n, 0.01, 5.0, "N", "squeeze that counts as contact"},
       {"gain_per_n_s", d.gain_per_n_s, 0.0, 10.0, "1/(N s)", "effort change per N of error per second"},
       {"open_effort", d.open_effort, 0.0, 1.0, "", "motor effort magnitude while opening"},
-      {"min_valid_units", static_cast<double>(d.min_valid_units), 1.0, 64.0, "", "fewer valid units: safe hold"},
+      {"min_valid_units", static_cast<double>(d.min_valid_units), 1.0, 64.0, "",
+       "fewer valid units: safe hold"},
   };
 }
 

@@ -124,7 +124,8 @@ FeaConfig FeaConfigFromYaml(const YamlMap& root) {
   if (const auto material = section("material")) {
     MaterialConfig& m = config.material;
     m.youngs_modulus_gpa = material->GetNumber("youngs_modulus_gpa", m.youngs_modulus_gpa, positive);
-    m.poisson_ratio = material->GetNumber("poisson_ratio", m.poisson_ratio, NumberRule::Between(-0.999, 0.499));
+    m.poisson_ratio =
+        material->GetNumber("poisson_ratio", m.poisson_ratio, NumberRule::Between(-0.999, 0.499));
     material->RejectUnknownKeys();
   }
   if (const auto geometry = section("geometry")) {
@@ -169,7 +170,8 @@ FeaConfig FeaConfigFromYaml(const YamlMap& root) {
     auto found = sections.find(top);
     if (found != sections.end()) {
       if (first_dot == std::string::npos) found->second.Fail(leaf, issue->message);
-      if (const auto nested = found->second.GetMap(parent.substr(first_dot + 1))) nested->Fail(leaf, issue->message);
+      if (const auto nested = found->second.GetMap(parent.substr(first_dot + 1)))
+        nested->Fail(leaf, issue->message);
     }
     // The key was left at its default: no line to point at.
     throw common::ConfigError(root.file() + ": " + issue->key + " = " + FormatValue(issue->value) +

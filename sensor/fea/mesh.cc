@@ -41,8 +41,7 @@ int Mesh::CellElement(int i, int j) const {
 }
 
 Mesh MeshRectangles(const std::vector<Rect>& rects, double element_size_mm,
-                    const std::vector<double>& extra_x_lines,
-                    const std::vector<double>& extra_y_lines) {
+                    const std::vector<double>& extra_x_lines, const std::vector<double>& extra_y_lines) {
   if (rects.empty()) throw std::invalid_argument("MeshRectangles: no rectangles to mesh");
   if (!(element_size_mm > 0.0)) {
     throw std::invalid_argument("MeshRectangles: element size " + std::to_string(element_size_mm) +
@@ -54,10 +53,9 @@ Mesh MeshRectangles(const std::vector<Rect>& rects, double element_size_mm,
   double y_lo = rects.front().y_min, y_hi = rects.front().y_max;
   for (const Rect& rect : rects) {
     if (!(rect.x_max > rect.x_min) || !(rect.y_max > rect.y_min)) {
-      throw std::invalid_argument("MeshRectangles: degenerate rectangle [" +
-                                  std::to_string(rect.x_min) + ", " + std::to_string(rect.x_max) +
-                                  "] x [" + std::to_string(rect.y_min) + ", " +
-                                  std::to_string(rect.y_max) + "] mm");
+      throw std::invalid_argument("MeshRectangles: degenerate rectangle [" + std::to_string(rect.x_min) +
+                                  ", " + std::to_string(rect.x_max) + "] x [" + std::to_string(rect.y_min) +
+                                  ", " + std::to_string(rect.y_max) + "] mm");
     }
     x_breaks.insert(x_breaks.end(), {rect.x_min, rect.x_max});
     y_breaks.insert(y_breaks.end(), {rect.y_min, rect.y_max});

@@ -34,10 +34,14 @@ Eigen::Matrix<double, 2, 9> ShapeDerivatives(double xi, double eta) {
 // The three local nodes on each side, in order of increasing natural coordinate along the side.
 std::array<int, 3> SideNodes(Side side) {
   switch (side) {
-    case Side::kBottom: return {0, 1, 2};
-    case Side::kRight: return {2, 5, 8};
-    case Side::kTop: return {6, 7, 8};
-    case Side::kLeft: return {0, 3, 6};
+    case Side::kBottom:
+      return {0, 1, 2};
+    case Side::kRight:
+      return {2, 5, 8};
+    case Side::kTop:
+      return {6, 7, 8};
+    case Side::kLeft:
+      return {0, 3, 6};
   }
   return {0, 1, 2};
 }
@@ -60,8 +64,8 @@ PlaneStressModel::PlaneStressModel(Mesh mesh, PlaneStressMaterial material,
   const double nu = material_.poisson_ratio;
   if (!(e > 0.0) || !(nu > -1.0 && nu < 0.5) || !(material_.thickness_mm > 0.0)) {
     throw std::invalid_argument("PlaneStressModel: material E = " + std::to_string(e) +
-                                " MPa, nu = " + std::to_string(nu) + ", thickness = " +
-                                std::to_string(material_.thickness_mm) +
+                                " MPa, nu = " + std::to_string(nu) +
+                                ", thickness = " + std::to_string(material_.thickness_mm) +
                                 " mm: need E > 0, -1 < nu < 0.5, thickness > 0");
   }
   if (mesh_.elements.empty()) throw std::invalid_argument("PlaneStressModel: the mesh has no elements");
@@ -97,7 +101,8 @@ PlaneStressModel::PlaneStressModel(Mesh mesh, PlaneStressMaterial material,
         const double xi = kGaussPoints[gx], eta = kGaussPoints[gy];
         const Eigen::Matrix<double, 2, 9> dn = ShapeDerivatives(xi, eta);
         Eigen::Matrix2d jacobian = Eigen::Matrix2d::Zero();
-        for (int n = 0; n < 9; ++n) jacobian += dn.col(n) * mesh_.nodes[mesh_.elements[element][n]].transpose();
+        for (int n = 0; n < 9; ++n)
+          jacobian += dn.col(n) * mesh_.nodes[mesh_.elements[element][n]].transpose();
         const double det = jacobian.determinant();
         if (!(det > 0.0)) {
           throw std::invalid_argument("PlaneStressModel: element " + std::to_string(element) +
@@ -105,7 +110,8 @@ PlaneStressModel::PlaneStressModel(Mesh mesh, PlaneStressMaterial material,
                                       std::to_string(det) + ")");
         }
         const Eigen::Matrix<double, 3, 18> b = StrainMatrix(element, xi, eta);
-        k += b.transpose() * elasticity_ * b * (det * kGaussWeights[gx] * kGaussWeights[gy] * material_.thickness_mm);
+        k += b.transpose() * elasticity_ * b *
+             (det * kGaussWeights[gx] * kGaussWeights[gy] * material_.thickness_mm);
       }
     }
     std::array<int, 18> dofs{};
@@ -139,8 +145,7 @@ PlaneStressModel::PlaneStressModel(Mesh mesh, PlaneStressMaterial material,
   const double largest = pivots.cwiseAbs().maxCoeff();
   if (!(pivots.minCoeff() > 1e-12 * largest)) {
     throw std::runtime_error("PlaneStressModel: the stiffness matrix is singular (" +
-                             std::to_string(free_count) +
-                             " free dofs); the part is not fully constrained");
+                             std::to_string(free_count) + " free dofs); the part is not fully constrained");
   }
 }
 
@@ -172,9 +177,8 @@ Eigen::Matrix<double, 18, 1> PlaneStressModel::ElementDisplacements(
 
 Eigen::MatrixXd PlaneStressModel::Solve(const Eigen::MatrixXd& loads) const {
   if (loads.rows() != DofCount()) {
-    throw std::invalid_argument("PlaneStressModel::Solve: load matrix has " +
-                                std::to_string(loads.rows()) + " rows, expected " +
-                                std::to_string(DofCount()));
+    throw std::invalid_argument("PlaneStressModel::Solve: load matrix has " + std::to_string(loads.rows()) +
+                                " rows, expected " + std::to_string(DofCount()));
   }
   const int free_count = FreeDofCount();
   Eigen::MatrixXd rhs(free_count, loads.cols());

@@ -60,9 +60,11 @@ class PlaneStressModel {
 
   /// Strain (eps_xx, eps_yy, gamma_xy) in `element` at natural coordinates (xi, eta) for the
   /// displacement vector `u` (DofCount() entries [mm]).
-  Eigen::Vector3d StrainAt(int element, double xi, double eta, const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  Eigen::Vector3d StrainAt(int element, double xi, double eta,
+                           const Eigen::Ref<const Eigen::VectorXd>& u) const;
   /// Stress (sigma_xx, sigma_yy, tau_xy) [MPa] at the same place.
-  Eigen::Vector3d StressAt(int element, double xi, double eta, const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  Eigen::Vector3d StressAt(int element, double xi, double eta,
+                           const Eigen::Ref<const Eigen::VectorXd>& u) const;
   /// Position [mm] of natural coordinates (xi, eta) in `element`.
   Eigen::Vector2d PositionAt(int element, double xi, double eta) const;
 
@@ -73,15 +75,16 @@ class PlaneStressModel {
 
  private:
   Eigen::Matrix<double, 3, 18> StrainMatrix(int element, double xi, double eta) const;
-  Eigen::Matrix<double, 18, 1> ElementDisplacements(int element, const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  Eigen::Matrix<double, 18, 1> ElementDisplacements(int element,
+                                                    const Eigen::Ref<const Eigen::VectorXd>& u) const;
 
   Mesh mesh_;
   PlaneStressMaterial material_;
-  Eigen::Matrix3d elasticity_;             // plane-stress D [MPa]
-  std::vector<int> free_dofs_;             // free index -> global dof
-  std::vector<int> free_index_;            // global dof -> free index, or -1 when prescribed
-  Eigen::VectorXd prescribed_values_;      // global vector, prescribed values else 0
-  Eigen::VectorXd prescribed_reaction_;    // K_fp * u_p, per free dof
+  Eigen::Matrix3d elasticity_;           // plane-stress D [MPa]
+  std::vector<int> free_dofs_;           // free index -> global dof
+  std::vector<int> free_index_;          // global dof -> free index, or -1 when prescribed
+  Eigen::VectorXd prescribed_values_;    // global vector, prescribed values else 0
+  Eigen::VectorXd prescribed_reaction_;  // K_fp * u_p, per free dof
   // Held by pointer: Eigen solvers are not movable, the model is.
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> solver_;
   long stiffness_non_zeros_ = 0;

@@ -48,8 +48,8 @@ std::string ProfileCsv(const StrainProfile& profile) {
   out << std::setprecision(10);
   out << "x_mm,eps_normal,eps_shear,eps_both,eps_sum\n";
   for (size_t i = 0; i < profile.x_mm.size(); ++i) {
-    out << profile.x_mm[i] << ',' << profile.normal[i] << ',' << profile.shear[i] << ','
-        << profile.both[i] << ',' << profile.sum[i] << '\n';
+    out << profile.x_mm[i] << ',' << profile.normal[i] << ',' << profile.shear[i] << ',' << profile.both[i]
+        << ',' << profile.sum[i] << '\n';
   }
   return out.str();
 }
@@ -102,7 +102,8 @@ plot::Figure SweepFigure(const FeaResults& results) {
   const ResistorSweep& n = results.normal_sweep;
   const ResistorSweep& t = results.shear_sweep;
   plot::Chart normal;
-  normal.title = "Normal force: k_n = " + Scientific(results.sensitivities.kn_per_n) + " /N, R^2 = " + Fixed(results.normal_fit.r_squared, 6);
+  normal.title = "Normal force: k_n = " + Scientific(results.sensitivities.kn_per_n) +
+                 " /N, R^2 = " + Fixed(results.normal_fit.r_squared, 6);
   normal.x_label = "Fn [N]";
   normal.y_label = "resistor-averaged strain [microstrain]";
   std::vector<double> mean_n, half_diff_t;
@@ -115,7 +116,8 @@ plot::Figure SweepFigure(const FeaResults& results) {
                    {"eps_n = (eps1 + eps2) / 2", n.force_n, Scaled(mean_n, kMicrostrain)}};
   normal.include_zero_y = true;
   plot::Chart shear;
-  shear.title = "Shear force: k_t = " + Scientific(results.sensitivities.kt_per_n) + " /N, R^2 = " + Fixed(results.shear_fit.r_squared, 6);
+  shear.title = "Shear force: k_t = " + Scientific(results.sensitivities.kt_per_n) +
+                " /N, R^2 = " + Fixed(results.shear_fit.r_squared, 6);
   shear.x_label = "Ft [N]";
   shear.y_label = "resistor-averaged strain [microstrain]";
   shear.series = {{"eps1 (R1)", t.force_n, Scaled(t.eps1, kMicrostrain), false, true},

@@ -161,10 +161,10 @@ PlaneStressModel UnitModel::BuildModel(const FeaConfig& config, double* mesh_s, 
   std::vector<PrescribedDof> fixed = FixedFeet(mesh);
   *mesh_s = Seconds(mesh_start);
   const Clock::time_point factor_start = Clock::now();
-  PlaneStressModel model(std::move(mesh),
-                         {config.material.youngs_modulus_gpa * 1000.0, config.material.poisson_ratio,
-                          config.geometry.width_mm},
-                         std::move(fixed));
+  PlaneStressModel model(
+      std::move(mesh),
+      {config.material.youngs_modulus_gpa * 1000.0, config.material.poisson_ratio, config.geometry.width_mm},
+      std::move(fixed));
   *assemble_factor_s = Seconds(factor_start);
   return model;
 }

@@ -65,13 +65,13 @@ struct Sensitivities {
 /// Everything the analysis reports.
 struct FeaResults {
   StrainProfile profile;
-  ResistorSweep normal_sweep;  ///< Ft = 0, Fn = 0..max
-  ResistorSweep shear_sweep;   ///< Fn = 0, Ft = 0..max
-  LineFit normal_fit;          ///< (eps1 + eps2) / 2 against Fn
-  LineFit shear_fit;           ///< (eps1 - eps2) / 2 against Ft
-  Sensitivities sensitivities; ///< slopes of the two fits
-  double kn_ratio = 0.0;       ///< k_n / paper's k_n
-  double kt_ratio = 0.0;       ///< k_t / paper's k_t
+  ResistorSweep normal_sweep;   ///< Ft = 0, Fn = 0..max
+  ResistorSweep shear_sweep;    ///< Fn = 0, Ft = 0..max
+  LineFit normal_fit;           ///< (eps1 + eps2) / 2 against Fn
+  LineFit shear_fit;            ///< (eps1 - eps2) / 2 against Ft
+  Sensitivities sensitivities;  ///< slopes of the two fits
+  double kn_ratio = 0.0;        ///< k_n / paper's k_n
+  double kt_ratio = 0.0;        ///< k_t / paper's k_t
   /// max |both - (normal + shear)| / max |both| along the underside, and over the two resistors.
   double superposition_error = 0.0;
   /// Cross-talk of the ideal unit: |eps1 - eps2| / |eps1 + eps2| under Fn alone, and
@@ -88,7 +88,8 @@ LineFit FitLine(const std::vector<double>& x, const std::vector<double>& y);
 
 /// eps_xx along the free bottom faces of grid row `row` of a MeshRectangles mesh (faces with no
 /// element below), at the element nodes; values at nodes shared by two elements are averaged.
-StrainLine BottomSurfaceStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u, int row);
+StrainLine BottomSurfaceStrain(const PlaneStressModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
+                               int row);
 
 /// Mean of eps_xx over x in [x_start, x_end] along the free bottom faces of grid row `row`
 /// (exact Gauss integration along each face, divided by the covered length).

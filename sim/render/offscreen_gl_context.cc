@@ -71,18 +71,32 @@ OffscreenGlContext::OffscreenGlContext() {
     EGLint major = 0;
     EGLint minor = 0;
     if (eglInitialize(candidate.display, &major, &minor) != EGL_TRUE) {
-      tried += std::string(tried.empty() ? "" : "; ") + candidate.name + ": eglInitialize: " +
-               EglErrorText(eglGetError());
+      tried += std::string(tried.empty() ? "" : "; ") + candidate.name +
+               ": eglInitialize: " + EglErrorText(eglGetError());
       continue;
     }
     // 8-bit RGBA with depth and stencil; the surface type does not matter (MuJoCo draws into its own
     // framebuffer object), but some drivers only list configs that have one.
-    const EGLint with_pbuffer[] = {EGL_RED_SIZE,     8, EGL_GREEN_SIZE,  8, EGL_BLUE_SIZE,       8,
-                                   EGL_ALPHA_SIZE,   8, EGL_DEPTH_SIZE, 24, EGL_STENCIL_SIZE,    8,
-                                   EGL_SURFACE_TYPE, EGL_PBUFFER_BIT,   EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+    const EGLint with_pbuffer[] = {EGL_RED_SIZE,
+                                   8,
+                                   EGL_GREEN_SIZE,
+                                   8,
+                                   EGL_BLUE_SIZE,
+                                   8,
+                                   EGL_ALPHA_SIZE,
+                                   8,
+                                   EGL_DEPTH_SIZE,
+                                   24,
+                                   EGL_STENCIL_SIZE,
+                                   8,
+                                   EGL_SURFACE_TYPE,
+                                   EGL_PBUFFER_BIT,
+                                   EGL_RENDERABLE_TYPE,
+                                   EGL_OPENGL_BIT,
                                    EGL_NONE};
-    const EGLint any_surface[] = {EGL_RED_SIZE,   8, EGL_GREEN_SIZE,   8, EGL_BLUE_SIZE,       8,
-                                  EGL_DEPTH_SIZE, 24, EGL_SURFACE_TYPE, 0, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+    const EGLint any_surface[] = {EGL_RED_SIZE,     8, EGL_GREEN_SIZE,      8,
+                                  EGL_BLUE_SIZE,    8, EGL_DEPTH_SIZE,      24,
+                                  EGL_SURFACE_TYPE, 0, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
                                   EGL_NONE};
     EGLConfig config = nullptr;
     EGLint count = 0;
@@ -98,13 +112,13 @@ OffscreenGlContext::OffscreenGlContext() {
     }
     EGLContext context = eglCreateContext(candidate.display, config, EGL_NO_CONTEXT, nullptr);
     if (context == EGL_NO_CONTEXT) {
-      tried += std::string(tried.empty() ? "" : "; ") + candidate.name + ": eglCreateContext: " +
-               EglErrorText(eglGetError());
+      tried += std::string(tried.empty() ? "" : "; ") + candidate.name +
+               ": eglCreateContext: " + EglErrorText(eglGetError());
       continue;
     }
     if (eglMakeCurrent(candidate.display, EGL_NO_SURFACE, EGL_NO_SURFACE, context) != EGL_TRUE) {
-      tried += std::string(tried.empty() ? "" : "; ") + candidate.name + ": eglMakeCurrent without a surface: " +
-               EglErrorText(eglGetError());
+      tried += std::string(tried.empty() ? "" : "; ") + candidate.name +
+               ": eglMakeCurrent without a surface: " + EglErrorText(eglGetError());
       eglDestroyContext(candidate.display, context);
       continue;
     }
@@ -117,8 +131,8 @@ OffscreenGlContext::OffscreenGlContext() {
     if (get_string != nullptr) {
       const unsigned char* version = get_string(kGlVersion);
       const unsigned char* renderer = get_string(kGlRenderer);
-      description_ += std::string(", OpenGL ") + (version ? reinterpret_cast<const char*>(version) : "?") + " " +
-                      (renderer ? reinterpret_cast<const char*>(renderer) : "?");
+      description_ += std::string(", OpenGL ") + (version ? reinterpret_cast<const char*>(version) : "?") +
+                      " " + (renderer ? reinterpret_cast<const char*>(renderer) : "?");
     }
     return;
   }
@@ -132,7 +146,8 @@ OffscreenGlContext::~OffscreenGlContext() {
   if (display_ == nullptr) return;
   // The display stays initialised: EGL hands every caller the same display per platform, and
   // eglTerminate would pull it from under other live contexts (another renderer in this process).
-  if (eglGetCurrentContext() == context_) eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  if (eglGetCurrentContext() == context_)
+    eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(display_, context_);
 }
 

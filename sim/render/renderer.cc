@@ -85,7 +85,7 @@ struct Renderer::Scene {
   mjvScene scene;
   mjvOption option;
   mjrContext context;
-  mjvGLCamera camera;  // of the last picture (both eyes averaged)
+  mjvGLCamera camera;     // of the last picture (both eyes averaged)
   mjvCamera free_camera;  // the last orbit camera used (built-in cameras are orbit cameras)
 };
 
@@ -133,7 +133,8 @@ void RenderOptions::Validate() const {
     }
   }
   if (!(force_arrow_m_per_n > 0.0) || !std::isfinite(force_arrow_m_per_n)) {
-    throw std::invalid_argument("force_arrow_m_per_n = " + std::to_string(force_arrow_m_per_n) + ": must be > 0");
+    throw std::invalid_argument("force_arrow_m_per_n = " + std::to_string(force_arrow_m_per_n) +
+                                ": must be > 0");
   }
   if (!(object_alpha >= 0.0 && object_alpha <= 1.0)) {
     throw std::invalid_argument("object_alpha = " + std::to_string(object_alpha) + ": must be in [0, 1]");
@@ -142,7 +143,8 @@ void RenderOptions::Validate() const {
     throw std::invalid_argument("multisamples = " + std::to_string(multisamples) + ": must be in 0..16");
   }
   if (!(shear_arrow_m_per_n > 0.0) || !std::isfinite(shear_arrow_m_per_n)) {
-    throw std::invalid_argument("shear_arrow_m_per_n = " + std::to_string(shear_arrow_m_per_n) + ": must be > 0");
+    throw std::invalid_argument("shear_arrow_m_per_n = " + std::to_string(shear_arrow_m_per_n) +
+                                ": must be > 0");
   }
   if (!(rated_force_n > 0.0) || !std::isfinite(rated_force_n)) {
     throw std::invalid_argument("rated_force_n = " + std::to_string(rated_force_n) + ": must be > 0");
@@ -177,8 +179,8 @@ std::string PanelText(const PanelInfo& info) {
     text += line;
   }
   if (info.state != nullptr) {
-    std::snprintf(line, sizeof(line), "measured grip\t%.2f N on %d units (%d valid)\n", info.state->total_fn_n,
-                  info.state->contact_count, info.state->valid_count);
+    std::snprintf(line, sizeof(line), "measured grip\t%.2f N on %d units (%d valid)\n",
+                  info.state->total_fn_n, info.state->contact_count, info.state->valid_count);
     text += line;
   }
   if (info.telemetry != nullptr) {
@@ -187,7 +189,8 @@ std::string PanelText(const PanelInfo& info) {
     std::string flags;
     if (t.slip_detected) {
       flags.append("SLIP ");
-      if (t.slip_cues != nullptr && t.slip_cues[0] != '\0') flags.append("(").append(t.slip_cues).append(") ");
+      if (t.slip_cues != nullptr && t.slip_cues[0] != '\0')
+        flags.append("(").append(t.slip_cues).append(") ");
     }
     if (t.safe_hold) flags.append("SAFE-HOLD ");
     if (stale) flags.append("STALE ");
@@ -197,7 +200,8 @@ std::string PanelText(const PanelInfo& info) {
     text += line;
     text += "slip flags\t" + flags + "\n";
   }
-  if (info.last_action) text += "last action\t" + (info.last_action->empty() ? std::string("-") : *info.last_action) + "\n";
+  if (info.last_action)
+    text += "last action\t" + (info.last_action->empty() ? std::string("-") : *info.last_action) + "\n";
   text += info.extra;
   while (!text.empty() && text.back() == '\n') text.pop_back();
   return text;
@@ -294,8 +298,9 @@ const image::RgbImage& Renderer::Render(Simulation& simulation, const sensor::Ta
   return image_;
 }
 
-void Renderer::RenderToWindow(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
-                              const std::string& label, int width_px, int height_px) {
+void Renderer::RenderToWindow(Simulation& simulation, const sensor::TactileState* state,
+                              const CameraSpec& camera, const std::string& label, int width_px,
+                              int height_px) {
   Draw(simulation, state, camera, label, {0, 0, width_px, height_px}, /*window=*/true);
 }
 
@@ -319,11 +324,21 @@ void Renderer::MoveCamera(CameraMove move, double dx, double dy, FreeView& view)
   for (int k = 0; k < 3; ++k) cam.lookat[k] = view.lookat_m[k];
   int action = mjMOUSE_ZOOM;
   switch (move) {
-    case CameraMove::kRotateVertical: action = mjMOUSE_ROTATE_V; break;
-    case CameraMove::kRotateHorizontal: action = mjMOUSE_ROTATE_H; break;
-    case CameraMove::kMoveVertical: action = mjMOUSE_MOVE_V; break;
-    case CameraMove::kMoveHorizontal: action = mjMOUSE_MOVE_H; break;
-    case CameraMove::kZoom: action = mjMOUSE_ZOOM; break;
+    case CameraMove::kRotateVertical:
+      action = mjMOUSE_ROTATE_V;
+      break;
+    case CameraMove::kRotateHorizontal:
+      action = mjMOUSE_ROTATE_H;
+      break;
+    case CameraMove::kMoveVertical:
+      action = mjMOUSE_MOVE_V;
+      break;
+    case CameraMove::kMoveHorizontal:
+      action = mjMOUSE_MOVE_H;
+      break;
+    case CameraMove::kZoom:
+      action = mjMOUSE_ZOOM;
+      break;
   }
   mjv_moveCamera(scene_->model.get(), action, dx, dy, &scene_->scene, &cam);
   view.azimuth_deg = cam.azimuth;
@@ -359,8 +374,10 @@ void Renderer::Draw(Simulation& simulation, const sensor::TactileState* state, c
       const int id = mj_name2id(m, mjOBJ_CAMERA, camera.model_camera.c_str());
       if (id < 0) {
         std::string names;
-        for (int c = 0; c < m->ncam; ++c) names += std::string(names.empty() ? "" : ", ") + mj_id2name(m, mjOBJ_CAMERA, c);
-        throw std::invalid_argument("--camera " + camera.model_camera + ": no such camera; built in: grasp, fingertip" +
+        for (int c = 0; c < m->ncam; ++c)
+          names += std::string(names.empty() ? "" : ", ") + mj_id2name(m, mjOBJ_CAMERA, c);
+        throw std::invalid_argument("--camera " + camera.model_camera +
+                                    ": no such camera; built in: grasp, fingertip" +
                                     (names.empty() ? "; the model has none" : "; the model has " + names));
       }
       cam.type = mjCAMERA_FIXED;
@@ -391,7 +408,8 @@ void Renderer::Draw(Simulation& simulation, const sensor::TactileState* state, c
         // enough to show the hand around it.
         double object_size_m = 0.0;
         if (object_body_ >= 0) {
-          for (int k = 0; k < 3; ++k) cam.lookat[k] = 0.7 * centroid[k] + 0.3 * d->xipos[3 * object_body_ + k];
+          for (int k = 0; k < 3; ++k)
+            cam.lookat[k] = 0.7 * centroid[k] + 0.3 * d->xipos[3 * object_body_ + k];
           for (int g = 0; g < m->ngeom; ++g) {
             if (m->geom_bodyid[g] == object_body_) object_size_m = std::max(object_size_m, m->geom_rbound[g]);
           }
@@ -439,7 +457,7 @@ void Renderer::Draw(Simulation& simulation, const sensor::TactileState* state, c
     const std::array<double, 3> c = UnitCenter(simulation, i);
     const mjtNum* frame = d->geom_xmat + 9 * unit_geoms_[i];
     mjtNum pos[3];
-    for (int k = 0; k < 3; ++k) pos[k] = c[k] + (kPatchLiftM) * frame[3 * k + 2];
+    for (int k = 0; k < 3; ++k) pos[k] = c[k] + (kPatchLiftM)*frame[3 * k + 2];
     const mjtNum size[3] = {0.5 * unit_footprint_m_[0], 0.5 * unit_footprint_m_[1], kPatchHalfThicknessM};
     mjvGeom* patch = s.scene.geoms + s.scene.ngeom;
     mjv_initGeom(patch, mjGEOM_BOX, size, pos, frame, colors[i].data());
@@ -489,7 +507,8 @@ void Renderer::AddUnitMarks(const Simulation& simulation, const sensor::TactileS
       if (s.scene.ngeom >= s.scene.maxgeom) return;
       double a[3], b[3];
       for (int k = 0; k < 3; ++k) {
-        const double half_diagonal = 0.5 * unit_footprint_m_[0] * beam[k] + across * 0.5 * unit_footprint_m_[1] * cross[k];
+        const double half_diagonal =
+            0.5 * unit_footprint_m_[0] * beam[k] + across * 0.5 * unit_footprint_m_[1] * cross[k];
         a[k] = c[k] + 2.0 * kPatchLiftM * normal[k] - half_diagonal;
         b[k] = c[k] + 2.0 * kPatchLiftM * normal[k] + half_diagonal;
       }
@@ -531,15 +550,16 @@ void Renderer::DrawLegend(const std::array<int, 4>& pixels) {
   const int panel_height_px = bar_height_px + 4 * line_px + 3 * kLegendMarginPx;
   const int left = viewport.left + viewport.width - panel_width_px - kLegendMarginPx;
   const int bottom = viewport.bottom + kLegendMarginPx;
-  if (left < viewport.left || bottom + panel_height_px > viewport.bottom + viewport.height) return;  // too small
+  if (left < viewport.left || bottom + panel_height_px > viewport.bottom + viewport.height)
+    return;  // too small
   mjr_rectangle({left, bottom, panel_width_px, panel_height_px}, 0.0f, 0.0f, 0.0f, 0.55f);
   const int bar_left = left + kLegendMarginPx;
   const int bar_bottom = bottom + 2 * line_px + 2 * kLegendMarginPx;
   for (int step = 0; step < kLegendSteps; ++step) {
     // Colour at the force whose square-root fraction is the step's middle.
     const double fraction = (step + 0.5) / kLegendSteps;
-    const std::array<float, 4> color =
-        UnitColor(fraction * fraction * options_.rated_force_n, sensor::UnitValidity::kValid, options_.rated_force_n);
+    const std::array<float, 4> color = UnitColor(fraction * fraction * options_.rated_force_n,
+                                                 sensor::UnitValidity::kValid, options_.rated_force_n);
     const int y0 = bar_bottom + step * bar_height_px / kLegendSteps;
     const int y1 = bar_bottom + (step + 1) * bar_height_px / kLegendSteps;
     mjr_rectangle({bar_left, y0, kLegendBarWidthPx, y1 - y0}, color[0], color[1], color[2], 1.0f);
@@ -549,24 +569,26 @@ void Renderer::DrawLegend(const std::array<int, 4>& pixels) {
   const auto text_at = [&](const std::string& text, int x_px, int y_px) {
     int width_px = 2;
     for (const char c : text) width_px += s.context.charWidth[static_cast<unsigned char>(c)];
-    mjr_label({x_px, y_px, width_px, s.context.charHeight + 2}, mjFONT_NORMAL, text.c_str(), 0.0f, 0.0f, 0.0f, 0.0f,
-              0.95f, 0.95f, 0.95f, &s.context);
+    mjr_label({x_px, y_px, width_px, s.context.charHeight + 2}, mjFONT_NORMAL, text.c_str(), 0.0f, 0.0f, 0.0f,
+              0.0f, 0.95f, 0.95f, 0.95f, &s.context);
   };
   const int label_left = bar_left + kLegendBarWidthPx + kLegendMarginPx;
   char tick[32];
   for (const double fraction : {0.0, 0.25, 1.0}) {
     std::snprintf(tick, sizeof(tick), "%g N", fraction * options_.rated_force_n);
     // Square-root scale: a quarter of the force sits half way up.
-    const int y = bar_bottom + static_cast<int>(std::sqrt(fraction) * bar_height_px) - s.context.charHeight / 2;
+    const int y =
+        bar_bottom + static_cast<int>(std::sqrt(fraction) * bar_height_px) - s.context.charHeight / 2;
     text_at(tick, label_left, std::clamp(y, bar_bottom, bar_bottom + bar_height_px - s.context.charHeight));
   }
   text_at("est. Fn", bar_left, bar_bottom + bar_height_px + kLegendMarginPx);
-  const std::array<float, 4> saturated = UnitColor(0.0, sensor::UnitValidity::kOutOfRange, options_.rated_force_n);
-  mjr_rectangle({bar_left, bottom + line_px + kLegendMarginPx, kLegendBarWidthPx, s.context.charHeight}, saturated[0],
-                saturated[1], saturated[2], 1.0f);
+  const std::array<float, 4> saturated =
+      UnitColor(0.0, sensor::UnitValidity::kOutOfRange, options_.rated_force_n);
+  mjr_rectangle({bar_left, bottom + line_px + kLegendMarginPx, kLegendBarWidthPx, s.context.charHeight},
+                saturated[0], saturated[1], saturated[2], 1.0f);
   text_at("sat.", label_left, bottom + line_px + kLegendMarginPx);
-  mjr_rectangle({bar_left, bottom + kLegendMarginPx / 2, kLegendBarWidthPx, s.context.charHeight}, 0.05f, 0.05f, 0.05f,
-                1.0f);
+  mjr_rectangle({bar_left, bottom + kLegendMarginPx / 2, kLegendBarWidthPx, s.context.charHeight}, 0.05f,
+                0.05f, 0.05f, 1.0f);
   mjr_rectangle({bar_left + kLegendBarWidthPx / 2 - 1, bottom + kLegendMarginPx / 2, 3, s.context.charHeight},
                 kInvalidCrossRgba[0], kInvalidCrossRgba[1], kInvalidCrossRgba[2], 1.0f);
   text_at("invalid", label_left, bottom + kLegendMarginPx / 2);

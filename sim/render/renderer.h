@@ -29,9 +29,10 @@ namespace graspbed::sim {
 
 /// MuJoCo's orbit camera: looks at `lookat_m` from `distance_m` away.
 struct FreeView {
-  double azimuth_deg = 0.0;     ///< heading of the view direction about world z: 0 looks along +x, 90 along +y [deg]
-  double elevation_deg = -20.0; ///< pitch of the view direction: negative looks down [deg], in (-90, 90)
-  double distance_m = 0.3;      ///< camera to lookat point [m], > 0
+  double azimuth_deg =
+      0.0;  ///< heading of the view direction about world z: 0 looks along +x, 90 along +y [deg]
+  double elevation_deg = -20.0;      ///< pitch of the view direction: negative looks down [deg], in (-90, 90)
+  double distance_m = 0.3;           ///< camera to lookat point [m], > 0
   std::array<double, 3> lookat_m{};  ///< point at the image centre, world frame [m]
 };
 
@@ -74,7 +75,8 @@ struct RenderOptions {
   /// the way the shear points [-].
   bool shear_arrows = true;
   double shear_arrow_m_per_n = 4e-3;  ///< shear arrow length per newton [m/N], > 0
-  bool legend = true;  ///< colour scale of the units (bottom right) when a TactileState is drawn; left out below ~200 px height
+  bool legend = true;  ///< colour scale of the units (bottom right) when a TactileState is drawn; left out
+                       ///< below ~200 px height
   /// MuJoCo's shadows. On llvmpipe (no GPU) they are most of a frame's cost (a 4096 px shadow map per
   /// light): about 115 against 36 ms per 640 x 480 frame here; videos and the viewer leave them out.
   bool shadows = true;
@@ -84,20 +86,22 @@ struct RenderOptions {
 };
 
 /// RGBA of a unit with estimate `fn_n` [N]: grey (0 N or less) to red (at `rated_force_n` and above)
-/// on a square-root scale (a quarter of the range is half way) when valid; magenta when saturated (out of range); black when the estimate is unusable (open,
-/// short, implausible, not tared).
+/// on a square-root scale (a quarter of the range is half way) when valid; magenta when saturated (out of
+/// range); black when the estimate is unusable (open, short, implausible, not tared).
 std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, double rated_force_n);
 
 /// What the text panel of a video frame or the viewer says (PanelText()).
 struct PanelInfo {
-  std::string title;  ///< first line, e.g. "default (grip_slip)"
+  std::string title;    ///< first line, e.g. "default (grip_slip)"
   double time_s = 0.0;  ///< simulated time [s]
-  const controller::ControllerTelemetry* telemetry = nullptr;  ///< phase, grip target, friction, slip; may be null
-  const sensor::TactileState* state = nullptr;  ///< measured grip (sum of valid Fn), units in contact; may be null
+  const controller::ControllerTelemetry* telemetry =
+      nullptr;  ///< phase, grip target, friction, slip; may be null
+  const sensor::TactileState* state =
+      nullptr;  ///< measured grip (sum of valid Fn), units in contact; may be null
   /// The script action that last fired, e.g. "lift at 1.000 s" ("" none yet: shown as "-"; nullopt:
   /// no such line).
   std::optional<std::string> last_action;
-  std::string extra;        ///< more "name\tvalue" lines appended (e.g. the viewer's speed)
+  std::string extra;  ///< more "name\tvalue" lines appended (e.g. the viewer's speed)
 };
 
 /// The panel as Render()'s `label`: "name\tvalue" lines for time, controller phase, grip target,
@@ -118,10 +122,10 @@ class Renderer {
 
   /// Renders `simulation` (the one this renderer was made for) as it is now, units coloured from
   /// `state` (nullptr: all grey), seen by `camera`, with `label` in the top-left corner: lines split at
-  /// '\n', each "name\tvalue" in two columns ("" draws none). Returns the picture, valid until the next call. Throws std::invalid_argument
-  /// for a model camera the model lacks (naming those it has).
-  const image::RgbImage& Render(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
-                                const std::string& label = "");
+  /// '\n', each "name\tvalue" in two columns ("" draws none). Returns the picture, valid until the next call.
+  /// Throws std::invalid_argument for a model camera the model lacks (naming those it has).
+  const image::RgbImage& Render(Simulation& simulation, const sensor::TactileState* state,
+                                const CameraSpec& camera, const std::string& label = "");
 
   /// Renders like Render() into the window whose context `gl` is (the viewer), `width_px` x
   /// `height_px` framebuffer pixels, without reading the pixels back.
@@ -152,7 +156,8 @@ class Renderer {
   /// (left, bottom, width, height).
   void DrawOverlays(const std::array<int, 4>& viewport, bool units_coloured, const std::string& label);
   void DrawLegend(const std::array<int, 4>& viewport);
-  /// The scene and overlays into the offscreen buffer or the window, in `pixels` (left, bottom, width, height).
+  /// The scene and overlays into the offscreen buffer or the window, in `pixels` (left, bottom, width,
+  /// height).
   void Draw(Simulation& simulation, const sensor::TactileState* state, const CameraSpec& camera,
             const std::string& label, const std::array<int, 4>& pixels, bool window);
   /// Reads the offscreen buffer into image_ (rows from the top).

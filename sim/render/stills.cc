@@ -52,8 +52,8 @@ StillsResult RenderStills(const scenario::ScenarioConfig& config, const StillsOp
               times.end());
   for (double t : times) {
     if (!(t >= 0.0 && t <= config.duration_s)) {
-      throw std::invalid_argument("--at " + Format("%g", t) + ": outside the scenario " + config.name + " (0 .. " +
-                                  Format("%g", config.duration_s) + " s, duration_s" +
+      throw std::invalid_argument("--at " + Format("%g", t) + ": outside the scenario " + config.name +
+                                  " (0 .. " + Format("%g", config.duration_s) + " s, duration_s" +
                                   (config.source_file.empty() ? "" : " in " + config.source_file) + ")");
     }
   }
@@ -80,7 +80,8 @@ StillsResult RenderStills(const scenario::ScenarioConfig& config, const StillsOp
     const image::RgbImage& picture = renderer->Render(rig.simulation(), &rig.loop().state(), options.camera,
                                                       options.label ? Label(config, rig) : "");
     Still still;
-    still.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    still.render_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     still.requested_s = instant_s;
     still.time_s = rig.time_s();
     still.path = (fs::path(options.out_dir) / StillFileName(config.name, instant_s)).string();

@@ -31,7 +31,7 @@ struct Still {
   double requested_s = 0.0;  ///< instant asked for [s]
   double time_s = 0.0;       ///< simulated time of the control tick rendered [s]
   std::string path;
-  double render_ms = 0.0;    ///< wall time to render and read back the picture, without the PNG [ms]
+  double render_ms = 0.0;  ///< wall time to render and read back the picture, without the PNG [ms]
 };
 
 /// What a call produced.

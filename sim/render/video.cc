@@ -23,13 +23,14 @@ double MsSince(std::chrono::steady_clock::time_point start) {
 
 /// Everything one video needs; shared by the run's two callbacks.
 struct Recorder {
-  Recorder(const scenario::ScenarioConfig& config_in, const VideoOptions& options_in, const std::string& video,
-           const std::string& strip)
+  Recorder(const scenario::ScenarioConfig& config_in, const VideoOptions& options_in,
+           const std::string& video, const std::string& strip)
       : config(config_in),
         options(options_in),
         video_path(video),
         strip_path(strip),
-        writer({video, options_in.render.width_px, options_in.render.height_px, options_in.fps, options_in.ffmpeg}),
+        writer({video, options_in.render.width_px, options_in.render.height_px, options_in.fps,
+                options_in.ffmpeg}),
         title(config_in.name + " (" + config_in.controller.name + ")"),
         cost(std::make_shared<VideoCost>()) {}
 
@@ -38,8 +39,9 @@ struct Recorder {
     sim::SimRig& rig = frame.rig;
     if (!renderer) renderer = std::make_unique<sim::Renderer>(gl, rig.simulation(), options.render);
     const controller::ControllerTelemetry telemetry = rig.controller().telemetry();
-    const image::RgbImage& picture = renderer->Render(rig.simulation(), &rig.loop().state(), options.camera,
-                                                      sim::PanelText(LivePanel(config, title, frame, telemetry)));
+    const image::RgbImage& picture =
+        renderer->Render(rig.simulation(), &rig.loop().state(), options.camera,
+                         sim::PanelText(LivePanel(config, title, frame, telemetry)));
     cost->render_ms += MsSince(start);
     const auto encode_start = std::chrono::steady_clock::now();
     writer.Write(picture);
@@ -85,7 +87,8 @@ void VideoOptions::Validate() const {
   }
   if (strip_tiles < 0 || (strip_tiles > 0 && strip_tile_width_px < 16)) {
     throw std::invalid_argument("video strip: " + std::to_string(strip_tiles) + " tiles " +
-                                std::to_string(strip_tile_width_px) + " px wide: need >= 0 tiles of >= 16 px");
+                                std::to_string(strip_tile_width_px) +
+                                " px wide: need >= 0 tiles of >= 16 px");
   }
 }
 
@@ -122,7 +125,8 @@ std::string LastActionText(const scenario::ScenarioConfig& config, const scenari
 }
 
 sim::PanelInfo LivePanel(const scenario::ScenarioConfig& config, const std::string& title,
-                         const scenario::FrameContext& frame, const controller::ControllerTelemetry& telemetry) {
+                         const scenario::FrameContext& frame,
+                         const controller::ControllerTelemetry& telemetry) {
   sim::PanelInfo panel;
   panel.title = title;
   panel.time_s = frame.time_s;
@@ -132,9 +136,9 @@ sim::PanelInfo LivePanel(const scenario::ScenarioConfig& config, const std::stri
   return panel;
 }
 
-std::shared_ptr<const VideoCost> AttachVideo(const scenario::ScenarioConfig& config, const VideoOptions& options,
-                                             const std::string& video_path, const std::string& strip_path,
-                                             scenario::RunOptions& run) {
+std::shared_ptr<const VideoCost> AttachVideo(const scenario::ScenarioConfig& config,
+                                             const VideoOptions& options, const std::string& video_path,
+                                             const std::string& strip_path, scenario::RunOptions& run) {
   options.Validate();
   auto recorder = std::make_shared<Recorder>(config, options, video_path, strip_path);
   run.frame_period_s = 1.0 / options.fps;

@@ -25,7 +25,8 @@ inline constexpr double kVideoForceArrowMPerN = 0.004;
 
 /// What a video shows and how.
 struct VideoOptions {
-  double fps = kDefaultVideoFps;     ///< frames per second of simulated time (videos play at real time) [1/s], (0, 240]
+  double fps =
+      kDefaultVideoFps;  ///< frames per second of simulated time (videos play at real time) [1/s], (0, 240]
   sim::RenderOptions render = [] {
     sim::RenderOptions options;
     options.width_px = 640;
@@ -34,9 +35,9 @@ struct VideoOptions {
     options.force_arrow_m_per_n = kVideoForceArrowMPerN;
     options.shadows = false;  // a third of the frame time without them (RenderOptions::shadows)
     return options;
-  }();  ///< size (even), overlays; contact-force arrows on by default
-  sim::CameraSpec camera;  ///< grasp camera by default
-  int strip_tiles = 6;     ///< frames in the PNG strip beside the video (0: no strip)
+  }();                            ///< size (even), overlays; contact-force arrows on by default
+  sim::CameraSpec camera;         ///< grasp camera by default
+  int strip_tiles = 6;            ///< frames in the PNG strip beside the video (0: no strip)
   int strip_tile_width_px = 320;  ///< width of each strip tile [px]
   std::string ffmpeg = "ffmpeg";  ///< the encoder program
 
@@ -60,7 +61,8 @@ std::string LastActionText(const scenario::ScenarioConfig& config, const scenari
 /// The panel of a frame of a live run (videos, the viewer): `title`, time, the controller's
 /// `telemetry` (kept by the caller while the panel is used), the rig's estimate, the last script action.
 sim::PanelInfo LivePanel(const scenario::ScenarioConfig& config, const std::string& title,
-                         const scenario::FrameContext& frame, const controller::ControllerTelemetry& telemetry);
+                         const scenario::FrameContext& frame,
+                         const controller::ControllerTelemetry& telemetry);
 
 /// Time spent on a video, filled in as it is made.
 struct VideoCost {
@@ -75,8 +77,8 @@ struct VideoCost {
 /// run still gets a video of what ran). Returns the cost so far, updated per frame. Throws
 /// std::invalid_argument for bad options, std::runtime_error when there is no OpenGL context or no
 /// ffmpeg.
-std::shared_ptr<const VideoCost> AttachVideo(const scenario::ScenarioConfig& config, const VideoOptions& options,
-                                             const std::string& video_path, const std::string& strip_path,
-                                             scenario::RunOptions& run);
+std::shared_ptr<const VideoCost> AttachVideo(const scenario::ScenarioConfig& config,
+                                             const VideoOptions& options, const std::string& video_path,
+                                             const std::string& strip_path, scenario::RunOptions& run);
 
 }  // namespace graspbed::render

@@ -38,7 +38,9 @@ constexpr double kReplayJumpS = 0.5;
 constexpr double kScrollZoomPerNotch = 0.05;
 constexpr const char* kKeysHelp = "space, arrows, [ ], +/-, backspace, F/G, Q (graspbed view --help)";
 
-double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 /// A GLFW window whose OpenGL context the renderer draws with, and the user's input since the last Poll().
 class Window : public sim::GlContext {
@@ -50,10 +52,12 @@ class Window : public sim::GlContext {
   };
 
   Window(int width_px, int height_px, const std::string& title) {
-    glfwSetErrorCallback([](int, const char* description) { std::fprintf(stderr, "GLFW: %s\n", description); });
+    glfwSetErrorCallback(
+        [](int, const char* description) { std::fprintf(stderr, "GLFW: %s\n", description); });
     if (glfwInit() != GLFW_TRUE) {
-      throw std::runtime_error("view: cannot open a window (no display? set DISPLAY, or run under xvfb-run; "
-                               "videos need none: graspbed run --video)");
+      throw std::runtime_error(
+          "view: cannot open a window (no display? set DISPLAY, or run under xvfb-run; "
+          "videos need none: graspbed run --video)");
     }
     glfwWindowHint(GLFW_SAMPLES, 4);
     window_ = glfwCreateWindow(width_px, height_px, title.c_str(), nullptr, nullptr);
@@ -71,7 +75,8 @@ class Window : public sim::GlContext {
       static_cast<Window*>(glfwGetWindowUserPointer(w))->OnCursor(x, y);
     });
     glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double y) {
-      static_cast<Window*>(glfwGetWindowUserPointer(w))->drags.push_back({sim::CameraMove::kZoom, 0.0, -kScrollZoomPerNotch * y});
+      static_cast<Window*>(glfwGetWindowUserPointer(w))
+          ->drags.push_back({sim::CameraMove::kZoom, 0.0, -kScrollZoomPerNotch * y});
     });
     description = std::string("GLFW ") + glfwGetVersionString() + ", OpenGL " +
                   std::to_string(glfwGetWindowAttrib(window_, GLFW_CONTEXT_VERSION_MAJOR)) + "." +
@@ -103,18 +108,44 @@ class Window : public sim::GlContext {
  private:
   void OnKey(int key, int mods) {
     switch (key) {
-      case GLFW_KEY_SPACE: pause_toggle = true; break;
-      case GLFW_KEY_RIGHT: step_forward = true; break;
-      case GLFW_KEY_LEFT: step_back = true; break;
-      case GLFW_KEY_RIGHT_BRACKET: jump_forward = true; break;
-      case GLFW_KEY_LEFT_BRACKET: jump_back = true; break;
-      case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: ++speed_steps; break;
-      case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: --speed_steps; break;
-      case GLFW_KEY_BACKSPACE: restart = true; break;
-      case GLFW_KEY_F: fingertip = true; break;
-      case GLFW_KEY_G: grasp = true; break;
-      case GLFW_KEY_Q: case GLFW_KEY_ESCAPE: quit = true; break;
-      default: break;
+      case GLFW_KEY_SPACE:
+        pause_toggle = true;
+        break;
+      case GLFW_KEY_RIGHT:
+        step_forward = true;
+        break;
+      case GLFW_KEY_LEFT:
+        step_back = true;
+        break;
+      case GLFW_KEY_RIGHT_BRACKET:
+        jump_forward = true;
+        break;
+      case GLFW_KEY_LEFT_BRACKET:
+        jump_back = true;
+        break;
+      case GLFW_KEY_EQUAL:
+      case GLFW_KEY_KP_ADD:
+        ++speed_steps;
+        break;
+      case GLFW_KEY_MINUS:
+      case GLFW_KEY_KP_SUBTRACT:
+        --speed_steps;
+        break;
+      case GLFW_KEY_BACKSPACE:
+        restart = true;
+        break;
+      case GLFW_KEY_F:
+        fingertip = true;
+        break;
+      case GLFW_KEY_G:
+        grasp = true;
+        break;
+      case GLFW_KEY_Q:
+      case GLFW_KEY_ESCAPE:
+        quit = true;
+        break;
+      default:
+        break;
     }
     (void)mods;
   }
@@ -152,8 +183,11 @@ class Window : public sim::GlContext {
 class ViewerCore {
  public:
   ViewerCore(const ViewerOptions& options, const std::string& title)
-      : options_(options), window_(options.width_px, options.height_px, title), camera_(options.camera),
-        speed_(options.speed), paused_(options.paused) {}
+      : options_(options),
+        window_(options.width_px, options.height_px, title),
+        camera_(options.camera),
+        speed_(options.speed),
+        paused_(options.paused) {}
 
   Window& window() { return window_; }
   bool paused() const { return paused_; }
@@ -199,7 +233,8 @@ class ViewerCore {
     }
     window_.drags.clear();
     char speed[256];
-    std::snprintf(speed, sizeof(speed), "speed\t%gx%s\nkeys\t%s", speed_, paused_ ? " (paused)" : "", kKeysHelp);
+    std::snprintf(speed, sizeof(speed), "speed\t%gx%s\nkeys\t%s", speed_, paused_ ? " (paused)" : "",
+                  kKeysHelp);
     panel.extra = speed;
     const std::array<int, 2> size = window_.FramebufferSize();
     renderer_->RenderToWindow(simulation, state, camera_, sim::PanelText(panel), size[0], size[1]);
@@ -232,7 +267,8 @@ void ViewerOptions::Validate() const {
   if (!(speed >= kMinSpeed && speed <= kMaxSpeed)) {
     throw std::invalid_argument("--speed " + std::to_string(speed) + ": must be in [1/64, 64]");
   }
-  if (exit_after_frames < 0) throw std::invalid_argument("--frames " + std::to_string(exit_after_frames) + ": must be >= 0");
+  if (exit_after_frames < 0)
+    throw std::invalid_argument("--frames " + std::to_string(exit_after_frames) + ": must be >= 0");
 }
 
 ViewerResult ViewLive(const scenario::ScenarioConfig& config, const ViewerOptions& options) {
@@ -261,7 +297,8 @@ ViewerResult ViewLive(const scenario::ScenarioConfig& config, const ViewerOption
         last_display = Clock::now();
       };
       while (true) {
-        const bool due = SecondsSince(last_display) >= (core.paused() || last_tick ? kIdlePeriodS : kDisplayPeriodS);
+        const bool due =
+            SecondsSince(last_display) >= (core.paused() || last_tick ? kIdlePeriodS : kDisplayPeriodS);
         if (!due && !core.paused() && !last_tick) break;
         if (core.Poll()) {
           anchor_wall = Clock::now();
@@ -306,7 +343,8 @@ ViewerResult ViewLive(const scenario::ScenarioConfig& config, const ViewerOption
       continue;
     }
     if (!held_at_end && !core.Done()) {
-      std::fprintf(stderr, "graspbed view: the run ended at t = %.3f s (physics fault?); restarting\n", result.time_s);
+      std::fprintf(stderr, "graspbed view: the run ended at t = %.3f s (physics fault?); restarting\n",
+                   result.time_s);
       ++result.restarts;
     }
   }
@@ -363,8 +401,9 @@ ViewerResult ViewReplay(const std::string& run_dir, const ViewerOptions& options
         for (const nlohmann::json& entry : summary.at("script")) {
           if (!entry.at("fired_s").is_number()) continue;
           char text[96];
-          std::snprintf(text, sizeof(text), "%s at %.3f s (line %d)", entry.at("action").get<std::string>().c_str(),
-                        entry.at("fired_s").get<double>(), entry.at("line").get<int>());
+          std::snprintf(text, sizeof(text), "%s at %.3f s (line %d)",
+                        entry.at("action").get<std::string>().c_str(), entry.at("fired_s").get<double>(),
+                        entry.at("line").get<int>());
           fired.emplace_back(entry.at("fired_s").get<double>(), text);
         }
       } catch (const nlohmann::json::exception& error) {
@@ -418,13 +457,17 @@ ViewerResult ViewReplay(const std::string& run_dir, const ViewerOptions& options
 
     // The control tick nearest to the state shown.
     const auto after = std::lower_bound(signal_times.begin(), signal_times.end(), states.time_s[row]);
-    size_t s = after == signal_times.end() ? signal_times.size() - 1 : static_cast<size_t>(after - signal_times.begin());
-    if (s > 0 && std::abs(signal_times[s - 1] - states.time_s[row]) < std::abs(signal_times[s] - states.time_s[row])) --s;
+    size_t s = after == signal_times.end() ? signal_times.size() - 1
+                                           : static_cast<size_t>(after - signal_times.begin());
+    if (s > 0 &&
+        std::abs(signal_times[s - 1] - states.time_s[row]) < std::abs(signal_times[s] - states.time_s[row]))
+      --s;
     state.time_s = signal_times[s];
     for (int u = 0; u < units; ++u) {
       state.fn_n[u] = signals.Number(s, c_fn[u]);
       state.ft_n[u] = signals.Number(s, c_ft[u]);
-      state.validity[u] = static_cast<sensor::UnitValidity>(static_cast<int>(signals.Number(s, c_validity[u])));
+      state.validity[u] =
+          static_cast<sensor::UnitValidity>(static_cast<int>(signals.Number(s, c_validity[u])));
     }
     state.valid_count = static_cast<int>(signals.Number(s, c_valid));
     state.contact_count = static_cast<int>(signals.Number(s, c_contact));

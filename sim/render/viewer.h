@@ -22,10 +22,10 @@ namespace graspbed::render {
 
 /// Window and playback settings.
 struct ViewerOptions {
-  int width_px = 1280;   ///< initial window size [px]
+  int width_px = 1280;  ///< initial window size [px]
   int height_px = 800;
-  double speed = 1.0;    ///< simulated seconds per wall-clock second at the start, (0, 64]
-  bool paused = false;   ///< start paused
+  double speed = 1.0;   ///< simulated seconds per wall-clock second at the start, (0, 64]
+  bool paused = false;  ///< start paused
   /// Close after this many displayed frames (0: when the window is closed); for scripted and
   /// headless (xvfb-run) checks.
   int exit_after_frames = 0;
@@ -36,7 +36,7 @@ struct ViewerOptions {
     options.shadows = false;  // a third of the frame time without them (RenderOptions::shadows)
     return options;
   }();
-  sim::CameraSpec camera;  ///< camera at the start
+  sim::CameraSpec camera;                   ///< camera at the start
   const std::atomic<bool>* stop = nullptr;  ///< set (SIGINT) to close the window
 
   /// Throws std::invalid_argument naming the option and value.
@@ -45,8 +45,8 @@ struct ViewerOptions {
 
 /// What a viewer session did.
 struct ViewerResult {
-  int frames = 0;          ///< frames displayed
-  double time_s = 0.0;     ///< simulated (or replayed) time shown last [s]
+  int frames = 0;       ///< frames displayed
+  double time_s = 0.0;  ///< simulated (or replayed) time shown last [s]
   int restarts = 0;
   std::string gl_description;  ///< the OpenGL renderer of the window
 };

@@ -92,8 +92,8 @@ void CheckBenchScript(const ScenarioConfig& config, const RunOptions& options) {
   std::vector<std::string> refused;
   for (const Action& action : config.script) {
     if (action.after != ScriptEvent::kNone) {
-      throw common::ConfigError(Where(config, action) + "script action " + ActionName(action.kind) + " after: " +
-                                EventName(action.after) +
+      throw common::ConfigError(Where(config, action) + "script action " + ActionName(action.kind) +
+                                " after: " + EventName(action.after) +
                                 ": backend serial plays fixed-time actions only (give it an at_s)");
     }
     if (!IsIntentAction(action.kind) && !options.prompt_actions) {
@@ -124,7 +124,7 @@ struct PhaseChange {
 
 struct IntentLogEntry {
   std::string intent;
-  std::string source;  ///< "script", "recording", or the live input's ("key", "stdin", "fifo")
+  std::string source;       ///< "script", "recording", or the live input's ("key", "stdin", "fifo")
   double received_s = 0.0;  ///< script: its at_s; live: when the input read it [s]
   double applied_s = 0.0;   ///< the tick that first ran with it [s]
   long live_index = -1;     ///< index in IntentInput::events(), for live commands
@@ -143,8 +143,8 @@ void WriteBenchPlots(const RunResult& result, const SignalLog& log, const sensor
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
   const int units = layout.unit_count();
-  const std::string title =
-      result.config.name + " (" + result.config.controller.name + ", " + BackendName(result.config.backend) + ")";
+  const std::string title = result.config.name + " (" + result.config.controller.name + ", " +
+                            BackendName(result.config.backend) + ")";
   plot::Figure forces;
   forces.title = title + ": forces";
   forces.columns = 1;
@@ -158,9 +158,9 @@ void WriteBenchPlots(const RunResult& result, const SignalLog& log, const sensor
 
   plot::Figure grip;
   grip.title = title + ": grip";
-  plot::Chart effort = MakeChart(replay ? "Grip motor command: this controller and the recording"
-                                        : "Grip motor command",
-                                 "time [s]", "effort [-]");
+  plot::Chart effort =
+      MakeChart(replay ? "Grip motor command: this controller and the recording" : "Grip motor command",
+                "time [s]", "effort [-]");
   effort.series = {Line(log, time, "grip_effort", replay ? "this controller" : "effort")};
   if (replay) effort.series.push_back(Line(log, time, "recorded_grip_effort", "recorded", 1.0, true));
   effort.markers = ScriptMarkers(result);
@@ -188,9 +188,9 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
   const int units = layout.unit_count();
   // The host inverts with the sensor's nominal constants, as a simulated run does.
-  const sensor::Calibration calibration = options.calibration
-                                              ? *options.calibration
-                                              : sensor::NominalCalibration(config.sensor.strain_model.nominal, units);
+  const sensor::Calibration calibration =
+      options.calibration ? *options.calibration
+                          : sensor::NominalCalibration(config.sensor.strain_model.nominal, units);
   controller::ControlLoopConfig loop_config;
   loop_config.stale_timeout_s = config.controller.stale_timeout_s;
   loop_config.readout = config.sensor.readout;
@@ -198,8 +198,9 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   loop_config.Validate();
   std::unique_ptr<controller::GraspController> grasp;
   try {
-    grasp = options.make_controller ? options.make_controller(config.controller)
-                                    : controller::MakeController(config.controller.name, config.controller.params);
+    grasp = options.make_controller
+                ? options.make_controller(config.controller)
+                : controller::MakeController(config.controller.name, config.controller.params);
   } catch (const std::invalid_argument& error) {
     throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
@@ -218,7 +219,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   NoActuator no_actuator;
   if (replay) {
     recording = hardware::LoadRecordedSession(config.log, units);
-    replay_backend = std::make_unique<hardware::ReplayBackend>(*recording, config.sensor.strain_model.nominal.r0_ohm);
+    replay_backend =
+        std::make_unique<hardware::ReplayBackend>(*recording, config.sensor.strain_model.nominal.r0_ohm);
   } else {
     if (!config.log.empty() && !std::ofstream(config.log + ".partial", std::ios::trunc)) {
       throw std::invalid_argument("--log " + config.log + ": cannot write this file");
@@ -237,7 +239,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
       throw std::invalid_argument(error.what());
     }
   }
-  sensor::TactileBackend& backend = replay ? static_cast<sensor::TactileBackend&>(*replay_backend) : *serial_backend;
+  sensor::TactileBackend& backend =
+      replay ? static_cast<sensor::TactileBackend&>(*replay_backend) : *serial_backend;
   hand::HandActuator& actuator = replay ? static_cast<hand::HandActuator&>(no_actuator) : *serial_actuator;
   controller::ControlLoop loop(backend, *grasp, actuator, layout, calibration, loop_config);
   std::unique_ptr<hardware::FrameLogger> frame_logger;
@@ -265,9 +268,10 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   const size_t capacity_rows =
       options.out_dir.empty() ? 0
       : replay                ? recording->ticks() + 1
-             : static_cast<size_t>(std::ceil(config.duration_s *
-                                             std::max(config.controller.rate_hz, config.sensor.sample_rate_hz) *
-                                             kSerialRowMargin)) + 16;
+                              : static_cast<size_t>(std::ceil(
+                                    config.duration_s * std::max(config.controller.rate_hz, config.sensor.sample_rate_hz) *
+                                    kSerialRowMargin)) +
+                     16;
   SignalLog log(columns, text_columns, capacity_rows);
 
   // The script: intent actions go to the controller, the others (serial with --prompt-actions) to
@@ -291,7 +295,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     intent = next;
     grasp->SetIntent(intent);
     if (intent == controller::GraspIntent::kClose && first_close_s < 0.0) first_close_s = applied_s;
-    if (intents.size() < intents.capacity()) intents.push_back({IntentName(intent), source, received_s, applied_s});
+    if (intents.size() < intents.capacity())
+      intents.push_back({IntentName(intent), source, received_s, applied_s});
   };
   // Due script actions at loop time `t` (fixed times, in order).
   const auto fire_script = [&](double t) {
@@ -302,8 +307,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
         if (!intent_from_recording) set_intent(IntentOf(action.kind), "script", action.at_s, t);
       } else if (serial) {
         const std::string text = PromptText(action);
-        std::fprintf(stderr, "\a>>> at %.2f s: %s now (%s, line %d)\n", t, text.c_str(), ActionName(action.kind),
-                     action.line);
+        std::fprintf(stderr, "\a>>> at %.2f s: %s now (%s, line %d)\n", t, text.c_str(),
+                     ActionName(action.kind), action.line);
         prompts.push_back({ActionName(action.kind), text, action.line, action.at_s, t});
       }
       ++next_action;
@@ -358,7 +363,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
         ++commands_differing;
         if (first_difference_s < 0.0) first_difference_s = time_s;
       }
-      max_effort_difference = std::max(max_effort_difference, std::abs(recorded.grip_effort - now.grip_effort));
+      max_effort_difference =
+          std::max(max_effort_difference, std::abs(recorded.grip_effort - now.grip_effort));
     }
     if (replay) text[3] = recording->phase.empty() ? "" : recording->phase[tick].c_str();
   };
@@ -391,7 +397,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     // The operator's cue (and a test's): the session runs and takes intent from now on.
     std::string inputs;
     if (live && options.intent_stdin) inputs += live->keys() ? "keys c/o/i/q" : "lines on stdin";
-    if (!options.intent_fifo.empty()) inputs += (inputs.empty() ? "" : ", ") + ("lines on " + options.intent_fifo);
+    if (!options.intent_fifo.empty())
+      inputs += (inputs.empty() ? "" : ", ") + ("lines on " + options.intent_fifo);
     char length[32] = "until stopped";
     if (std::isfinite(config.duration_s)) std::snprintf(length, sizeof(length), "%.1f s", config.duration_s);
     std::fprintf(stderr, "run: backend serial on %s: session started (%s; live intent: %s)\n",
@@ -416,10 +423,10 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
           quit = true;
           break;
         }
-        const controller::GraspIntent next = command == hardware::IntentCommand::kClose ? controller::GraspIntent::kClose
-                                             : command == hardware::IntentCommand::kOpen
-                                                 ? controller::GraspIntent::kOpen
-                                                 : controller::GraspIntent::kIdle;
+        const controller::GraspIntent next =
+            command == hardware::IntentCommand::kClose  ? controller::GraspIntent::kClose
+            : command == hardware::IntentCommand::kOpen ? controller::GraspIntent::kOpen
+                                                        : controller::GraspIntent::kIdle;
         set_intent(next, "live", -1.0, t);
         intents.back().live_index = static_cast<long>(index);  // source and time from the input below
       }
@@ -485,7 +492,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
       bench["commands_compared"] = commands_compared;
       bench["commands_differing"] = commands_differing;
       bench["max_effort_difference"] = max_effort_difference;
-      bench["first_difference_s"] = first_difference_s >= 0.0 ? nlohmann::json(first_difference_s) : nlohmann::json(nullptr);
+      bench["first_difference_s"] =
+          first_difference_s >= 0.0 ? nlohmann::json(first_difference_s) : nlohmann::json(nullptr);
     }
   }
   const controller::LoopCounters& ticks = loop.counters();
@@ -500,7 +508,8 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   bench["final_valid_units"] = loop.state().valid_count;
   bench["first_close_s"] = first_close_s >= 0.0 ? nlohmann::json(first_close_s) : nlohmann::json(nullptr);
   nlohmann::json phase_list = nlohmann::json::array();
-  for (const PhaseChange& change : phases) phase_list.push_back({{"phase", change.phase}, {"start_s", change.time_s}});
+  for (const PhaseChange& change : phases)
+    phase_list.push_back({{"phase", change.phase}, {"start_s", change.time_s}});
   bench["phases"] = phase_list;
   nlohmann::json intent_list = nlohmann::json::array();
   for (const IntentLogEntry& entry : intents) {
@@ -557,30 +566,36 @@ std::string BenchSummaryTable(const RunResult& result) {
   const nlohmann::json& b = result.bench;
   std::ostringstream out;
   char line[320];
-  std::snprintf(line, sizeof(line), "scenario %s, controller %s, backend %s: %s\n", result.config.name.c_str(),
-                result.config.controller.name.c_str(), BackendName(result.config.backend),
-                !result.completed ? "INTERRUPTED" : result.passed ? "PASSED" : "FAILED");
+  std::snprintf(line, sizeof(line), "scenario %s, controller %s, backend %s: %s\n",
+                result.config.name.c_str(), result.config.controller.name.c_str(),
+                BackendName(result.config.backend),
+                !result.completed ? "INTERRUPTED"
+                : result.passed   ? "PASSED"
+                                  : "FAILED");
   out << line;
   if (result.config.backend == Backend::kSerial) {
-    std::snprintf(line, sizeof(line),
-                  "  %s: %.2f s (ended by %s), %llu frames, %llu corrupt, %llu dropped, %llu reconnects, %llu stale "
-                  "periods%s\n",
-                  b.value("port", std::string()).c_str(), result.metrics.sim_s,
-                  b.value("ended_by", std::string()).c_str(), static_cast<unsigned long long>(b.value("frames", 0ull)),
-                  static_cast<unsigned long long>(b.value("corrupt", 0ull)),
-                  static_cast<unsigned long long>(b.value("dropped", 0ull)),
-                  static_cast<unsigned long long>(b.value("reconnects", 0ull)),
-                  static_cast<unsigned long long>(b.value("stale_periods", 0ull)),
-                  b.value("connected_at_end", true) ? "" : "; device DISCONNECTED at the end");
+    std::snprintf(
+        line, sizeof(line),
+        "  %s: %.2f s (ended by %s), %llu frames, %llu corrupt, %llu dropped, %llu reconnects, %llu stale "
+        "periods%s\n",
+        b.value("port", std::string()).c_str(), result.metrics.sim_s,
+        b.value("ended_by", std::string()).c_str(), static_cast<unsigned long long>(b.value("frames", 0ull)),
+        static_cast<unsigned long long>(b.value("corrupt", 0ull)),
+        static_cast<unsigned long long>(b.value("dropped", 0ull)),
+        static_cast<unsigned long long>(b.value("reconnects", 0ull)),
+        static_cast<unsigned long long>(b.value("stale_periods", 0ull)),
+        b.value("connected_at_end", true) ? "" : "; device DISCONNECTED at the end");
     out << line;
   } else {
     std::snprintf(line, sizeof(line), "  replayed %llu ticks of %s (%s), intent from the %s\n",
                   static_cast<unsigned long long>(b.value("recorded_ticks", 0ull)),
-                  b.value("recording", std::string()).c_str(), b.value("recording_kind", std::string()).c_str(),
+                  b.value("recording", std::string()).c_str(),
+                  b.value("recording_kind", std::string()).c_str(),
                   b.value("intent_from", std::string()).c_str());
     out << line;
     if (b.value("commands_recorded", false)) {
-      std::snprintf(line, sizeof(line), "  commands differing from the recording: %llu of %llu (max |effort| difference %.3g)\n",
+      std::snprintf(line, sizeof(line),
+                    "  commands differing from the recording: %llu of %llu (max |effort| difference %.3g)\n",
                     static_cast<unsigned long long>(b.value("commands_differing", 0ull)),
                     static_cast<unsigned long long>(b.value("commands_compared", 0ull)),
                     b.value("max_effort_difference", 0.0));
@@ -599,7 +614,8 @@ std::string BenchSummaryTable(const RunResult& result) {
   }
   out << "\n";
   for (const auto& event : b.at("intent_events")) {
-    std::snprintf(line, sizeof(line), "  intent %s from %s at %.3f s\n", event.at("intent").get<std::string>().c_str(),
+    std::snprintf(line, sizeof(line), "  intent %s from %s at %.3f s\n",
+                  event.at("intent").get<std::string>().c_str(),
                   event.at("source").get<std::string>().c_str(), event.at("applied_s").get<double>());
     out << line;
   }
@@ -609,8 +625,8 @@ std::string BenchSummaryTable(const RunResult& result) {
     out << line;
   }
   for (const ExpectationOutcome& o : result.outcomes) {
-    std::snprintf(line, sizeof(line), "  [----] %-24s %-14s not scored: %s\n", o.name.c_str(), o.limit.c_str(),
-                  o.note.c_str());
+    std::snprintf(line, sizeof(line), "  [----] %-24s %-14s not scored: %s\n", o.name.c_str(),
+                  o.limit.c_str(), o.note.c_str());
     out << line;
   }
   return out.str();

@@ -44,11 +44,13 @@ RunSignals ReadRunSignals(const std::string& dir) {
     std::stringstream header(line);
     for (std::string name; std::getline(header, name, ',');) names.push_back(name);
   }
-  if (names.empty() || names[0] != "time_s") throw ConfigError(run.path + ":1: expected a run's signals.csv (time_s first)");
+  if (names.empty() || names[0] != "time_s")
+    throw ConfigError(run.path + ":1: expected a run's signals.csv (time_s first)");
   std::vector<std::vector<double>*> targets(names.size(), nullptr);
   for (size_t c = 0; c < names.size(); ++c) {
     // Text columns of a run's signals.csv (intent, controller phase, slip cues, a replay's recorded phase).
-    const bool text = names[c] == "intent" || names[c] == "phase" || names[c] == "slip_cues" || names[c] == "recorded_phase";
+    const bool text = names[c] == "intent" || names[c] == "phase" || names[c] == "slip_cues" ||
+                      names[c] == "recorded_phase";
     if (!text) targets[c] = &run.numeric[names[c]];
   }
   int line_number = 1;
@@ -74,7 +76,8 @@ RunSignals ReadRunSignals(const std::string& dir) {
       targets[c]->push_back(value);
     }
   }
-  if (run.Column("time_s").size() < 2) throw ConfigError(run.path + ": fewer than 2 rows: nothing to compare");
+  if (run.Column("time_s").size() < 2)
+    throw ConfigError(run.path + ": fewer than 2 rows: nothing to compare");
   while (run.numeric.count("fn_est_n_" + std::to_string(run.units)) > 0) ++run.units;
   return run;
 }
@@ -105,8 +108,8 @@ double Interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[lo] + w * (y[hi] - y[lo]);
 }
 
-void MatchInOrder(const std::vector<Change>& a, const std::vector<Change>& b, const std::string& kind, double shift_s,
-                  RunComparison* out) {
+void MatchInOrder(const std::vector<Change>& a, const std::vector<Change>& b, const std::string& kind,
+                  double shift_s, RunComparison* out) {
   // Skip the initial state (row 0); match the k-th change into NAME in A with the k-th in B.
   std::map<std::string, std::vector<double>> b_times;
   for (size_t i = 1; i < b.size(); ++i) b_times[b[i].name].push_back(b[i].time_s);
@@ -143,8 +146,8 @@ RunComparison CompareRuns(const std::string& run_a, const std::string& run_b) {
   const RunSignals a = ReadRunSignals(run_a);
   const RunSignals b = ReadRunSignals(run_b);
   if (a.units != b.units) {
-    throw ConfigError(run_b + "/signals.csv:1: " + std::to_string(b.units) + " units, but " + run_a + " has " +
-                      std::to_string(a.units) + ": not the same sensor");
+    throw ConfigError(run_b + "/signals.csv:1: " + std::to_string(b.units) + " units, but " + run_a +
+                      " has " + std::to_string(a.units) + ": not the same sensor");
   }
   RunComparison out;
   out.run_a = run_a;
@@ -206,7 +209,8 @@ RunComparison CompareRuns(const std::string& run_a, const std::string& run_b) {
       const auto value_b = [&](const std::string& column) {
         const double fn = Interpolate(time_b, b.Column(column + k), tb);
         const double validity = b.Column("validity_" + k)[std::min(
-            static_cast<size_t>(std::lower_bound(time_b.begin(), time_b.end(), tb) - time_b.begin()), time_b.size() - 1)];
+            static_cast<size_t>(std::lower_bound(time_b.begin(), time_b.end(), tb) - time_b.begin()),
+            time_b.size() - 1)];
         return validity == 0.0 ? fn : 0.0;
       };
       const double fn_diff = value_b("fn_est_n_") - value(a, "fn_est_n_", i);
@@ -243,7 +247,11 @@ nlohmann::json ComparisonJson(const RunComparison& c) {
   }
   nlohmann::json events = nlohmann::json::array();
   for (const EventTiming& e : c.events) {
-    events.push_back({{"kind", e.kind}, {"name", e.name}, {"a_s", e.a_s}, {"b_s", e.b_s}, {"difference_s", e.difference_s}});
+    events.push_back({{"kind", e.kind},
+                      {"name", e.name},
+                      {"a_s", e.a_s},
+                      {"b_s", e.b_s},
+                      {"difference_s", e.difference_s}});
   }
   return {{"run_a", c.run_a},
           {"run_b", c.run_b},
@@ -264,24 +272,26 @@ nlohmann::json ComparisonJson(const RunComparison& c) {
 
 std::string ComparisonTable(const RunComparison& c) {
   std::ostringstream out;
-  out << "compare " << c.run_a << " (A) with " << c.run_b << " (B), aligned on " << c.aligned_on << " (B - A shift "
-      << Format("%.4f", c.shift_s) << " s), " << Format("%.2f", c.overlap_s) << " s overlap, " << c.samples
-      << " samples\n";
-  out << "  sensed grip: peak A " << Format("%.3f", c.peak_grip_a_n) << " N, B " << Format("%.3f", c.peak_grip_b_n)
-      << " N; B - A RMS " << Format("%.3g", c.grip_rms_n) << " N, max " << Format("%.3g", c.grip_max_abs_n)
-      << " N; effort RMS " << Format("%.3g", c.effort_rms) << "\n";
+  out << "compare " << c.run_a << " (A) with " << c.run_b << " (B), aligned on " << c.aligned_on
+      << " (B - A shift " << Format("%.4f", c.shift_s) << " s), " << Format("%.2f", c.overlap_s)
+      << " s overlap, " << c.samples << " samples\n";
+  out << "  sensed grip: peak A " << Format("%.3f", c.peak_grip_a_n) << " N, B "
+      << Format("%.3f", c.peak_grip_b_n) << " N; B - A RMS " << Format("%.3g", c.grip_rms_n) << " N, max "
+      << Format("%.3g", c.grip_max_abs_n) << " N; effort RMS " << Format("%.3g", c.effort_rms) << "\n";
   out << "  per-unit Fn residual RMS over all units " << Format("%.3g", c.fn_rms_n) << " N; largest:";
   std::vector<UnitResidual> sorted = c.units;
-  std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.fn_rms_n > y.fn_rms_n; });
+  std::sort(sorted.begin(), sorted.end(),
+            [](const auto& x, const auto& y) { return x.fn_rms_n > y.fn_rms_n; });
   for (size_t i = 0; i < std::min<size_t>(3, sorted.size()); ++i) {
     out << " unit " << sorted[i].unit << " " << Format("%.3g", sorted[i].fn_rms_n) << " N";
   }
   out << "\n";
   for (const EventTiming& e : c.events) {
-    out << "  " << e.kind << " " << e.name << ": A " << Format("%.3f", e.a_s) << " s, B " << Format("%.3f", e.b_s)
-        << " s (" << Format("%+.1f", 1e3 * e.difference_s) << " ms)\n";
+    out << "  " << e.kind << " " << e.name << ": A " << Format("%.3f", e.a_s) << " s, B "
+        << Format("%.3f", e.b_s) << " s (" << Format("%+.1f", 1e3 * e.difference_s) << " ms)\n";
   }
-  if (c.unmatched_events > 0) out << "  " << c.unmatched_events << " events without a counterpart in the other run\n";
+  if (c.unmatched_events > 0)
+    out << "  " << c.unmatched_events << " events without a counterpart in the other run\n";
   return out.str();
 }
 
@@ -290,9 +300,11 @@ void WriteComparisonPlot(const RunComparison& c, const std::string& path) {
   // The run directories' own names: whole paths do not fit a title.
   const auto name = [](const std::string& dir) {
     const std::string stem = std::filesystem::path(dir).lexically_normal().filename().string();
-    return stem.empty() ? std::filesystem::path(dir).lexically_normal().parent_path().filename().string() : stem;
+    return stem.empty() ? std::filesystem::path(dir).lexically_normal().parent_path().filename().string()
+                        : stem;
   };
-  figure.title = "compare: A = " + name(c.run_a) + ", B = " + name(c.run_b) + " (aligned on " + c.aligned_on + ")";
+  figure.title =
+      "compare: A = " + name(c.run_a) + ", B = " + name(c.run_b) + " (aligned on " + c.aligned_on + ")";
   plot::Chart grip;
   grip.title = "Sensed grip (est_total_fn_n) on A's clock";
   grip.x_label = "time [s]";

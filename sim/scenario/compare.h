@@ -22,10 +22,10 @@ struct UnitResidual {
 
 /// One event (an intent change or a controller phase change) in A and its counterpart in B.
 struct EventTiming {
-  std::string kind;   ///< "intent" or "phase"
-  std::string name;   ///< the intent or phase entered
-  double a_s = 0.0;   ///< time in A [s]
-  double b_s = 0.0;   ///< time in B on A's clock (after the alignment shift) [s]
+  std::string kind;           ///< "intent" or "phase"
+  std::string name;           ///< the intent or phase entered
+  double a_s = 0.0;           ///< time in A [s]
+  double b_s = 0.0;           ///< time in B on A's clock (after the alignment shift) [s]
   double difference_s = 0.0;  ///< b_s - a_s [s]
 };
 
@@ -35,18 +35,18 @@ struct RunComparison {
   /// B's clock minus A's at the alignment event (the first intent change both share) [s]; 0 when
   /// neither has an intent event.
   double shift_s = 0.0;
-  std::string aligned_on;       ///< e.g. "close" (the first intent event), or "start"
-  double overlap_s = 0.0;       ///< length of the compared span on A's clock [s]
-  size_t samples = 0;           ///< rows of A compared
+  std::string aligned_on;  ///< e.g. "close" (the first intent event), or "start"
+  double overlap_s = 0.0;  ///< length of the compared span on A's clock [s]
+  size_t samples = 0;      ///< rows of A compared
   std::vector<UnitResidual> units;
-  double fn_rms_n = 0.0;        ///< over all units and samples [N]
-  double grip_rms_n = 0.0;      ///< est_total_fn_n, B - A [N]
+  double fn_rms_n = 0.0;    ///< over all units and samples [N]
+  double grip_rms_n = 0.0;  ///< est_total_fn_n, B - A [N]
   double grip_max_abs_n = 0.0;
-  double peak_grip_a_n = 0.0;   ///< peak est_total_fn_n in the overlap [N]
+  double peak_grip_a_n = 0.0;  ///< peak est_total_fn_n in the overlap [N]
   double peak_grip_b_n = 0.0;
-  double effort_rms = 0.0;      ///< grip_effort, B - A [-]
+  double effort_rms = 0.0;          ///< grip_effort, B - A [-]
   std::vector<EventTiming> events;  ///< intent events, then phase changes, matched in order
-  int unmatched_events = 0;     ///< events of one run with no counterpart in the other
+  int unmatched_events = 0;         ///< events of one run with no counterpart in the other
   /// Aligned series for the plot (A's time, A's and B's sensed total, B - A).
   std::vector<double> time_s, grip_a_n, grip_b_n;
 };

@@ -26,7 +26,8 @@ EmulatedHand::EmulatedHand(const ScenarioConfig& config, const sensor::Layout& l
       rig_(layout, sensor::PaperCalibration(layout.unit_count()), EmulatorRigConfig(config),
            controller::MakeController("open_loop", {})),
       player_(config),
-      tracker_(config.metrics, config.scene.object.crush_limit_n, config.sensor.inversion.contact_threshold_n),
+      tracker_(config.metrics, config.scene.object.crush_limit_n,
+               config.sensor.inversion.contact_threshold_n),
       period_s_(1.0 / config.sensor.sample_rate_hz),
       wall_start_(std::chrono::steady_clock::now()) {
   player_.Start(rig_);
@@ -102,8 +103,8 @@ nlohmann::json EmulatedHand::Summary() const {
   // The host's controller, not the emulator, sees slip flags and estimates: leave out what it
   // cannot score.
   for (const char* key : {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n",
-                          "missed_slip_events", "controller_slip_flags", "false_slip_flags", "false_slip_flag_s",
-                          "false_slip_flag_pct", "estimation_samples"}) {
+                          "missed_slip_events", "controller_slip_flags", "false_slip_flags",
+                          "false_slip_flag_s", "false_slip_flag_pct", "estimation_samples"}) {
     metrics.erase(key);
   }
   return {

@@ -217,11 +217,13 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.max_slip_mm = copy.slip_distance_m_ * 1e3;
   m.peak_grip_n = copy.peak_grip_n_;
   m.needed_grip_n = copy.needed_grip_n_;
-  if (copy.needed_grip_n_ >= kMinNeededGripN) m.grip_efficiency_ratio = copy.peak_grip_n_ / copy.needed_grip_n_;
+  if (copy.needed_grip_n_ >= kMinNeededGripN)
+    m.grip_efficiency_ratio = copy.peak_grip_n_ / copy.needed_grip_n_;
   m.crushed = copy.crush_limit_n_ > 0.0 && copy.peak_grip_n_ > copy.crush_limit_n_;
   m.slip_events = copy.event_count_;
   m.missed_slip_events = copy.missed_;
-  if (copy.event_count_ > 0 && copy.worst_latency_s_ >= 0.0) m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
+  if (copy.event_count_ > 0 && copy.worst_latency_s_ >= 0.0)
+    m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
   m.controller_slip_flags = copy.flags_;
   m.false_slip_flags = copy.false_flags_;
   m.held_s = copy.held_s_;
@@ -248,7 +250,9 @@ std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, cons
   if (e.not_dropped) {
     ExpectationOutcome o = Outcome("not_dropped", *e.not_dropped ? "true" : "false");
     o.value = m.dropped ? 1.0 : 0.0;
-    o.value_text = !m.grasped ? "never grasped" : m.dropped ? "dropped at " + Format(m.drop_time_s, "s") : "held";
+    o.value_text = !m.grasped  ? "never grasped"
+                   : m.dropped ? "dropped at " + Format(m.drop_time_s, "s")
+                               : "held";
     o.passed = *e.not_dropped ? !m.dropped : m.dropped;
     if (!m.grasped) o.note = "the object was never grasped";
     outcomes.push_back(o);
@@ -275,14 +279,16 @@ std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, cons
     outcomes.push_back(o);
   }
   if (e.slip_detected_within_ms) {
-    ExpectationOutcome o = Outcome("slip_detected_within_ms", "<= " + Format(*e.slip_detected_within_ms, "ms"));
+    ExpectationOutcome o =
+        Outcome("slip_detected_within_ms", "<= " + Format(*e.slip_detected_within_ms, "ms"));
     if (m.slip_events == 0) {
       o.value_text = "no slip";
       o.passed = true;
       o.note = "no slip event occurred, nothing to detect";
     } else if (m.missed_slip_events > 0) {
       o.value = m.slip_detect_latency_ms;
-      o.value_text = std::to_string(m.missed_slip_events) + " of " + std::to_string(m.slip_events) + " missed";
+      o.value_text =
+          std::to_string(m.missed_slip_events) + " of " + std::to_string(m.slip_events) + " missed";
       o.passed = false;
       o.note = "slip events the controller never flagged";
     } else {
@@ -314,7 +320,8 @@ std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, cons
     outcomes.push_back(o);
   }
   if (e.max_false_slip_per_min) {
-    ExpectationOutcome o = Outcome("max_false_slip_per_min", "<= " + Format(*e.max_false_slip_per_min, "/min"));
+    ExpectationOutcome o =
+        Outcome("max_false_slip_per_min", "<= " + Format(*e.max_false_slip_per_min, "/min"));
     o.value = m.false_slip_per_min;
     o.value_text = Format(m.false_slip_per_min, "/min") + " (" + std::to_string(m.false_slip_flags) + ")";
     o.passed = m.false_slip_per_min <= *e.max_false_slip_per_min;

@@ -20,23 +20,23 @@ namespace graspbed::scenario {
 
 /// One ground-truth slip event while the object was held.
 struct SlipEvent {
-  double onset_s = 0.0;           ///< first tick with relative speed above slip_speed_m_s [s]
-  double end_s = 0.0;             ///< last tick above it [s] (event closes slip_event_gap_s later)
-  double peak_speed_m_s = 0.0;    ///< [m/s]
-  double distance_m = 0.0;        ///< slip distance accumulated during the event [m]
-  bool detected = false;          ///< a controller slip flag matched the event
-  double latency_s = 0.0;         ///< flag time - onset, >= 0 (0 for an early flag) [s]
+  double onset_s = 0.0;         ///< first tick with relative speed above slip_speed_m_s [s]
+  double end_s = 0.0;           ///< last tick above it [s] (event closes slip_event_gap_s later)
+  double peak_speed_m_s = 0.0;  ///< [m/s]
+  double distance_m = 0.0;      ///< slip distance accumulated during the event [m]
+  bool detected = false;        ///< a controller slip flag matched the event
+  double latency_s = 0.0;       ///< flag time - onset, >= 0 (0 for an early flag) [s]
 };
 
 /// The metrics of one run.
 struct Metrics {
-  bool grasped = false;           ///< the object was grasped at some point after a close
-  double grasp_time_s = -1.0;     ///< when it first was [s]; < 0 never
-  bool dropped = false;           ///< left the hand while held (or was never grasped)
-  double drop_time_s = -1.0;      ///< [s]; < 0 not dropped
-  double max_slip_mm = 0.0;       ///< slip distance accumulated above the creep speed while held [mm]
-  double peak_grip_n = 0.0;       ///< largest squeeze on the object over the run [N]
-  bool crushed = false;           ///< peak_grip_n above object.crush_limit_n (fragile objects only)
+  bool grasped = false;        ///< the object was grasped at some point after a close
+  double grasp_time_s = -1.0;  ///< when it first was [s]; < 0 never
+  bool dropped = false;        ///< left the hand while held (or was never grasped)
+  double drop_time_s = -1.0;   ///< [s]; < 0 not dropped
+  double max_slip_mm = 0.0;    ///< slip distance accumulated above the creep speed while held [mm]
+  double peak_grip_n = 0.0;    ///< largest squeeze on the object over the run [N]
+  bool crushed = false;        ///< peak_grip_n above object.crush_limit_n (fragile objects only)
   /// Largest grip the held object needed: max over holding ticks of the ground truth's
   /// required_grip_n, max(|Ft finger|, |Ft thumb|) / mu [N].
   double needed_grip_n = 0.0;
@@ -46,25 +46,25 @@ struct Metrics {
   std::optional<double> grip_efficiency_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
-  int slip_events = 0;            ///< ground-truth slip events while held
-  int missed_slip_events = 0;     ///< of those, never flagged by the controller
-  int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
-  int false_slip_flags = 0;       ///< flags matching no slip event
+  int slip_events = 0;              ///< ground-truth slip events while held
+  int missed_slip_events = 0;       ///< of those, never flagged by the controller
+  int controller_slip_flags = 0;    ///< rising edges of the controller's slip flag while held
+  int false_slip_flags = 0;         ///< flags matching no slip event
   double false_slip_per_min = 0.0;  ///< false_slip_flags per minute held [1/min]
   /// Time the controller's slip flag was up while held, outside slip events and seating [s]. A flag
   /// that stays up counts once in false_slip_flags; this is what it costs.
   double false_slip_flag_s = 0.0;
   /// false_slip_flag_s as a share of the time held [%].
   double false_slip_flag_pct = 0.0;
-  double held_s = 0.0;            ///< time the object was held [s]
+  double held_s = 0.0;              ///< time the object was held [s]
   std::optional<double> fn_rmse_n;  ///< per-unit Fn estimation RMSE over contact samples [N]
   std::optional<double> ft_rmse_n;  ///< per-unit Ft estimation RMSE over the same samples [N]
   int64_t estimation_samples = 0;   ///< (tick, unit) pairs in the RMSEs
   /// Time from the first close to the start of the first stable window [s]; nullopt never stable.
   std::optional<double> time_to_stable_s;
-  double sim_s = 0.0;             ///< simulated time [s]
-  double wall_s = 0.0;            ///< wall-clock time of the run [s]
-  bool physics_fault = false;     ///< NaN or MuJoCo warning during the run
+  double sim_s = 0.0;          ///< simulated time [s]
+  double wall_s = 0.0;         ///< wall-clock time of the run [s]
+  bool physics_fault = false;  ///< NaN or MuJoCo warning during the run
   std::string physics_fault_cause;
   double physics_fault_time_s = 0.0;
   std::vector<SlipEvent> events;  ///< every slip event (first kMaxEvents)
@@ -120,7 +120,7 @@ class MetricsTracker {
   bool grasped_ever_ = false;
   double grasp_time_s_ = -1.0;
   double grasp_start_s_ = -1.0;  ///< when the current grasp was established [s]
-  bool grasped_ = false;  ///< grasped since the latest close
+  bool grasped_ = false;         ///< grasped since the latest close
   bool holding_ = false;
   std::array<double, 3> reference_offset_m_{};  ///< object - wrist when grasped [m]
   bool dropped_ = false;
@@ -132,7 +132,7 @@ class MetricsTracker {
   double needed_grip_n_ = 0.0;
 
   std::array<SlipEvent, kMaxEvents> events_{};
-  int event_count_ = 0;       ///< events started (may exceed kMaxEvents)
+  int event_count_ = 0;  ///< events started (may exceed kMaxEvents)
   bool event_open_ = false;
   SlipEvent current_{};
   double last_above_s_ = 0.0;
@@ -165,11 +165,12 @@ struct ExpectationOutcome {
   std::optional<double> value;  ///< the measured value (nullopt where there is none)
   std::string value_text;       ///< the measured value for tables ("1.23 mm", "none")
   bool passed = false;
-  std::string note;             ///< why, when not obvious
+  std::string note;  ///< why, when not obvious
 };
 
 /// Checks `metrics` against every configured expectation (in a fixed order), plus the implicit
 /// "no_physics_fault" that every run must meet.
-std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations, const Metrics& metrics);
+std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations,
+                                                     const Metrics& metrics);
 
 }  // namespace graspbed::scenario

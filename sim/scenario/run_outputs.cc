@@ -18,10 +18,10 @@ namespace {
 namespace fs = std::filesystem;
 
 // Files a run writes; removed at the start so an old result never sits next to a new run.
-constexpr const char* kOutputFiles[] = {"config.yaml",        "signals.csv", "summary.json", "forces.png",
-                                        "estimate_vs_truth.png", "grip.png", "slip.png",     "height.png",
-                                        "taxels_fn.png",         "taxels_ft.png", "states.csv",
-                                        "video.mp4",             "video_strip.png"};
+constexpr const char* kOutputFiles[] = {
+    "config.yaml", "signals.csv", "summary.json",   "forces.png",    "estimate_vs_truth.png",
+    "grip.png",    "slip.png",    "height.png",     "taxels_fn.png", "taxels_ft.png",
+    "states.csv",  "video.mp4",   "video_strip.png"};
 // Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
 constexpr double kTaxelScaleFloorN = 0.5;
 
@@ -32,12 +32,25 @@ std::string TempPath(const std::string& path) {
 
 }  // namespace
 
-const char* const kLoopColumnNames[kLoopColumnCount] = {
-    "time_s",        "grip_effort",       "motor_enable", "brake",
-    "grip_target_n", "friction_estimate", "slip_flag",    "safe_hold",
-    "stale",         "valid_units",       "contact_units", "est_total_fn_n",
-    "est_shear_axial_n", "est_shear_circumferential_n", "read_status", "frame_seq",
-    "frame_time_s",  "frame_flags",       "session"};
+const char* const kLoopColumnNames[kLoopColumnCount] = {"time_s",
+                                                        "grip_effort",
+                                                        "motor_enable",
+                                                        "brake",
+                                                        "grip_target_n",
+                                                        "friction_estimate",
+                                                        "slip_flag",
+                                                        "safe_hold",
+                                                        "stale",
+                                                        "valid_units",
+                                                        "contact_units",
+                                                        "est_total_fn_n",
+                                                        "est_shear_axial_n",
+                                                        "est_shear_circumferential_n",
+                                                        "read_status",
+                                                        "frame_seq",
+                                                        "frame_time_s",
+                                                        "frame_flags",
+                                                        "session"};
 
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry) {
@@ -156,7 +169,8 @@ void WriteTaxelMaps(const RunResult& result, const SignalLog& log, const sensor:
   double ft_max = kTaxelScaleFloorN;
   for (int u = 0; u < layout.unit_count(); ++u) {
     const sensor::UnitPose& pose = layout.units[static_cast<size_t>(u)];
-    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" + std::to_string(pose.column) +
+    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" +
+                              std::to_string(pose.column) +
                               (pose.orientation == sensor::BeamOrientation::kAxial ? ", ax)" : ", circ)");
     fn.row_labels.push_back(label);
     ft.row_labels.push_back(label);
@@ -197,7 +211,6 @@ void PrepareOutputDir(const std::string& dir) {
   WriteFileAtomic(dir + "/" + kIncompleteMarker,
                   "This run is in progress or was interrupted; its results are not complete.\n");
 }
-
 
 }  // namespace internal
 

@@ -30,27 +30,29 @@ namespace {
 
 namespace fs = std::filesystem;
 
+using internal::HorizontalLine;
+using internal::IntentName;
 using internal::kIncompleteMarker;
 using internal::kLoopColumnCount;
-using internal::IntentName;
 using internal::Line;
 using internal::MakeChart;
 using internal::PerUnitFnChart;
-using internal::HorizontalLine;
-using internal::ScriptMarkers;
-using internal::WriteTaxelMaps;
-using internal::WriteCsvAtomic;
 using internal::PrepareOutputDir;
+using internal::ScriptMarkers;
+using internal::WriteCsvAtomic;
+using internal::WriteTaxelMaps;
 
 // Simulated time between progress callbacks [s].
 constexpr double kProgressPeriodS = 0.1;
-
 
 /// True unit loads per control tick in a ring, to look up the truth at a frame's sample time.
 class TruthRing {
  public:
   TruthRing(size_t capacity, int units, double rate_hz)
-      : capacity_(capacity), units_(units), rate_hz_(rate_hz), times_(capacity, -1.0),
+      : capacity_(capacity),
+        units_(units),
+        rate_hz_(rate_hz),
+        times_(capacity, -1.0),
         loads_(capacity * static_cast<size_t>(units)) {}
 
   std::span<sensor::UnitLoad> Next(double time_s) {
@@ -113,16 +115,16 @@ enum Col : size_t {
   kFixedCount
 };
 
-constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] = {
-    "true_sensed_fn_n", "true_finger_fn_n", "true_thumb_fn_n", "true_squeeze_n",     "slip_speed_mm_s",
-    "object_x_m",       "object_y_m",       "object_z_m",      "object_height_m",    "wrist_x_m",
-    "wrist_y_m",        "wrist_z_m",        "wrist_target_z_m", "grip_closure_m",    "object_mass_kg",
-    "external_force_x_n", "external_force_y_n", "external_force_z_n", "holding",     "slip_event",
-    "slip_distance_mm"};
+constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
+    {"true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",    "true_squeeze_n",  "slip_speed_mm_s",
+     "object_x_m",         "object_y_m",         "object_z_m",         "object_height_m", "wrist_x_m",
+     "wrist_y_m",          "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",  "object_mass_kg",
+     "external_force_x_n", "external_force_y_n", "external_force_z_n", "holding",         "slip_event",
+     "slip_distance_mm"};
 
 // Per-unit columns, in this order per unit.
-constexpr const char* kUnitNames[] = {"r1_ohm", "r2_ohm", "fn_est_n", "ft_est_n", "fn_true_n", "ft_true_n",
-                                      "validity"};
+constexpr const char* kUnitNames[] = {"r1_ohm",    "r2_ohm",    "fn_est_n", "ft_est_n",
+                                      "fn_true_n", "ft_true_n", "validity"};
 constexpr size_t kPerUnit = std::size(kUnitNames);
 
 std::vector<std::string> NumericColumns(int units) {
@@ -134,7 +136,8 @@ std::vector<std::string> NumericColumns(int units) {
   return names;
 }
 
-void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Layout& layout, const std::string& dir) {
+void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Layout& layout,
+                const std::string& dir) {
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
   const int units = static_cast<int>((log.numeric_column_count() - kFixedCount) / kPerUnit);
@@ -168,10 +171,12 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   plot::Figure estimate;
   estimate.title = title + ": estimate vs truth";
   plot::Chart fn = MakeChart("Unit " + b + " (most loaded): Fn", "time [s]", "Fn [N]");
-  fn.series = {Line(log, time, "fn_est_n_" + b, "estimated"), Line(log, time, "fn_true_n_" + b, "true", 1.0, true)};
+  fn.series = {Line(log, time, "fn_est_n_" + b, "estimated"),
+               Line(log, time, "fn_true_n_" + b, "true", 1.0, true)};
   fn.include_zero_y = true;
   plot::Chart ft = MakeChart("Unit " + b + " (most loaded): Ft", "time [s]", "Ft [N]");
-  ft.series = {Line(log, time, "ft_est_n_" + b, "estimated"), Line(log, time, "ft_true_n_" + b, "true", 1.0, true)};
+  ft.series = {Line(log, time, "ft_est_n_" + b, "estimated"),
+               Line(log, time, "ft_true_n_" + b, "true", 1.0, true)};
   ft.include_zero_y = true;
   plot::Chart total = MakeChart("Sum over units: Fn", "time [s]", "Fn [N]");
   total.series = {Line(log, time, "est_total_fn_n", "estimated"),
@@ -202,8 +207,8 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   slip.title = title + ": slip";
   plot::Chart speed = MakeChart("Relative speed object / fingertips (truth)", "time [s]", "speed [mm/s]");
   speed.series = {Line(log, time, "slip_speed_mm_s", "slip speed")};
-  speed.series.push_back(
-      HorizontalLine("slip threshold", time.front(), time.back(), result.config.metrics.slip_speed_m_s * 1e3));
+  speed.series.push_back(HorizontalLine("slip threshold", time.front(), time.back(),
+                                        result.config.metrics.slip_speed_m_s * 1e3));
   for (const SlipEvent& event : result.metrics.events) speed.markers.push_back({event.onset_s, "slip"});
   speed.include_zero_y = true;
   plot::Chart flags = MakeChart("Slip: truth events and controller flags", "time [s]", "flag [-]");
@@ -268,8 +273,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     // knows per unit (spread, drift): those show up as estimation error, as on hardware.
     rig = std::make_unique<sim::SimRig>(
         layout, sensor::NominalCalibration(config.sensor.strain_model.nominal, units), rig_config,
-        options.make_controller ? options.make_controller(config.controller)
-                                : controller::MakeController(config.controller.name, config.controller.params));
+        options.make_controller
+            ? options.make_controller(config.controller)
+            : controller::MakeController(config.controller.name, config.controller.params));
   } catch (const std::invalid_argument& error) {
     throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
@@ -287,9 +293,10 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
   const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * ticks_per_s)) + 16;
   SignalLog log(NumericColumns(units), {"intent", "phase", "slip_cues"}, capacity_rows);
-  const size_t ring_capacity = static_cast<size_t>(std::ceil(
-                                   (MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
-                                   config.controller.rate_hz)) + 8;
+  const size_t ring_capacity =
+      static_cast<size_t>(std::ceil((MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
+                                    config.controller.rate_hz)) +
+      8;
   TruthRing truth_ring(ring_capacity, units, config.controller.rate_hz);
   StateRecorder states(rig->simulation(), options.out_dir.empty() ? 0.0 : config.duration_s);
   size_t next_frame = 0;
@@ -402,7 +409,8 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.metrics.physics_fault_time_s = fault.time_s;
   result.outcomes = EvaluateExpectations(config.expectations, result.metrics);
   // An event action that never ran fails the run like an expectation.
-  for (ExpectationOutcome& outcome : player.EventOutcomes(sim_s)) result.outcomes.push_back(std::move(outcome));
+  for (ExpectationOutcome& outcome : player.EventOutcomes(sim_s))
+    result.outcomes.push_back(std::move(outcome));
   result.script_timings = player.timings();
   result.passed = result.completed && std::all_of(result.outcomes.begin(), result.outcomes.end(),
                                                   [](const ExpectationOutcome& o) { return o.passed; });
@@ -498,15 +506,18 @@ nlohmann::json SummaryJson(const RunResult& result) {
   }
   nlohmann::json events = nlohmann::json::array();
   for (const SlipEvent& e : m.events) {
-    events.push_back({{"onset_s", e.onset_s},
-                      {"end_s", e.end_s},
-                      {"peak_speed_mm_s", e.peak_speed_m_s * 1e3},
-                      {"distance_mm", e.distance_m * 1e3},
-                      {"detected", e.detected},
-                      {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
+    events.push_back(
+        {{"onset_s", e.onset_s},
+         {"end_s", e.end_s},
+         {"peak_speed_mm_s", e.peak_speed_m_s * 1e3},
+         {"distance_mm", e.distance_m * 1e3},
+         {"detected", e.detected},
+         {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
   }
   // When each script action fired; for event actions also when it was armed and saw its event.
-  const auto time_or_null = [](double time_s) { return time_s >= 0.0 ? nlohmann::json(time_s) : nlohmann::json(nullptr); };
+  const auto time_or_null = [](double time_s) {
+    return time_s >= 0.0 ? nlohmann::json(time_s) : nlohmann::json(nullptr);
+  };
   nlohmann::json script = nlohmann::json::array();
   for (size_t i = 0; i < result.config.script.size(); ++i) {
     const Action& action = result.config.script[i];
@@ -561,21 +572,24 @@ std::string SummaryTable(const RunResult& result) {
   };
   std::snprintf(line, sizeof(line), "scenario %s, controller %s, seed %llu: %s\n", result.config.name.c_str(),
                 result.config.controller.name.c_str(), static_cast<unsigned long long>(result.config.seed),
-                !result.completed ? "INTERRUPTED" : result.passed ? "PASSED" : "FAILED");
+                !result.completed ? "INTERRUPTED"
+                : result.passed   ? "PASSED"
+                                  : "FAILED");
   out << line;
-  std::snprintf(line, sizeof(line),
-                "  grasped %s  dropped %s  slip %.2f mm  peak grip %.2f N  crushed %s\n",
+  std::snprintf(line, sizeof(line), "  grasped %s  dropped %s  slip %.2f mm  peak grip %.2f N  crushed %s\n",
                 m.grasped ? "yes" : "no", m.dropped ? "yes" : "no", m.max_slip_mm, m.peak_grip_n,
                 m.crushed ? "yes" : "no");
   out << line;
   std::snprintf(line, sizeof(line),
                 "  slip events %d (missed %d), detect latency %s, false slip %.2f/min, stable after %s\n",
-                m.slip_events, m.missed_slip_events, optional_text(m.slip_detect_latency_ms, "%.1f ms").c_str(),
-                m.false_slip_per_min, optional_text(m.time_to_stable_s, "%.3f s").c_str());
+                m.slip_events, m.missed_slip_events,
+                optional_text(m.slip_detect_latency_ms, "%.1f ms").c_str(), m.false_slip_per_min,
+                optional_text(m.time_to_stable_s, "%.3f s").c_str());
   out << line;
   // %g, not %f: an ideal sensor inverts exactly (RMSE ~1e-15 N), and 0.000 would hide whether the
   // error is rounding or a few tenths of a millinewton.
-  std::snprintf(line, sizeof(line), "  Fn RMSE %s, Ft RMSE %s; %.2f s simulated in %.2f s (%.1fx real time)\n",
+  std::snprintf(line, sizeof(line),
+                "  Fn RMSE %s, Ft RMSE %s; %.2f s simulated in %.2f s (%.1fx real time)\n",
                 optional_text(m.fn_rmse_n, "%.3g N").c_str(), optional_text(m.ft_rmse_n, "%.3g N").c_str(),
                 m.sim_s, m.wall_s, result.real_time_factor);
   out << line;

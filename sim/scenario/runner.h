@@ -34,14 +34,15 @@ struct SimRigConfig;
 namespace graspbed::scenario {
 
 /// Builds a run's controller from its resolved controller section (RunOptions::make_controller).
-using ControllerFactory = std::function<std::unique_ptr<controller::GraspController>(const ControllerOptions&)>;
+using ControllerFactory =
+    std::function<std::unique_ptr<controller::GraspController>(const ControllerOptions&)>;
 struct RunResult;
 
 /// What a per-frame observer (RunOptions::on_frame) sees: the rig at a control tick, after that
 /// tick's row is logged, and the script played so far. Observers only read.
 struct FrameContext {
-  double time_s = 0.0;          ///< simulated time of the control tick [s]
-  double frame_time_s = 0.0;    ///< the frame's nominal time, index * frame_period_s [s]
+  double time_s = 0.0;        ///< simulated time of the control tick [s]
+  double frame_time_s = 0.0;  ///< the frame's nominal time, index * frame_period_s [s]
   sim::SimRig& rig;
   const ScriptPlayer& player;
 };
@@ -100,7 +101,8 @@ struct RunOptions {
 /// Lets a suite or sweep add observers (e.g. a video) to the options of each run it starts: called on
 /// the worker thread that then runs `config`, with a name for the run's files ("<scenario>" in
 /// suites, "run_<index>" in sweeps).
-using PrepareRun = std::function<void(const ScenarioConfig& config, const std::string& run_name, RunOptions& run)>;
+using PrepareRun =
+    std::function<void(const ScenarioConfig& config, const std::string& run_name, RunOptions& run)>;
 
 /// The result of one run.
 struct RunResult {
@@ -111,21 +113,21 @@ struct RunResult {
   /// Ran to its end: duration_s, or a physics fault, which ends a run at once (metrics say which);
   /// false: stopped early by `RunOptions::stop`.
   bool completed = false;
-  bool passed = false;     ///< completed and every expectation held
+  bool passed = false;            ///< completed and every expectation held
   double real_time_factor = 0.0;  ///< simulated seconds per wall-clock second
   uint64_t frames = 0;            ///< sensor frames delivered
   uint64_t dropped_frames = 0;    ///< frames lost on the simulated link
   uint64_t stale_ticks = 0;       ///< control ticks on stale data
   uint64_t control_ticks = 0;
-  size_t signal_rows_lost = 0;    ///< rows beyond the reserved signal storage (should be 0)
-  std::string out_dir;            ///< where the outputs went ("" none)
+  size_t signal_rows_lost = 0;  ///< rows beyond the reserved signal storage (should be 0)
+  std::string out_dir;          ///< where the outputs went ("" none)
   /// backend serial or replay: link counters, intent events, prompts, controller phases, the
   /// replayed commands' comparison (summary.json "bench", docs/hardware.md); null for sim.
   nlohmann::json bench;
 };
 
-/// Runs `config` on config.backend. Throws std::invalid_argument (common::ConfigError naming the scenario file) for a
-/// configuration the rig refuses, e.g. a scene whose bodies start inside each other, before any
+/// Runs `config` on config.backend. Throws std::invalid_argument (common::ConfigError naming the scenario
+/// file) for a configuration the rig refuses, e.g. a scene whose bodies start inside each other, before any
 /// output is written; std::runtime_error when outputs cannot be written. A physics fault (NaN, a
 /// MuJoCo warning) is a result, not an exception: it ends the run at once, the outputs so far are
 /// written, and the run fails (metrics.physics_fault with its cause and time).

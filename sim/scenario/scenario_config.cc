@@ -24,8 +24,8 @@ using common::ConfigError;
 using common::NumberRule;
 using common::YamlMap;
 
-constexpr double kMaxDurationS = 3600.0;  // one simulated hour: beyond that a scenario is a mistake
-constexpr double kMaxRateHz = 10000.0;  // sensor sampling and control rates [Hz]
+constexpr double kMaxDurationS = 3600.0;   // one simulated hour: beyond that a scenario is a mistake
+constexpr double kMaxRateHz = 10000.0;     // sensor sampling and control rates [Hz]
 constexpr double kMaxSpeedMS = 10.0;       // metric speed thresholds [m/s]
 constexpr double kMaxStaleTimeoutS = 1.0;  // data older than a second is stale for any grasp [s]
 // Signals a run may keep in memory (SignalLog reserves them before the run) [bytes].
@@ -41,14 +41,22 @@ struct ActionEntry {
 };
 
 constexpr ActionEntry kActions[] = {
-    {ActionKind::kClose, "close"},           {ActionKind::kOpen, "open"},
-    {ActionKind::kIdle, "idle"},             {ActionKind::kMove, "move"},
-    {ActionKind::kLift, "lift"},             {ActionKind::kShake, "shake"},
-    {ActionKind::kAddMass, "add_mass"},      {ActionKind::kPull, "pull"},
-    {ActionKind::kSetFriction, "set_friction"}, {ActionKind::kDeadUnit, "dead_unit"},
-    {ActionKind::kShortUnit, "short_unit"},  {ActionKind::kRestoreUnit, "restore_unit"},
-    {ActionKind::kBias, "bias"},             {ActionKind::kNoiseBurst, "noise_burst"},
-    {ActionKind::kDropFrames, "drop_frames"}, {ActionKind::kAddLatency, "add_latency"},
+    {ActionKind::kClose, "close"},
+    {ActionKind::kOpen, "open"},
+    {ActionKind::kIdle, "idle"},
+    {ActionKind::kMove, "move"},
+    {ActionKind::kLift, "lift"},
+    {ActionKind::kShake, "shake"},
+    {ActionKind::kAddMass, "add_mass"},
+    {ActionKind::kPull, "pull"},
+    {ActionKind::kSetFriction, "set_friction"},
+    {ActionKind::kDeadUnit, "dead_unit"},
+    {ActionKind::kShortUnit, "short_unit"},
+    {ActionKind::kRestoreUnit, "restore_unit"},
+    {ActionKind::kBias, "bias"},
+    {ActionKind::kNoiseBurst, "noise_burst"},
+    {ActionKind::kDropFrames, "drop_frames"},
+    {ActionKind::kAddLatency, "add_latency"},
 };
 
 struct EventEntry {
@@ -123,8 +131,9 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
     action.after = EventFromName(map.RequireString("after", EventNames()));
     action.delay_s = map.GetNumber("delay_s", 0.0, NumberRule::Between(0.0, config.duration_s));
     if (!map.Has("timeout_s")) {
-      map.Fail("timeout_s", "missing required key: an action after an event needs timeout_s > 0, the longest "
-                            "wait for the event [s]");
+      map.Fail("timeout_s",
+               "missing required key: an action after an event needs timeout_s > 0, the longest "
+               "wait for the event [s]");
     }
     action.timeout_s = map.RequireNumber("timeout_s", kPositiveDuration);
   } else {
@@ -167,7 +176,8 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       break;
     }
     case ActionKind::kAddMass:
-      action.mass_kg = map.RequireNumber("mass_kg", NumberRule::Between(-sim::kMaxObjectMassKg, sim::kMaxObjectMassKg));
+      action.mass_kg =
+          map.RequireNumber("mass_kg", NumberRule::Between(-sim::kMaxObjectMassKg, sim::kMaxObjectMassKg));
       if (action.mass_kg == 0.0) map.Fail("mass_kg", "must not be 0");
       action.ramp_s = map.GetNumber("ramp_s", 0.0, kDuration);
       action.profile = ReadProfile(map);
@@ -175,7 +185,8 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
     case ActionKind::kPull:
       action.vector = ReadVector(map, "force_n", {0, 0, 0}, true);
       for (double component : action.vector) {
-        if (std::abs(component) > sim::kMaxForceN) map.Fail("force_n", "each component must be within +-1000 N");
+        if (std::abs(component) > sim::kMaxForceN)
+          map.Fail("force_n", "each component must be within +-1000 N");
       }
       action.ramp_s = map.GetNumber("ramp_s", 0.0, kDuration);
       action.duration_s = map.GetNumber("duration_s", 0.0, kDuration);
@@ -263,7 +274,8 @@ MetricsConfig LoadMetricsConfig(const YamlMap& map) {
     map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + std::string(limit) + ")");
   }
   m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, kDuration);
-  m.early_detection_window_s = map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
+  m.early_detection_window_s =
+      map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
   m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, {0.0, sim::kMaxForceN, true});
   m.seating_s = map.GetNumber("seating_s", m.seating_s, kDuration);
   m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, {0.0, sim::kMaxPositionM, true});
@@ -301,8 +313,9 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     std::filesystem::path path(s.layout);
     if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
     if (!std::filesystem::exists(path)) {
-      map.Fail("layout", "no such layout: give default_20, paper_3x3 or a layout file path (relative to "
-                         "the scenario file)");
+      map.Fail("layout",
+               "no such layout: give default_20, paper_3x3 or a layout file path (relative to "
+               "the scenario file)");
     }
     s.layout = std::filesystem::absolute(path).lexically_normal().string();
   }
@@ -332,8 +345,8 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
       }
     }
     // The unit's geometry and material decide kn and kt (about 0.1 s of analysis).
-    const fea::Sensitivities analysed =
-        fea::ComputeSensitivities(fea::LoadFeaConfig(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
+    const fea::Sensitivities analysed = fea::ComputeSensitivities(
+        fea::LoadFeaConfig(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
     if (!(analysed.kn_per_n > 0.0) || !(analysed.kt_per_n > 0.0)) {
       std::ostringstream reason;
       reason << "the unit in " << (s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config)
@@ -357,7 +370,8 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     }
     // The readout is told the ADC window the strain model ends up with (a profile's or the
     // scenario's own), so a clipped channel reads out of range.
-    readout_defaults.adc_full_scale_ohm = s.strain_model.adc_bits > 0 ? s.strain_model.adc_full_scale_ohm : 0.0;
+    readout_defaults.adc_full_scale_ohm =
+        s.strain_model.adc_bits > 0 ? s.strain_model.adc_full_scale_ohm : 0.0;
     readout_defaults.adc_min_ohm = s.strain_model.adc_bits > 0 ? s.strain_model.adc_min_ohm : 0.0;
   }
   if (auto sub = map.GetMap("readout")) {
@@ -381,7 +395,8 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
     c.name = std::string(controller::kPluginPrefix) + map.RequireString("plugin");
   } else {
     c.name = map.GetString("name", default_name);
-    if (!controller::IsPluginName(c.name)) c.name = map.GetString("name", default_name, controller::ControllerNames());
+    if (!controller::IsPluginName(c.name))
+      c.name = map.GetString("name", default_name, controller::ControllerNames());
   }
   c.name = controller::ResolvePluginName(c.name, std::filesystem::path(map.file()).parent_path().string());
   std::vector<controller::ControllerParameter> declared;
@@ -395,16 +410,18 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
     std::vector<std::string> valid;
     for (const auto& parameter : declared) valid.push_back(parameter.name);
     for (const std::string& key : params->Keys()) {
-      const auto match = std::find_if(declared.begin(), declared.end(),
-                                      [&](const auto& p) { return p.name == key; });
+      const auto match =
+          std::find_if(declared.begin(), declared.end(), [&](const auto& p) { return p.name == key; });
       if (match == declared.end()) {
         params->Fail(key, "controller '" + c.name + "' has no such parameter; valid parameters: " +
                               (valid.empty() ? std::string("(none)") : Join(valid)));
       }
-      c.params[key] = params->GetNumber(key, match->default_value, NumberRule::Between(match->min, match->max));
+      c.params[key] =
+          params->GetNumber(key, match->default_value, NumberRule::Between(match->min, match->max));
     }
   }
-  c.grip_ceiling_n = map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN));
+  c.grip_ceiling_n =
+      map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN));
   c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, kMaxRateHz));
   c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, {0.0, kMaxStaleTimeoutS, true});
   map.RejectUnknownKeys();
@@ -465,17 +482,21 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   std::vector<std::pair<double, Action>> keyed;
   for (const YamlMap& action_map : map.GetMapList("script")) {
     const Action action = LoadAction(action_map, config, unit_count);
-    const double key = action.after != ScriptEvent::kNone ? (keyed.empty() ? 0.0 : keyed.back().first) : action.at_s;
+    const double key =
+        action.after != ScriptEvent::kNone ? (keyed.empty() ? 0.0 : keyed.back().first) : action.at_s;
     keyed.emplace_back(key, action);
   }
-  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(keyed.begin(), keyed.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [key, action] : keyed) config.script.push_back(action);
   if (auto metrics_map = map.GetMap("metrics")) config.metrics = LoadMetricsConfig(*metrics_map);
   if (auto expectations_map = map.GetMap("expectations")) {
     config.expectations = LoadExpectations(*expectations_map, config);
   }
   const std::string backend = map.GetString("backend", "sim", {"sim", "serial", "replay"});
-  config.backend = backend == "serial" ? Backend::kSerial : backend == "replay" ? Backend::kReplay : Backend::kSim;
+  config.backend = backend == "serial"   ? Backend::kSerial
+                   : backend == "replay" ? Backend::kReplay
+                                         : Backend::kSim;
   if (auto serial_map = map.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*serial_map);
   config.log = map.GetString("log", "");
   if (config.backend == Backend::kReplay && config.log.empty()) {
@@ -491,9 +512,10 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
     if (action.kind != ActionKind::kAddLatency) continue;
     latency_s += action.latency_s;
     if (latency_s > kMaxLatencyS) {
-      throw ConfigError(file + ":" + std::to_string(action.line) + ": add_latency at_s = " +
-                        FormatDouble(action.at_s) + ": sensor.latency_s plus the add_latency actions up to here = " +
-                        FormatDouble(latency_s) + " s: must be <= " + FormatDouble(kMaxLatencyS) + " s");
+      throw ConfigError(
+          file + ":" + std::to_string(action.line) + ": add_latency at_s = " + FormatDouble(action.at_s) +
+          ": sensor.latency_s plus the add_latency actions up to here = " + FormatDouble(latency_s) +
+          " s: must be <= " + FormatDouble(kMaxLatencyS) + " s");
     }
   }
   // The signals are reserved before the run (one row per control tick, at most one per step).
@@ -501,9 +523,9 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   const double row_bytes = 8.0 * (40.0 + 7.0 * unit_count);
   const double signal_bytes = std::ceil(config.duration_s * ticks_per_s) * row_bytes;
   if (signal_bytes > kMaxSignalBytes) {
-    map.Fail("duration_s", "with controller.rate_hz = " + FormatDouble(config.controller.rate_hz) + " the run keeps " +
-                               FormatDouble(std::round(signal_bytes / 1e6)) + " MB of signals (at most " +
-                               FormatDouble(kMaxSignalBytes / 1e6) +
+    map.Fail("duration_s", "with controller.rate_hz = " + FormatDouble(config.controller.rate_hz) +
+                               " the run keeps " + FormatDouble(std::round(signal_bytes / 1e6)) +
+                               " MB of signals (at most " + FormatDouble(kMaxSignalBytes / 1e6) +
                                " MB): shorten duration_s or lower controller.rate_hz");
   }
   return config;
@@ -859,18 +881,18 @@ void ScenarioConfig::Validate() const {
     if (action.after != ScriptEvent::kNone) {
       // Built in code: the loader's checks again.
       if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' delay_s = " +
-                                    FormatDouble(action.delay_s) + ": must be >= 0");
+        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
+                                    "' delay_s = " + FormatDouble(action.delay_s) + ": must be >= 0");
       }
       if (!(action.timeout_s > 0.0) || !std::isfinite(action.timeout_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' timeout_s = " +
-                                    FormatDouble(action.timeout_s) + ": must be > 0");
+        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
+                                    "' timeout_s = " + FormatDouble(action.timeout_s) + ": must be > 0");
       }
       continue;
     }
     if (action.at_s > duration_s) {
-      throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) + "' at_s = " +
-                                  FormatDouble(action.at_s) + ": after duration_s");
+      throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
+                                  "' at_s = " + FormatDouble(action.at_s) + ": after duration_s");
     }
   }
 }

@@ -93,10 +93,10 @@ const char* ToString(Profile profile);
 struct Action {
   double at_s = 0.0;  ///< start time [s], simulation clock; unused (0) when `after` is set
   ActionKind kind = ActionKind::kClose;
-  int line = 0;       ///< line in the scenario file (for messages), 0 when built in code
+  int line = 0;                            ///< line in the scenario file (for messages), 0 when built in code
   ScriptEvent after = ScriptEvent::kNone;  ///< the event this action waits for (kNone: at at_s)
-  double delay_s = 0.0;    ///< after an event: fire this long after it [s] (>= 0)
-  double timeout_s = 0.0;  ///< after an event: longest wait for it from arming [s] (> 0)
+  double delay_s = 0.0;                    ///< after an event: fire this long after it [s] (>= 0)
+  double timeout_s = 0.0;                  ///< after an event: longest wait for it from arming [s] (> 0)
 
   /// move: target position [m], world frame (absolute) or offset (relative = true).
   /// pull: force [N], world frame. shake: axis (normalised on load).
@@ -108,28 +108,28 @@ struct Action {
   double duration_s = 0.0;
   double ramp_s = 0.0;  ///< add_mass/pull/set_friction: ramp time; 0 = step [s]
   Profile profile = Profile::kMinimumJerk;
-  double mass_kg = 0.0;         ///< add_mass: mass added [kg] (negative removes, total stays > 0)
-  double friction = 0.0;        ///< set_friction: new coefficient [-]
-  double frequency_hz = 0.0;    ///< shake [Hz]
-  double amplitude_m = 0.0;     ///< shake: peak displacement [m]
-  int unit = 0;                 ///< dead_unit/short_unit/restore_unit/bias: layout index
-  double r1_bias_ohm = 0.0;     ///< bias [Ohm]
-  double r2_bias_ohm = 0.0;     ///< bias [Ohm]
-  double noise_scale = 1.0;     ///< noise_burst: factor on the configured noise (>= 0)
-  double noise_ohm = 0.0;       ///< noise_burst: noise std-dev when none is configured [Ohm]
-  double probability = 1.0;     ///< drop_frames: chance each frame is lost [0..1]
-  double latency_s = 0.0;       ///< add_latency: extra latency [s]
+  double mass_kg = 0.0;       ///< add_mass: mass added [kg] (negative removes, total stays > 0)
+  double friction = 0.0;      ///< set_friction: new coefficient [-]
+  double frequency_hz = 0.0;  ///< shake [Hz]
+  double amplitude_m = 0.0;   ///< shake: peak displacement [m]
+  int unit = 0;               ///< dead_unit/short_unit/restore_unit/bias: layout index
+  double r1_bias_ohm = 0.0;   ///< bias [Ohm]
+  double r2_bias_ohm = 0.0;   ///< bias [Ohm]
+  double noise_scale = 1.0;   ///< noise_burst: factor on the configured noise (>= 0)
+  double noise_ohm = 0.0;     ///< noise_burst: noise std-dev when none is configured [Ohm]
+  double probability = 1.0;   ///< drop_frames: chance each frame is lost [0..1]
+  double latency_s = 0.0;     ///< add_latency: extra latency [s]
 };
 
 /// What a run must achieve. Every check is optional (absent = not checked).
 struct Expectations {
-  std::optional<bool> not_dropped;             ///< the object stays in the hand while held
-  std::optional<double> max_slip_mm;           ///< accumulated slip distance <= [mm]
-  std::optional<double> max_peak_grip_n;       ///< peak squeeze on the object <= [N]
-  std::optional<bool> not_crushed;             ///< squeeze never above object.crush_limit_n
+  std::optional<bool> not_dropped;                ///< the object stays in the hand while held
+  std::optional<double> max_slip_mm;              ///< accumulated slip distance <= [mm]
+  std::optional<double> max_peak_grip_n;          ///< peak squeeze on the object <= [N]
+  std::optional<bool> not_crushed;                ///< squeeze never above object.crush_limit_n
   std::optional<double> slip_detected_within_ms;  ///< every slip event flagged within [ms]
   std::optional<double> max_estimation_error_n;   ///< fn_rmse_n and ft_rmse_n <= [N]
-  std::optional<double> stable_within_s;       ///< time_to_stable_s <= [s] after the first close
+  std::optional<double> stable_within_s;          ///< time_to_stable_s <= [s] after the first close
   std::optional<double> max_false_slip_per_min;   ///< false slip alarms per minute held <= [1/min]
 
   /// True when no check is configured.
@@ -169,9 +169,9 @@ struct SensorOptions {
   /// Layout: "default_20", "paper_3x3" (shipped in sensor/layouts/) or a path to a layout file
   /// (relative to the scenario file).
   std::string layout = "default_20";
-  double sample_rate_hz = 1000.0;     ///< sensor frames per second [Hz]
-  double latency_s = 0.0;             ///< delay from sampling to delivery [s]
-  double drop_probability = 0.0;      ///< chance each frame is lost on the link [0..1]
+  double sample_rate_hz = 1000.0;  ///< sensor frames per second [Hz]
+  double latency_s = 0.0;          ///< delay from sampling to delivery [s]
+  double drop_probability = 0.0;   ///< chance each frame is lost on the link [0..1]
   /// Where the strain model's kn and kt come from: "paper" (strain_model.kn_per_n / kt_per_n, the
   /// paper's values unless set) or "fea" (graspbed's finite-element analysis of the unit described
   /// by fea_config; overrides strain_model.kn_per_n and kt_per_n). The inversion uses the same
@@ -199,8 +199,8 @@ struct ControllerOptions {
   controller::ControllerParams params;
   /// Grip ceiling for the task [N] (e.g. a fragile object); 0 = none.
   double grip_ceiling_n = 0.0;
-  double rate_hz = 1000.0;          ///< control ticks per second [Hz]
-  double stale_timeout_s = 0.02;    ///< no frame for this long: state stale, controller holds [s]
+  double rate_hz = 1000.0;        ///< control ticks per second [Hz]
+  double stale_timeout_s = 0.02;  ///< no frame for this long: state stale, controller holds [s]
 };
 
 /// Reads a controller section (name or plugin, params, grip_ceiling_n, rate_hz, stale_timeout_s; the
@@ -208,7 +208,8 @@ struct ControllerOptions {
 /// `name: plugin:LIBRARY`; a relative library path is taken relative to the file, and a plugin that
 /// does not load is refused at that key. Unknown keys, names and parameters, out-of-range values
 /// and the controller's own cross-field checks are refused at the offending key with file and line.
-ControllerOptions LoadControllerOptions(const common::YamlMap& map, const std::string& default_name = "open_loop");
+ControllerOptions LoadControllerOptions(const common::YamlMap& map,
+                                        const std::string& default_name = "open_loop");
 
 /// Where a run's frames come from and its commands go (docs/hardware.md, "One runner, three
 /// backends"): the simulation; the hand over a serial link (or `graspbed emulate`); a recording
@@ -220,11 +221,11 @@ const char* BackendName(Backend backend);
 
 /// A complete scenario.
 struct ScenarioConfig {
-  std::string name;          ///< default: the file name without .yaml
+  std::string name;  ///< default: the file name without .yaml
   std::string description;
-  std::string source_file;   ///< file it was loaded from ("" when built in code)
-  uint64_t seed = 1;         ///< seeds the sensor noise, spreads and frame drops
-  double duration_s = 3.0;   ///< simulated time [s]
+  std::string source_file;  ///< file it was loaded from ("" when built in code)
+  uint64_t seed = 1;        ///< seeds the sensor noise, spreads and frame drops
+  double duration_s = 3.0;  ///< simulated time [s]
   sim::SceneConfig scene;
   SensorOptions sensor;
   ControllerOptions controller;

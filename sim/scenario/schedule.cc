@@ -5,7 +5,9 @@
 
 namespace graspbed::scenario {
 
-double ExpectedRunCost(const ScenarioConfig& config) { return config.duration_s / config.scene.physics.timestep_s; }
+double ExpectedRunCost(const ScenarioConfig& config) {
+  return config.duration_s / config.scene.physics.timestep_s;
+}
 
 std::vector<size_t> LongestFirst(const std::vector<double>& costs) {
   std::vector<size_t> order(costs.size());

@@ -43,10 +43,12 @@ double NumberOf(const std::string& file, const YAML::Node& node, const std::stri
   Fail(file, node, key, NodeText(node), "expected a number");
 }
 
-std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& list, const std::string& where) {
+std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& list,
+                                     const std::string& where) {
   std::vector<ScorecardVary> vary;
   if (!list.IsDefined() || list.IsNull()) return vary;
-  if (!list.IsSequence()) Fail(file, list, where, NodeText(list), "expected a list of {key, min, max} or {choose: [...]}");
+  if (!list.IsSequence())
+    Fail(file, list, where, NodeText(list), "expected a list of {key, min, max} or {choose: [...]}");
   for (size_t i = 0; i < list.size(); ++i) {
     const YAML::Node item = list[i];
     const std::string at = where + "[" + std::to_string(i) + "]";
@@ -66,7 +68,8 @@ std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& 
         std::vector<Override> overrides;
         for (const auto& pair : group) {
           const YAML::Node value = pair.second;
-          overrides.push_back({pair.first.as<std::string>(), value.IsScalar() ? value.as<std::string>() : NodeText(value)});
+          overrides.push_back(
+              {pair.first.as<std::string>(), value.IsScalar() ? value.as<std::string>() : NodeText(value)});
         }
         entry.choices.push_back(std::move(overrides));
       }
@@ -77,7 +80,8 @@ std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& 
       entry.key = item["key"].as<std::string>();
       entry.min = NumberOf(file, item["min"], at + ".min");
       entry.max = NumberOf(file, item["max"], at + ".max");
-      if (entry.max < entry.min) Fail(file, item["max"], at + ".max", NodeText(item["max"]), "must be >= min");
+      if (entry.max < entry.min)
+        Fail(file, item["max"], at + ".max", NodeText(item["max"]), "must be >= min");
     }
     vary.push_back(std::move(entry));
   }
@@ -135,7 +139,8 @@ ScorecardSet LoadScorecardSet(const std::string& path) {
   set.version = static_cast<int>(version);
   if (root["seed"]) {
     const double seed = NumberOf(path, root["seed"], "seed");
-    if (seed < 0 || seed != std::floor(seed)) Fail(path, root["seed"], "seed", NodeText(root["seed"]), "expected a whole number >= 0");
+    if (seed < 0 || seed != std::floor(seed))
+      Fail(path, root["seed"], "seed", NodeText(root["seed"]), "expected a whole number >= 0");
     set.seed = static_cast<uint64_t>(seed);
   }
   set.common = ParseVary(path, root["vary"], "vary");
@@ -148,7 +153,8 @@ ScorecardSet LoadScorecardSet(const std::string& path) {
   for (size_t i = 0; i < bases.size(); ++i) {
     const YAML::Node item = bases[i];
     const std::string at = "bases[" + std::to_string(i) + "]";
-    if (!item.IsMap() || !item["scenario"]) Fail(path, item, at, NodeText(item), "expected {scenario: FILE, variations: N}");
+    if (!item.IsMap() || !item["scenario"])
+      Fail(path, item, at, NodeText(item), "expected {scenario: FILE, variations: N}");
     ScorecardBase base;
     base.scenario_path = (directory / item["scenario"].as<std::string>()).lexically_normal().string();
     if (!fs::is_regular_file(base.scenario_path)) {
@@ -158,7 +164,8 @@ ScorecardSet LoadScorecardSet(const std::string& path) {
     if (item["variations"]) {
       const double count = NumberOf(path, item["variations"], at + ".variations");
       if (count < 0 || count > 1000 || count != std::floor(count)) {
-        Fail(path, item["variations"], at + ".variations", NodeText(item["variations"]), "expected a whole number in [0, 1000]");
+        Fail(path, item["variations"], at + ".variations", NodeText(item["variations"]),
+             "expected a whole number in [0, 1000]");
       }
       base.variations = static_cast<int>(count);
     }
@@ -184,7 +191,8 @@ std::vector<ScorecardRun> ExpandScorecardSet(const ScorecardSet& set) {
         for (const ScorecardVary& vary : set.common) Sample(vary, rng, run.overrides);
         for (const ScorecardVary& vary : base.vary) Sample(vary, rng, run.overrides);
         // A seed per variation too, so sensor noise and any random script differ between variations.
-        run.overrides.push_back({"seed", std::to_string(std::uniform_int_distribution<uint32_t>(1, 1u << 30)(rng))});
+        run.overrides.push_back(
+            {"seed", std::to_string(std::uniform_int_distribution<uint32_t>(1, 1u << 30)(rng))});
       }
       runs.push_back(std::move(run));
     }
@@ -201,7 +209,8 @@ std::optional<double> Percentile(std::vector<double> values, double p) {
   return values[lower] + (rank - static_cast<double>(lower)) * (values[upper] - values[lower]);
 }
 
-ControllerScore ScoreRuns(const std::string& controller, const std::vector<const RunResult*>& finished, int errors) {
+ControllerScore ScoreRuns(const std::string& controller, const std::vector<const RunResult*>& finished,
+                          int errors) {
   ControllerScore score;
   score.controller = controller;
   score.errors = errors;
@@ -225,7 +234,8 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     if (metrics.crushed) ++score.crushes;
     if (metrics.grip_efficiency_ratio) grip_ratios.push_back(*metrics.grip_efficiency_ratio);
     if (metrics.fn_rmse_n && metrics.estimation_samples > 0) {
-      fn_square_sum += *metrics.fn_rmse_n * *metrics.fn_rmse_n * static_cast<double>(metrics.estimation_samples);
+      fn_square_sum +=
+          *metrics.fn_rmse_n * *metrics.fn_rmse_n * static_cast<double>(metrics.estimation_samples);
       fn_samples += metrics.estimation_samples;
     }
     if (metrics.physics_fault) ++score.physics_faults;
@@ -279,12 +289,15 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
   if (!options.custom_controllers.empty()) {
     suite_options.make_controller = [&options](const ControllerOptions& controller) {
       const auto custom = options.custom_controllers.find(controller.name);
-      return custom != options.custom_controllers.end() ? custom->second(controller)
-                                                        : controller::MakeController(controller.name, controller.params);
+      return custom != options.custom_controllers.end()
+                 ? custom->second(controller)
+                 : controller::MakeController(controller.name, controller.params);
     };
   }
   if (options.on_finished) {
-    suite_options.on_finished = [&](int finished, int total, const SuiteRun&) { options.on_finished(finished, total); };
+    suite_options.on_finished = [&](int finished, int total, const SuiteRun&) {
+      options.on_finished(finished, total);
+    };
   }
   SuiteResult suite = RunSuite(configs, suite_options);
   scorecard.completed = suite.completed;
@@ -329,7 +342,8 @@ std::string Int(int value) { return std::to_string(value); }
 
 const std::vector<Figure>& Figures() {
   static const std::vector<Figure> figures = {
-      {"runs (errors)", "runs", [](const ControllerScore& s) { return Int(s.runs) + (s.errors ? " (" + Int(s.errors) + ")" : ""); },
+      {"runs (errors)", "runs",
+       [](const ControllerScore& s) { return Int(s.runs) + (s.errors ? " (" + Int(s.errors) + ")" : ""); },
        [](const ControllerScore& s) { return nlohmann::json(s.runs); }},
       {"errors", "errors", [](const ControllerScore& s) { return Int(s.errors); },
        [](const ControllerScore& s) { return nlohmann::json(s.errors); }},
@@ -337,19 +351,24 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return nlohmann::json(s.passed); }},
       {"slip events detected", "slip_detected_pct",
        [](const ControllerScore& s) {
-         return OptionalText(s.detected_pct, "%.1f %%") + " (" + Int(s.slip_detected) + "/" + Int(s.slip_events) + ")";
+         return OptionalText(s.detected_pct, "%.1f %%") + " (" + Int(s.slip_detected) + "/" +
+                Int(s.slip_events) + ")";
        },
        [](const ControllerScore& s) { return OptionalJson(s.detected_pct); }},
       {"slip events", "slip_events", [](const ControllerScore& s) { return Int(s.slip_events); },
        [](const ControllerScore& s) { return nlohmann::json(s.slip_events); }},
       {"slip events flagged", "slip_detected", [](const ControllerScore& s) { return Int(s.slip_detected); },
        [](const ControllerScore& s) { return nlohmann::json(s.slip_detected); }},
-      {"detection latency p50", "latency_p50_ms", [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
+      {"detection latency p50", "latency_p50_ms",
+       [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p50_ms); }},
-      {"detection latency p95", "latency_p95_ms", [](const ControllerScore& s) { return OptionalText(s.latency_p95_ms, "%.1f ms"); },
+      {"detection latency p95", "latency_p95_ms",
+       [](const ControllerScore& s) { return OptionalText(s.latency_p95_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p95_ms); }},
       {"false flags / min held", "false_flags_per_min",
-       [](const ControllerScore& s) { return OptionalText(s.false_per_min, "%.2f") + " (" + Int(s.false_flags) + ")"; },
+       [](const ControllerScore& s) {
+         return OptionalText(s.false_per_min, "%.2f") + " (" + Int(s.false_flags) + ")";
+       },
        [](const ControllerScore& s) { return OptionalJson(s.false_per_min); }},
       {"false flags", "false_flags", [](const ControllerScore& s) { return Int(s.false_flags); },
        [](const ControllerScore& s) { return nlohmann::json(s.false_flags); }},
@@ -362,11 +381,14 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return nlohmann::json(s.drops); }},
       {"crushes", "crushes", [](const ControllerScore& s) { return Int(s.crushes); },
        [](const ControllerScore& s) { return nlohmann::json(s.crushes); }},
-      {"peak/needed grip median", "grip_ratio_median", [](const ControllerScore& s) { return OptionalText(s.grip_ratio_median, "%.2f"); },
+      {"peak/needed grip median", "grip_ratio_median",
+       [](const ControllerScore& s) { return OptionalText(s.grip_ratio_median, "%.2f"); },
        [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_median); }},
-      {"peak/needed grip p95", "grip_ratio_p95", [](const ControllerScore& s) { return OptionalText(s.grip_ratio_p95, "%.2f"); },
+      {"peak/needed grip p95", "grip_ratio_p95",
+       [](const ControllerScore& s) { return OptionalText(s.grip_ratio_p95, "%.2f"); },
        [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_p95); }},
-      {"Fn estimation RMSE", "fn_rmse_n", [](const ControllerScore& s) { return OptionalText(s.fn_rmse_n, "%.3f N"); },
+      {"Fn estimation RMSE", "fn_rmse_n",
+       [](const ControllerScore& s) { return OptionalText(s.fn_rmse_n, "%.3f N"); },
        [](const ControllerScore& s) { return OptionalJson(s.fn_rmse_n); }},
       {"physics faults", "physics_faults", [](const ControllerScore& s) { return Int(s.physics_faults); },
        [](const ControllerScore& s) { return nlohmann::json(s.physics_faults); }},
@@ -377,15 +399,16 @@ const std::vector<Figure>& Figures() {
 // Figures shown in the printed table (the CSV has every column).
 bool InTable(const Figure& figure) {
   const std::string column = figure.column;
-  return column != "errors" && column != "slip_events" && column != "slip_detected" && column != "false_flags";
+  return column != "errors" && column != "slip_events" && column != "slip_detected" &&
+         column != "false_flags";
 }
 
 }  // namespace
 
 std::string ScorecardTable(const Scorecard& scorecard) {
   std::ostringstream out;
-  out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " (" << scorecard.set_file << "): "
-      << scorecard.runs_per_controller << " runs per controller, " << scorecard.jobs << " jobs, "
+  out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " (" << scorecard.set_file
+      << "): " << scorecard.runs_per_controller << " runs per controller, " << scorecard.jobs << " jobs, "
       << FormatNumber(scorecard.wall_s) << " s" << (scorecard.completed ? "" : ", INCOMPLETE") << "\n";
   constexpr int kLabelWidth = 26;
   constexpr int kColumnWidth = 24;
@@ -424,20 +447,21 @@ std::string ScorecardBySensorTable(const Scorecard& scorecard) {
   std::sort(sensors.begin(), sensors.end());
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", "sensor", "controller", "runs",
-                "detected", "latency p95", "false flags/min", "flag up", "drops", "grip ratio");
+  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", "sensor", "controller",
+                "runs", "detected", "latency p95", "false flags/min", "flag up", "drops", "grip ratio");
   out << line;
   for (const std::string& sensor : sensors) {
     for (const ControllerScore& total : scorecard.scores) {
       std::vector<const RunResult*> finished;
       for (const ScorecardRow& row : scorecard.rows) {
-        if (row.controller == total.controller && row.error.empty() && row.result.completed && sensor_of(row) == sensor) {
+        if (row.controller == total.controller && row.error.empty() && row.result.completed &&
+            sensor_of(row) == sensor) {
           finished.push_back(&row.result);
         }
       }
       const ControllerScore score = ScoreRuns(total.controller, finished, 0);
-      const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" + Int(score.slip_detected) + "/" +
-                                   Int(score.slip_events) + ")";
+      const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" +
+                                   Int(score.slip_detected) + "/" + Int(score.slip_events) + ")";
       std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n", sensor.c_str(),
                     score.controller.c_str(), score.runs, detected.c_str(),
                     OptionalText(score.latency_p95_ms, "%.1f ms").c_str(),
@@ -514,8 +538,10 @@ void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
   const std::vector<Panel> panels = {
       {"slip events detected", "detected [%]", [](const ControllerScore& s) { return s.detected_pct; }},
       {"detection latency p95", "latency [ms]", [](const ControllerScore& s) { return s.latency_p95_ms; }},
-      {"false flags per minute held", "false flags [1/min]", [](const ControllerScore& s) { return s.false_per_min; }},
-      {"peak / needed grip, median", "ratio [-]", [](const ControllerScore& s) { return s.grip_ratio_median; }},
+      {"false flags per minute held", "false flags [1/min]",
+       [](const ControllerScore& s) { return s.false_per_min; }},
+      {"peak / needed grip, median", "ratio [-]",
+       [](const ControllerScore& s) { return s.grip_ratio_median; }},
       {"drops + crushes", "runs [-]",
        [](const ControllerScore& s) { return std::optional<double>(s.drops + s.crushes); }},
       {"runs passed", "passed [%]",
@@ -536,7 +562,8 @@ void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
     chart.y_label = panel.y_label;
     chart.include_zero_y = true;
     double top = 0.0;
-    for (const ControllerScore& score : scorecard.scores) top = std::max(top, panel.value(score).value_or(0.0));
+    for (const ControllerScore& score : scorecard.scores)
+      top = std::max(top, panel.value(score).value_or(0.0));
     // Unnamed padding: a baseline from 0.2 to N + 0.8 so the bars stand clear of the frame, and a
     // lone point (drawn as nothing) 40 % above the tallest bar, so the legend sits above the bars.
     const double count = static_cast<double>(scorecard.scores.size());

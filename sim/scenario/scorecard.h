@@ -27,17 +27,17 @@ namespace graspbed::scenario {
 /// One varied quantity of a set: a range of one key (uniform sample), or a choice among groups of
 /// overrides applied together (e.g. object.shape with a matching object.size_m).
 struct ScorecardVary {
-  std::string key;                               ///< range: dotted key as for --set; "" for a choice
-  double min = 0.0;                              ///< range [min, max]
+  std::string key;   ///< range: dotted key as for --set; "" for a choice
+  double min = 0.0;  ///< range [min, max]
   double max = 0.0;
-  std::vector<std::vector<Override>> choices;    ///< choice: one group drawn with equal probability
+  std::vector<std::vector<Override>> choices;  ///< choice: one group drawn with equal probability
 };
 
 /// One base scenario of a set and how many seeded variations of it run beside it.
 struct ScorecardBase {
-  std::string scenario_path;          ///< resolved relative to the set file
-  int variations = 0;                 ///< seeded variations besides the base as shipped (>= 0)
-  std::vector<ScorecardVary> vary;    ///< applied after the set's common ones
+  std::string scenario_path;        ///< resolved relative to the set file
+  int variations = 0;               ///< seeded variations besides the base as shipped (>= 0)
+  std::vector<ScorecardVary> vary;  ///< applied after the set's common ones
 };
 
 /// A parsed set.yaml.
@@ -56,7 +56,7 @@ ScorecardSet LoadScorecardSet(const std::string& path);
 
 /// One run of a set (per controller).
 struct ScorecardRun {
-  std::string name;                 ///< <base scenario name>.v<k>; v0 is the base as shipped
+  std::string name;  ///< <base scenario name>.v<k>; v0 is the base as shipped
   std::string scenario_path;
   std::vector<Override> overrides;  ///< the sampled overrides (empty for v0)
 };
@@ -68,24 +68,24 @@ std::vector<ScorecardRun> ExpandScorecardSet(const ScorecardSet& set);
 /// The pooled figures of one controller over the runs of a set.
 struct ControllerScore {
   std::string controller;
-  int runs = 0;                 ///< runs that ran to their end (errors and interrupted runs excluded)
-  int errors = 0;               ///< runs that threw or were interrupted
-  int passed = 0;               ///< runs that met every expectation of their scenario
-  int slip_events = 0;          ///< ground-truth slip events while held, all runs
-  int slip_detected = 0;        ///< of those, flagged by the controller
-  std::optional<double> detected_pct;       ///< 100 * detected / events; nullopt with no event [%]
-  std::optional<double> latency_p50_ms;     ///< over detected events [ms]
+  int runs = 0;                        ///< runs that ran to their end (errors and interrupted runs excluded)
+  int errors = 0;                      ///< runs that threw or were interrupted
+  int passed = 0;                      ///< runs that met every expectation of their scenario
+  int slip_events = 0;                 ///< ground-truth slip events while held, all runs
+  int slip_detected = 0;               ///< of those, flagged by the controller
+  std::optional<double> detected_pct;  ///< 100 * detected / events; nullopt with no event [%]
+  std::optional<double> latency_p50_ms;  ///< over detected events [ms]
   std::optional<double> latency_p95_ms;
   int false_flags = 0;
-  double held_min = 0.0;                    ///< time held, all runs [min]
-  std::optional<double> false_per_min;      ///< false_flags / held_min [1/min]
-  double false_flag_min = 0.0;              ///< time the flag was up outside slip events, all runs [min]
-  std::optional<double> false_flag_pct;     ///< false_flag_min / held_min [%]
+  double held_min = 0.0;                 ///< time held, all runs [min]
+  std::optional<double> false_per_min;   ///< false_flags / held_min [1/min]
+  double false_flag_min = 0.0;           ///< time the flag was up outside slip events, all runs [min]
+  std::optional<double> false_flag_pct;  ///< false_flag_min / held_min [%]
   int drops = 0;
   int crushes = 0;
   std::optional<double> grip_ratio_median;  ///< peak grip / needed grip over runs with a load [-]
   std::optional<double> grip_ratio_p95;
-  std::optional<double> fn_rmse_n;          ///< sample-weighted RMS of the runs' Fn RMSEs [N]
+  std::optional<double> fn_rmse_n;  ///< sample-weighted RMS of the runs' Fn RMSEs [N]
   int physics_faults = 0;
 };
 
@@ -94,13 +94,14 @@ struct ControllerScore {
 std::optional<double> Percentile(std::vector<double> values, double p);
 
 /// Pools finished runs of one controller into its score. `errors` counts runs that did not finish.
-ControllerScore ScoreRuns(const std::string& controller, const std::vector<const RunResult*>& finished, int errors);
+ControllerScore ScoreRuns(const std::string& controller, const std::vector<const RunResult*>& finished,
+                          int errors);
 
 /// Settings of a scorecard run.
 struct ScorecardOptions {
   std::vector<std::string> controllers = {"grip_slip", "open_loop"};
   int jobs = 1;
-  int limit = 0;              ///< > 0: only the first `limit` runs of the set (smoke tests)
+  int limit = 0;  ///< > 0: only the first `limit` runs of the set (smoke tests)
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, total).
   std::function<void(int, int)> on_finished;

@@ -15,11 +15,12 @@ ScriptEventMonitor::ScriptEventMonitor(const MetricsConfig& metrics, double cont
     : grasp_force_n_(metrics.grasp_force_n),
       stable_band_(metrics.stable_force_band),
       stable_window_s_(metrics.stable_window_s),
-      window_fn_(static_cast<size_t>(std::max(1.0, std::round(metrics.stable_window_s * control_rate_hz))) + 1,
-                 0.0) {}
+      window_fn_(
+          static_cast<size_t>(std::max(1.0, std::round(metrics.stable_window_s * control_rate_hz))) + 1,
+          0.0) {}
 
-uint32_t ScriptEventMonitor::Update(double time_s, controller::GraspIntent intent, const sensor::TactileState& state,
-                                    bool slip_flag) {
+uint32_t ScriptEventMonitor::Update(double time_s, controller::GraspIntent intent,
+                                    const sensor::TactileState& state, bool slip_flag) {
   uint32_t events = 0;
   if (slip_flag) {
     events |= EventBit(ScriptEvent::kSlipFlagged);
@@ -29,7 +30,8 @@ uint32_t ScriptEventMonitor::Update(double time_s, controller::GraspIntent inten
   // Stale data say nothing about now: both streaks break.
   const bool fresh = !state.stale;
   const bool in_grasp = fresh && state.contact_count >= 1 && state.total_fn_n >= grasp_force_n_;
-  const bool free = fresh && state.valid_count >= 1 && state.contact_count == 0 && state.total_fn_n < grasp_force_n_;
+  const bool free =
+      fresh && state.valid_count >= 1 && state.contact_count == 0 && state.total_fn_n < grasp_force_n_;
 
   if (in_grasp) {
     if (grasp_since_s_ < 0.0) {
@@ -50,7 +52,8 @@ uint32_t ScriptEventMonitor::Update(double time_s, controller::GraspIntent inten
   if (grasped) events |= EventBit(ScriptEvent::kGrasped);
 
   // Stable: the whole window inside the grasp streak, steady, and no slip flag in it.
-  if (grasped && window_count_ == window_fn_.size() && time_s - last_slip_flag_s_ > stable_window_s_ + kTimeEpsS) {
+  if (grasped && window_count_ == window_fn_.size() &&
+      time_s - last_slip_flag_s_ > stable_window_s_ + kTimeEpsS) {
     double sum = 0.0;
     double low = window_fn_[0];
     double high = window_fn_[0];

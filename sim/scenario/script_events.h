@@ -39,7 +39,7 @@ class ScriptEventMonitor {
   double last_slip_flag_s_ = -1e9;
   std::vector<double> window_fn_;  ///< estimated total Fn of the last ticks, a ring [N]
   size_t window_next_ = 0;
-  size_t window_count_ = 0;        ///< ticks of the current in-grasp streak held in the ring
+  size_t window_count_ = 0;  ///< ticks of the current in-grasp streak held in the ring
 };
 
 }  // namespace graspbed::scenario

@@ -105,7 +105,8 @@ void ScriptPlayer::Fire(const Action& action, double time_s, sim::SimRig& rig) {
       // From the mass now to the previous target plus this step: overlapping ramps add up.
       const double now = mass_.At(time_s);
       // The total stays within the bounds of object.mass_kg (an empty cup keeps its own mass).
-      const double target = std::clamp(mass_.to + action.mass_kg, sim::kMinObjectMassKg, sim::kMaxObjectMassKg);
+      const double target =
+          std::clamp(mass_.to + action.mass_kg, sim::kMinObjectMassKg, sim::kMaxObjectMassKg);
       mass_ = Ramp{now, target, time_s, action.ramp_s, action.profile, true};
       break;
     }
@@ -260,8 +261,8 @@ std::vector<ExpectationOutcome> ScriptPlayer::EventOutcomes(double end_s) const 
     if (timing.fired_s >= 0.0) {
       outcome.passed = true;
       outcome.value_text = "after " + FormatSeconds(timing.event_s - timing.armed_s);
-      outcome.note = "armed at " + FormatSeconds(timing.armed_s) + ", event at " + FormatSeconds(timing.event_s) +
-                     ", fired at " + FormatSeconds(timing.fired_s);
+      outcome.note = "armed at " + FormatSeconds(timing.armed_s) + ", event at " +
+                     FormatSeconds(timing.event_s) + ", fired at " + FormatSeconds(timing.fired_s);
     } else if (timing.timed_out_s >= 0.0) {
       outcome.value_text = "none by " + FormatSeconds(timing.timed_out_s);
       outcome.note = "timed out: no " + std::string(EventName(action.after)) + " within " +
@@ -276,8 +277,9 @@ std::vector<ExpectationOutcome> ScriptPlayer::EventOutcomes(double end_s) const 
                      FormatSeconds(timing.armed_s) + ", before the event; the action did not run";
     } else {
       outcome.value_text = "after " + FormatSeconds(timing.event_s - timing.armed_s);
-      outcome.note = "event at " + FormatSeconds(timing.event_s) + ", but the run ended before its delay of " +
-                     FormatSeconds(action.delay_s) + " passed; the action did not run";
+      outcome.note = "event at " + FormatSeconds(timing.event_s) +
+                     ", but the run ended before its delay of " + FormatSeconds(action.delay_s) +
+                     " passed; the action did not run";
     }
     outcomes.push_back(outcome);
   }

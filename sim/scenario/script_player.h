@@ -93,8 +93,8 @@ class ScriptPlayer {
   int fired_count_ = 0;
   std::vector<ActionTiming> timings_;
   ScriptEventMonitor monitor_;
-  uint32_t tick_events_ = 0;     ///< EventBit()s that held at the latest control tick
-  double tick_time_s_ = -1.0;    ///< time of the latest control tick (< 0: none yet)
+  uint32_t tick_events_ = 0;   ///< EventBit()s that held at the latest control tick
+  double tick_time_s_ = -1.0;  ///< time of the latest control tick (< 0: none yet)
   controller::GraspIntent intent_ = controller::GraspIntent::kIdle;
   double first_close_time_s_ = -1.0;
 

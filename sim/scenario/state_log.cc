@@ -99,7 +99,8 @@ CsvTable ReadCsvTable(const std::string& path) {
     return cells;
   };
   std::string line;
-  if (!std::getline(file, line) || line.empty()) throw std::invalid_argument(path + ": empty, no header line");
+  if (!std::getline(file, line) || line.empty())
+    throw std::invalid_argument(path + ": empty, no header line");
   table.header = split(line);
   int line_number = 1;
   while (std::getline(file, line)) {
@@ -118,7 +119,8 @@ CsvTable ReadCsvTable(const std::string& path) {
 StateLog LoadStateLog(const std::string& path, int nq, int nv, int nu) {
   std::ifstream file(path);
   if (!file) {
-    throw std::invalid_argument(path + ": cannot read (a run directory from graspbed run has states.csv since "
+    throw std::invalid_argument(path +
+                                ": cannot read (a run directory from graspbed run has states.csv since "
                                 "the viewer's replay was added; run the scenario again)");
   }
   const std::vector<std::string> expected = StateColumns(nq, nv, nu);
@@ -130,7 +132,8 @@ StateLog LoadStateLog(const std::string& path, int nq, int nv, int nu) {
     for (std::string name; std::getline(header, name, ',');) {
       if (column >= expected.size() || name != expected[column]) {
         throw std::invalid_argument(path + ":1: column " + std::to_string(column + 1) + " is '" + name +
-                                    "', expected '" + (column < expected.size() ? expected[column] : "(none)") +
+                                    "', expected '" +
+                                    (column < expected.size() ? expected[column] : "(none)") +
                                     "': not a state log of this model (nq " + std::to_string(nq) + ", nv " +
                                     std::to_string(nv) + ", nu " + std::to_string(nu) + ")");
       }
@@ -163,12 +166,14 @@ StateLog LoadStateLog(const std::string& path, int nq, int nv, int nu) {
       p = *end == ',' ? end + 1 : end;
     }
     if (values.size() != expected.size()) {
-      throw std::invalid_argument(path + ":" + std::to_string(line_number) + ": " + std::to_string(values.size()) +
-                                  " values, expected " + std::to_string(expected.size()));
+      throw std::invalid_argument(path + ":" + std::to_string(line_number) + ": " +
+                                  std::to_string(values.size()) + " values, expected " +
+                                  std::to_string(expected.size()));
     }
     if (!log.time_s.empty() && !(values[0] > log.time_s.back())) {
-      throw std::invalid_argument(path + ":" + std::to_string(line_number) + ": time_s " + std::to_string(values[0]) +
-                                  " does not follow " + std::to_string(log.time_s.back()));
+      throw std::invalid_argument(path + ":" + std::to_string(line_number) + ": time_s " +
+                                  std::to_string(values[0]) + " does not follow " +
+                                  std::to_string(log.time_s.back()));
     }
     log.time_s.push_back(values[0]);
     log.rows.emplace_back(values.begin() + 1, values.end());

@@ -20,7 +20,8 @@ std::vector<std::string> ListScenarioFiles(const std::string& dir) {
   if (!fs::is_directory(dir)) throw common::ConfigError(dir + ": not a directory of scenario files");
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_regular_file() && entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+    if (entry.is_regular_file() && entry.path().extension() == ".yaml")
+      files.push_back(entry.path().string());
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw common::ConfigError(dir + ": no *.yaml scenario files");
@@ -75,7 +76,8 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
       std::lock_guard<std::mutex> lock(mutex);
       suite.runs[index] = std::move(run);
       ++finished;
-      if (options.on_finished) options.on_finished(finished, static_cast<int>(configs.size()), suite.runs[index]);
+      if (options.on_finished)
+        options.on_finished(finished, static_cast<int>(configs.size()), suite.runs[index]);
     }
   };
   std::vector<std::thread> threads;
@@ -109,23 +111,24 @@ nlohmann::json SuiteJson(const SuiteResult& result) {
   for (const SuiteRun& run : result.runs) {
     nlohmann::json entry;
     if (!run.started) {
-      entry = {{"scenario", run.result.config.name}, {"completed", false}, {"passed", false},
+      entry = {{"scenario", run.result.config.name},
+               {"completed", false},
+               {"passed", false},
                {"error", "not run (interrupted)"}};
     } else if (!run.error.empty()) {
-      entry = {{"scenario", run.result.config.name}, {"completed", false}, {"passed", false}, {"error", run.error}};
+      entry = {{"scenario", run.result.config.name},
+               {"completed", false},
+               {"passed", false},
+               {"error", run.error}};
     } else {
       entry = SummaryJson(run.result);
     }
     runs.push_back(entry);
   }
-  return {{"completed", result.completed},
-          {"passed", result.completed && result.failed == 0},
-          {"scenarios", result.runs.size()},
-          {"passed_count", result.passed},
-          {"failed_count", result.failed},
-          {"jobs", result.jobs},
-          {"wall_s", result.wall_s},
-          {"runs", runs}};
+  return {{"completed", result.completed},   {"passed", result.completed && result.failed == 0},
+          {"scenarios", result.runs.size()}, {"passed_count", result.passed},
+          {"failed_count", result.failed},   {"jobs", result.jobs},
+          {"wall_s", result.wall_s},         {"runs", runs}};
 }
 
 std::string SuiteTable(const SuiteResult& result) {
@@ -136,21 +139,23 @@ std::string SuiteTable(const SuiteResult& result) {
   out << line;
   for (const SuiteRun& run : result.runs) {
     const RunResult& r = run.result;
-    std::string verdict = !run.started ? "SKIP" : !run.error.empty() ? "ERROR" : !r.completed ? "STOP"
-                                                                      : r.passed         ? "pass"
-                                                                                         : "FAIL";
+    std::string verdict = !run.started         ? "SKIP"
+                          : !run.error.empty() ? "ERROR"
+                          : !r.completed       ? "STOP"
+                          : r.passed           ? "pass"
+                                               : "FAIL";
     std::string failures;
     if (!run.error.empty()) failures = run.error;
     for (const ExpectationOutcome& o : r.outcomes) {
       if (!o.passed) failures += (failures.empty() ? "" : ", ") + o.name + " (" + o.value_text + ")";
     }
     std::snprintf(line, sizeof(line), "%-28s %-12s %-6s %8.2f %9.2f %9.2f  %s\n", r.config.name.c_str(),
-                  r.config.controller.name.c_str(), verdict.c_str(), r.metrics.max_slip_mm, r.metrics.peak_grip_n,
-                  r.metrics.wall_s, failures.c_str());
+                  r.config.controller.name.c_str(), verdict.c_str(), r.metrics.max_slip_mm,
+                  r.metrics.peak_grip_n, r.metrics.wall_s, failures.c_str());
     out << line;
   }
-  std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenarios in %.2f s with %d jobs%s\n", result.passed,
-                result.failed, result.runs.size(), result.wall_s, result.jobs,
+  std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenarios in %.2f s with %d jobs%s\n",
+                result.passed, result.failed, result.runs.size(), result.wall_s, result.jobs,
                 result.completed ? "" : " (INTERRUPTED)");
   out << line;
   return out.str();

@@ -33,8 +33,8 @@ struct SuiteRun {
 
 /// Settings of a suite run.
 struct SuiteOptions {
-  int jobs = 1;              ///< worker threads (>= 1)
-  std::string out_dir;       ///< per scenario: out_dir/<name>/; "" writes nothing
+  int jobs = 1;         ///< worker threads (>= 1)
+  std::string out_dir;  ///< per scenario: out_dir/<name>/; "" writes nothing
   bool write_plots = true;
   const std::atomic<bool>* stop = nullptr;  ///< stops the runs in flight and starts no new ones
   /// Called (under a lock) after each run with (runs finished, total, that run).
@@ -49,7 +49,7 @@ struct SuiteResult {
   std::vector<SuiteRun> runs;
   bool completed = false;  ///< every run ran to its end
   int passed = 0;
-  int failed = 0;          ///< failed expectations, errors and interrupted runs
+  int failed = 0;  ///< failed expectations, errors and interrupted runs
   double wall_s = 0.0;
   int jobs = 1;
 };

@@ -27,10 +27,20 @@ using common::YamlMap;
 
 constexpr int kMaxRuns = 1000000;
 // Columns every row has, in CSV order; parameter columns go between "scenario" and "passed".
-const std::vector<std::string> kMetricColumns = {
-    "passed",      "completed",        "dropped",          "max_slip_mm",       "peak_grip_n",
-    "crushed",     "slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n",
-    "time_to_stable_s", "sim_s",        "wall_s",           "failed_expectations"};
+const std::vector<std::string> kMetricColumns = {"passed",
+                                                 "completed",
+                                                 "dropped",
+                                                 "max_slip_mm",
+                                                 "peak_grip_n",
+                                                 "crushed",
+                                                 "slip_detect_latency_ms",
+                                                 "false_slip_per_min",
+                                                 "fn_rmse_n",
+                                                 "ft_rmse_n",
+                                                 "time_to_stable_s",
+                                                 "sim_s",
+                                                 "wall_s",
+                                                 "failed_expectations"};
 
 std::string ReadText(const std::string& path) {
   std::ifstream stream(path);
@@ -143,7 +153,8 @@ SweepSpec LoadSweepSpec(const std::string& path) {
   std::string scenario = map.RequireString("scenario");
   fs::path scenario_path(scenario);
   if (scenario_path.is_relative()) scenario_path = fs::path(path).parent_path() / scenario_path;
-  if (!fs::exists(scenario_path)) map.Fail("scenario", "no such scenario file (paths are relative to the spec)");
+  if (!fs::exists(scenario_path))
+    map.Fail("scenario", "no such scenario file (paths are relative to the spec)");
   spec.scenario_path = scenario_path.lexically_normal().string();
   spec.random = map.GetString("mode", "grid", {"grid", "random"}) == "random";
   spec.samples = spec.random ? map.RequireInt("samples", 1, kMaxRuns) : map.GetInt("samples", 0, 0, 0);
@@ -170,7 +181,8 @@ SweepSpec LoadSweepSpec(const std::string& path) {
       range.RejectUnknownKeys();
       if (parameter.max < parameter.min) range.Fail("max", "must be >= min");
       if (parameter.log_scale && parameter.min <= 0.0) range.Fail("min", "must be > 0 with log: true");
-      if (!spec.random) parameters.Fail(key, "a range {min, max} needs mode: random; a grid takes a list of values");
+      if (!spec.random)
+        parameters.Fail(key, "a range {min, max} needs mode: random; a grid takes a list of values");
     } else {
       parameters.Fail(key, "expected a list of values or a range {min: .., max: ..}");
     }
@@ -180,7 +192,8 @@ SweepSpec LoadSweepSpec(const std::string& path) {
   map.RejectUnknownKeys();
   if (!spec.random) {
     double runs = 1.0;
-    for (const SweepParameter& parameter : spec.parameters) runs *= static_cast<double>(parameter.values.size());
+    for (const SweepParameter& parameter : spec.parameters)
+      runs *= static_cast<double>(parameter.values.size());
     if (runs > kMaxRuns) map.Fail("parameters", "the grid has more than 1000000 runs");
   }
   char fingerprint[17];
@@ -201,11 +214,13 @@ std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
       for (const SweepParameter& parameter : spec.parameters) {
         std::string value;
         if (!parameter.values.empty()) {
-          value = parameter.values[std::uniform_int_distribution<size_t>(0, parameter.values.size() - 1)(rng)];
+          value =
+              parameter.values[std::uniform_int_distribution<size_t>(0, parameter.values.size() - 1)(rng)];
         } else {
           const double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
           const double sample = parameter.log_scale
-                                    ? std::exp(std::log(parameter.min) + u * (std::log(parameter.max) - std::log(parameter.min)))
+                                    ? std::exp(std::log(parameter.min) +
+                                               u * (std::log(parameter.max) - std::log(parameter.min)))
                                     : parameter.min + u * (parameter.max - parameter.min);
           value = FormatSample(sample, parameter.integer);
         }
@@ -266,8 +281,9 @@ nlohmann::json SweepRow(const SweepSpec& spec, const SweepRun& run, const RunRes
   const nlohmann::json summary = SummaryJson(result);
   row["passed"] = result.passed;
   row["completed"] = result.completed;
-  for (const char* key : {"dropped", "max_slip_mm", "peak_grip_n", "crushed", "slip_detect_latency_ms",
-                          "false_slip_per_min", "fn_rmse_n", "ft_rmse_n", "time_to_stable_s", "sim_s", "wall_s"}) {
+  for (const char* key :
+       {"dropped", "max_slip_mm", "peak_grip_n", "crushed", "slip_detect_latency_ms", "false_slip_per_min",
+        "fn_rmse_n", "ft_rmse_n", "time_to_stable_s", "sim_s", "wall_s"}) {
     row[key] = summary.at("metrics").at(key);
   }
   std::string failed;
@@ -294,7 +310,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
 
   fs::create_directories(options.out_dir);
   const std::string partial = options.out_dir + "/results.jsonl.partial";
-  for (const char* name : {"results.jsonl", "results.csv", "manifest.json"}) fs::remove(fs::path(options.out_dir) / name);
+  for (const char* name : {"results.jsonl", "results.csv", "manifest.json"})
+    fs::remove(fs::path(options.out_dir) / name);
   std::ofstream partial_stream(partial, std::ios::trunc);
   if (!partial_stream) throw std::runtime_error(partial + ": cannot write");
 
@@ -317,7 +334,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
       RunResult result;
       std::string error;
       try {
-        if (options.prepare_run) options.prepare_run(configs[i], "run_" + std::to_string(runs[i].index), run_options);
+        if (options.prepare_run)
+          options.prepare_run(configs[i], "run_" + std::to_string(runs[i].index), run_options);
         result = RunScenario(configs[i], run_options);
       } catch (const std::exception& e) {
         result.config = configs[i];
@@ -344,17 +362,18 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
   outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<int> indices;
   for (const SweepRun& run : runs) indices.push_back(run.index);
-  nlohmann::json manifest = {{"spec", spec.source_file},
-                             {"scenario", spec.scenario_path},
-                             {"fingerprint", spec.fingerprint},
-                             {"total_runs", all.size()},
-                             {"shard", std::to_string(options.shard.index) + "/" + std::to_string(options.shard.count)},
-                             {"shard_index", options.shard.index},
-                             {"shard_count", options.shard.count},
-                             {"runs", indices},
-                             {"completed", outcome.completed},
-                             {"finished_runs", outcome.finished},
-                             {"wall_s", outcome.wall_s}};
+  nlohmann::json manifest = {
+      {"spec", spec.source_file},
+      {"scenario", spec.scenario_path},
+      {"fingerprint", spec.fingerprint},
+      {"total_runs", all.size()},
+      {"shard", std::to_string(options.shard.index) + "/" + std::to_string(options.shard.count)},
+      {"shard_index", options.shard.index},
+      {"shard_count", options.shard.count},
+      {"runs", indices},
+      {"completed", outcome.completed},
+      {"finished_runs", outcome.finished},
+      {"wall_s", outcome.wall_s}};
   if (outcome.completed) {
     WriteOutputs(options.out_dir, Columns(ParameterKeys(spec)), rows, manifest);
     fs::remove(partial);
@@ -398,9 +417,10 @@ int MergeSweeps(const std::vector<std::string>& shard_dirs, const std::string& o
                                   " come from different sweeps (spec or scenario differ)");
     }
     if (shard.manifest.at("shard_count").get<int>() != count) {
-      throw std::invalid_argument(shard.dir + ": shard " + shard.manifest.at("shard").get<std::string>() + " of " +
-                                  std::to_string(shard.manifest.at("shard_count").get<int>()) + " shards, but " +
-                                  shards.front().dir + " is one of " + std::to_string(count));
+      throw std::invalid_argument(shard.dir + ": shard " + shard.manifest.at("shard").get<std::string>() +
+                                  " of " + std::to_string(shard.manifest.at("shard_count").get<int>()) +
+                                  " shards, but " + shards.front().dir + " is one of " +
+                                  std::to_string(count));
     }
     const int index = shard.manifest.at("shard_index").get<int>();
     if (seen.count(index)) {
@@ -411,9 +431,11 @@ int MergeSweeps(const std::vector<std::string>& shard_dirs, const std::string& o
   }
   std::string missing;
   for (int k = 1; k <= count; ++k) {
-    if (!seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(count);
+    if (!seen.count(k))
+      missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(count);
   }
-  if (!missing.empty()) throw std::invalid_argument("missing shard(s) " + missing + "; merge needs all of them");
+  if (!missing.empty())
+    throw std::invalid_argument("missing shard(s) " + missing + "; merge needs all of them");
 
   std::vector<nlohmann::json> rows;
   std::set<int> indices;
@@ -428,7 +450,8 @@ int MergeSweeps(const std::vector<std::string>& shard_dirs, const std::string& o
       try {
         row = nlohmann::json::parse(line);
       } catch (const nlohmann::json::exception&) {
-        throw std::invalid_argument(shard.dir + "/results.jsonl:" + std::to_string(line_number) + ": not JSON");
+        throw std::invalid_argument(shard.dir + "/results.jsonl:" + std::to_string(line_number) +
+                                    ": not JSON");
       }
       const int run = row.at("run").get<int>();
       if (!indices.insert(run).second) {

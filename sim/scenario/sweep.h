@@ -30,20 +30,20 @@ struct SweepParameter {
   std::vector<std::string> values;  ///< YAML value texts; empty for a range
   double min = 0.0;                 ///< range [min, max] (random mode)
   double max = 0.0;
-  bool log_scale = false;           ///< sample the range log-uniformly (min > 0)
-  bool integer = false;             ///< round the sample to a whole number
+  bool log_scale = false;  ///< sample the range log-uniformly (min > 0)
+  bool integer = false;    ///< round the sample to a whole number
 };
 
 /// A parsed sweep spec.
 struct SweepSpec {
   std::string source_file;
-  std::string scenario_path;  ///< base scenario, resolved relative to the spec file
-  bool random = false;        ///< mode: grid (false) or random
-  int samples = 0;            ///< random mode: number of runs
-  uint64_t seed = 1;          ///< random mode: sampling seed
+  std::string scenario_path;    ///< base scenario, resolved relative to the spec file
+  bool random = false;          ///< mode: grid (false) or random
+  int samples = 0;              ///< random mode: number of runs
+  uint64_t seed = 1;            ///< random mode: sampling seed
   std::vector<Override> fixed;  ///< `set:` overrides applied to every run first
   std::vector<SweepParameter> parameters;
-  std::string fingerprint;    ///< hash of the spec and base scenario texts (merge checks it)
+  std::string fingerprint;  ///< hash of the spec and base scenario texts (merge checks it)
 };
 
 /// Loads and validates a spec; errors are common::ConfigError "file:line: key = value: reason".
@@ -83,7 +83,7 @@ struct SweepOptions {
 
 /// What a sweep (shard) did.
 struct SweepOutcome {
-  int runs = 0;       ///< runs in this shard
+  int runs = 0;  ///< runs in this shard
   int finished = 0;
   int passed = 0;
   bool completed = false;

@@ -11,7 +11,9 @@ namespace {
 using ::testing::HasSubstr;
 
 // The errors refused here are ConfigError; one of another type fails the test.
-std::string ErrorOf(const std::function<void()>& action) { return graspbed::testing::ErrorOf<ConfigError>(action); }
+std::string ErrorOf(const std::function<void()>& action) {
+  return graspbed::testing::ErrorOf<ConfigError>(action);
+}
 
 TEST(YamlMapTest, ReadsTypedValuesWithDefaults) {
   const YamlMap map = YamlMap::LoadString("mass: 0.25\nname: box\nflag: true\ncount: 3\n", "t.yaml");
@@ -40,13 +42,14 @@ TEST(YamlMapTest, UnknownKeyListsValidKeys) {
 }
 
 TEST(YamlMapTest, SyntaxErrorAndMissingKeyAndWrongType) {
-  EXPECT_THAT(ErrorOf([] { YamlMap::LoadString("a: [1, 2\nb: 3\n", "bad.yaml"); }),
-              HasSubstr("bad.yaml:"));
+  EXPECT_THAT(ErrorOf([] { YamlMap::LoadString("a: [1, 2\nb: 3\n", "bad.yaml"); }), HasSubstr("bad.yaml:"));
   const YamlMap map = YamlMap::LoadString("a: hello\nlist: [1, x]\n", "m.yaml");
   EXPECT_EQ(ErrorOf([&] { map.RequireNumber("a"); }), "m.yaml:1: a = hello: expected a number");
   EXPECT_THAT(ErrorOf([&] { map.RequireNumber("b"); }), HasSubstr("b = null: missing required key"));
   EXPECT_EQ(ErrorOf([&] { map.GetNumberList("list", {}); }), "m.yaml:2: list[1] = x: expected a number");
-  EXPECT_THAT(ErrorOf([&] { map.GetString("a", "", {"box", "sphere"}); }),
+  EXPECT_THAT(ErrorOf([&] {
+                map.GetString("a", "", {"box", "sphere"});
+              }),
               HasSubstr("valid names: box, sphere"));
   EXPECT_THAT(ErrorOf([] { YamlMap::LoadFile("/nonexistent/x.yaml"); }),
               HasSubstr("/nonexistent/x.yaml: cannot open file"));

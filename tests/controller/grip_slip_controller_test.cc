@@ -16,25 +16,27 @@
 namespace graspbed::controller {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::HandPlant;
+using ::testing::HasSubstr;
 using testing::SyntheticContact;
 using testing::SyntheticTactile;
 
-constexpr double kPeriodS = 0.001;           // 1 kHz control and sensor rate
-constexpr double kGravity = 9.81;            // [m/s^2]
-constexpr double kSlipLatencyLimitS = 0.030;  // detection target, well under the human 60-90 ms
-constexpr double kGripTolN = 0.25;           // force-loop tracking tolerance in a steady hold
-constexpr double kCeilingTolN = 0.3;         // ceiling overshoot allowed (noise + loop transient)
+constexpr double kPeriodS = 0.001;                 // 1 kHz control and sensor rate
+constexpr double kGravity = 9.81;                  // [m/s^2]
+constexpr double kSlipLatencyLimitS = 0.030;       // detection target, well under the human 60-90 ms
+constexpr double kGripTolN = 0.25;                 // force-loop tracking tolerance in a steady hold
+constexpr double kCeilingTolN = 0.3;               // ceiling overshoot allowed (noise + loop transient)
 constexpr double kSlowSlideLatencyLimitS = 0.100;  // slide seen only by centroid travel, light grip
-constexpr double kAddedMassSlipLimitM = 5e-3;  // slide allowed after a load step of 2x the friction limit
+constexpr double kAddedMassSlipLimitM = 5e-3;      // slide allowed after a load step of 2x the friction limit
 constexpr double kLowFrictionSlipLimitM = 10e-3;
-constexpr double kVibrationNoiseSigmas = 2.5;  // vibration floor from the readout's noise, when switched on  // slide allowed while a 2x friction overestimate is learned
+constexpr double kVibrationNoiseSigmas = 2.5;  // vibration floor from the readout's noise, when switched on
+                                               // // slide allowed while a 2x friction overestimate is learned
 
 /// Controller + plant + sensor at 1 kHz, with the tangential load given as a function of time.
 class ClosedLoop {
  public:
-  ClosedLoop(const GripSlipConfig& config, const HandPlant::Options& plant, const SyntheticTactile::Options& sensor)
+  ClosedLoop(const GripSlipConfig& config, const HandPlant::Options& plant,
+             const SyntheticTactile::Options& sensor)
       : controller(config), plant(plant), sensor(sensor) {}
 
   /// Runs until `end_s`; `load_n(t)` is the axial tangential load; `each` sees every tick.
@@ -64,7 +66,8 @@ class ClosedLoop {
     controller.SetIntent(GraspIntent::kClose);
     double lift_start_s = -1.0;
     RunUntil(settle_until_s, [&](double t) {
-      if (lift_start_s < 0.0 && std::string(controller.telemetry().phase) == "holding") lift_start_s = t + 0.1;
+      if (lift_start_s < 0.0 && std::string(controller.telemetry().phase) == "holding")
+        lift_start_s = t + 0.1;
       return lift_start_s < 0.0 ? 0.0 : load_n * std::clamp((t - lift_start_s) / 0.3, 0.0, 1.0);
     });
     if (load_n > 0.0 && (lift_start_s < 0.0 || lift_start_s + 0.3 > settle_until_s)) {
@@ -104,15 +107,18 @@ TEST(GripSlipControllerTest, ClosesUntilContactThenLoadsToInitialGrip) {
   double contact_s = -1.0;
   double loading_s = -1.0;
   double peak_loading_grip_n = 0.0;
-  loop.RunUntil(0.8, [](double) { return 0.0; }, [&](double t) {
-    if (std::string(loop.controller.telemetry().phase) == "loading") {
-      peak_loading_grip_n = std::max(peak_loading_grip_n, loop.plant.grip_n());
-    }
-    if (contact_s < 0.0 && loop.plant.grip_n() > loop.controller.config().slip.contact_unit_threshold_n * 2.0) {
-      contact_s = t;
-    }
-    if (loading_s < 0.0 && std::string(loop.controller.telemetry().phase) == "loading") loading_s = t;
-  });
+  loop.RunUntil(
+      0.8, [](double) { return 0.0; },
+      [&](double t) {
+        if (std::string(loop.controller.telemetry().phase) == "loading") {
+          peak_loading_grip_n = std::max(peak_loading_grip_n, loop.plant.grip_n());
+        }
+        if (contact_s < 0.0 &&
+            loop.plant.grip_n() > loop.controller.config().slip.contact_unit_threshold_n * 2.0) {
+          contact_s = t;
+        }
+        if (loading_s < 0.0 && std::string(loop.controller.telemetry().phase) == "loading") loading_s = t;
+      });
   ASSERT_GT(contact_s, 0.0) << "the plant never touched";
   ASSERT_GT(loading_s, 0.0) << "contact never detected";
   // Before the finger touched, noise alone never looked like contact.
@@ -161,21 +167,24 @@ TEST(GripSlipControllerTest, NoFalseSlipInLongStaticHold) {
     int detected_ticks = 0;
     int cue_ticks[3] = {0, 0, 0};
     constexpr double kHoldS = 60.0;
-    loop.RunUntil(1.0 + kHoldS, [](double) { return 0.5; }, [&](double) {
-      if (loop.controller.telemetry().slip_detected) ++detected_ticks;
-      const SlipSignals& signals = loop.controller.diagnostics().signals;
-      cue_ticks[0] += signals.ratio_slip;
-      cue_ticks[1] += signals.vibration_slip;
-      cue_ticks[2] += signals.centroid_slip;
-    });
-    std::printf("[ measure  ] flagged ticks by cue: ratio %d, vibration %d, centroid %d\n", cue_ticks[0], cue_ticks[1],
-                cue_ticks[2]);
+    loop.RunUntil(
+        1.0 + kHoldS, [](double) { return 0.5; },
+        [&](double) {
+          if (loop.controller.telemetry().slip_detected) ++detected_ticks;
+          const SlipSignals& signals = loop.controller.diagnostics().signals;
+          cue_ticks[0] += signals.ratio_slip;
+          cue_ticks[1] += signals.vibration_slip;
+          cue_ticks[2] += signals.centroid_slip;
+        });
+    std::printf("[ measure  ] flagged ticks by cue: ratio %d, vibration %d, centroid %d\n", cue_ticks[0],
+                cue_ticks[1], cue_ticks[2]);
     const int false_events = loop.controller.telemetry().slip_events - events_after_grasp;
-    std::printf("[ measure  ] noise x%.0f (fn %.3f N, ft %.3f N per unit): %d false slip events, %d flagged ticks in "
-                "%.0f s static hold; vibration noise rms %.4f N, threshold %.4f N\n",
-                noise_scale, sensor.noise_fn_n, sensor.noise_ft_n, false_events, detected_ticks, kHoldS,
-                loop.controller.diagnostics().signals.noise_rms_n,
-                loop.controller.diagnostics().signals.vibration_threshold_n);
+    std::printf(
+        "[ measure  ] noise x%.0f (fn %.3f N, ft %.3f N per unit): %d false slip events, %d flagged ticks in "
+        "%.0f s static hold; vibration noise rms %.4f N, threshold %.4f N\n",
+        noise_scale, sensor.noise_fn_n, sensor.noise_ft_n, false_events, detected_ticks, kHoldS,
+        loop.controller.diagnostics().signals.noise_rms_n,
+        loop.controller.diagnostics().signals.vibration_threshold_n);
     EXPECT_EQ(events_after_grasp, 0) << "noise x" << noise_scale;
     EXPECT_EQ(false_events, 0) << "noise x" << noise_scale;
     EXPECT_EQ(detected_ticks, 0) << "noise x" << noise_scale;
@@ -187,8 +196,8 @@ TEST(GripSlipControllerTest, NoFalseSlipInLongStaticHold) {
 /// the vibration threshold's floor rises with the sensor's noise above the fixed 0.03 N and the
 /// centroid's noise is the sensor's normal-force noise. At the noise of realistic readout chains
 /// (tests/sensor/sensor_profile_test.cc: divider_12bit with the paper's sensitivities, inamp_16bit
-/// with the FEA's) and at the noisy FEA case (FEA sensitivities, 0.5 Ohm channel noise, 16-bit ADC), a minute of static hold raises at most one false
-/// slip, and the slips of the tests above are still flagged.
+/// with the FEA's) and at the noisy FEA case (FEA sensitivities, 0.5 Ohm channel noise, 16-bit ADC), a minute
+/// of static hold raises at most one false slip, and the slips of the tests above are still flagged.
 TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
   struct Level {
     const char* name;
@@ -196,8 +205,9 @@ TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
   };
   // Third: the FEA's sensitivities behind 0.5 Ohm of channel noise (the noisy FEA case; no shipped
   // profile is this noisy), where the noise, not the fixed floor, has to set the threshold.
-  for (const Level level : {Level{"divider_12bit, paper", 0.0103, 0.0138}, Level{"inamp_16bit, fea", 0.00083, 0.0044},
-                            Level{"0.5 Ohm, fea", 0.031, 0.165}}) {
+  for (const Level level :
+       {Level{"divider_12bit, paper", 0.0103, 0.0138}, Level{"inamp_16bit, fea", 0.00083, 0.0044},
+        Level{"0.5 Ohm, fea", 0.031, 0.165}}) {
     // Without the noise figure in the state (today's learned-noise cues), with it (the centroid's
     // noise from the readout's figures), and with the vibration floor from it too.
     for (const int mode : {0, 1, 2}) {
@@ -259,14 +269,17 @@ TEST(GripSlipControllerTest, NoiseAwareCuesUnderRealisticProfileNoise) {
       if (mode > 0) {
         EXPECT_FALSE(low_dropped[1]) << "the 0.2 s lift was dropped";
       }
-      std::printf("[ measure  ] %s noise (fn %.4f, ft %.4f N), %s: %d false slips in %.0f s held (vibration threshold "
-                  "%.4f N); added mass flagged after %.0f ms; low friction flagged after %.0f ms (0.5 s lift, %s), "
-                  "%.0f ms (0.2 s lift, %s)\n",
-                  level.name, level.fn_n, level.ft_n,
-                  mode == 0 ? "learned noise only" : (mode == 1 ? "noise figure, centroid" : "noise figure, centroid + vibration floor"),
-                  false_events, kHoldS, hold.controller.diagnostics().signals.vibration_threshold_n,
-                  added_latency_s * 1e3, low_latency_s[0] * 1e3, low_dropped[0] ? "dropped" : "held",
-                  low_latency_s[1] * 1e3, low_dropped[1] ? "dropped" : "held");
+      std::printf(
+          "[ measure  ] %s noise (fn %.4f, ft %.4f N), %s: %d false slips in %.0f s held (vibration "
+          "threshold "
+          "%.4f N); added mass flagged after %.0f ms; low friction flagged after %.0f ms (0.5 s lift, %s), "
+          "%.0f ms (0.2 s lift, %s)\n",
+          level.name, level.fn_n, level.ft_n,
+          mode == 0 ? "learned noise only"
+                    : (mode == 1 ? "noise figure, centroid" : "noise figure, centroid + vibration floor"),
+          false_events, kHoldS, hold.controller.diagnostics().signals.vibration_threshold_n,
+          added_latency_s * 1e3, low_latency_s[0] * 1e3, low_dropped[0] ? "dropped" : "held",
+          low_latency_s[1] * 1e3, low_dropped[1] ? "dropped" : "held");
     }
   }
 }
@@ -282,8 +295,8 @@ TEST(GripSlipControllerTest, NoFalseSlipDuringArmMotion) {
   // Lift/carry profile: 1.5 Hz swings of +-7 m/s^2, then a 4 Hz shake of +-5 m/s^2.
   const auto load = [&](double t) {
     const double tm = t - 1.0;
-    const double acceleration =
-        tm < 6.0 ? 7.0 * std::sin(2.0 * std::numbers::pi * 1.5 * tm) : 5.0 * std::sin(2.0 * std::numbers::pi * 4.0 * tm);
+    const double acceleration = tm < 6.0 ? 7.0 * std::sin(2.0 * std::numbers::pi * 1.5 * tm)
+                                         : 5.0 * std::sin(2.0 * std::numbers::pi * 4.0 * tm);
     return mass_kg * (kGravity + acceleration) / 2.0;
   };
   loop.RunUntil(11.0, load, [&](double t) {
@@ -309,8 +322,9 @@ TEST(GripSlipControllerTest, DetectsSlipFromAddedMassWithinLatencyAndStopsIt) {
   ASSERT_GT(loop.plant.slip_onset_s(), 0.0) << "the load step did not make the object slip";
   ASSERT_GT(loop.first_slip_s, 0.0) << "slip not detected";
   const double latency_s = loop.first_slip_s - loop.plant.slip_onset_s();
-  std::printf("[ measure  ] added mass: slip detected %.1f ms after onset, slid %.2f mm, grip %.2f -> %.2f N\n",
-              latency_s * 1e3, loop.plant.slip_distance_m() * 1e3, grip_before_n, loop.plant.grip_n());
+  std::printf(
+      "[ measure  ] added mass: slip detected %.1f ms after onset, slid %.2f mm, grip %.2f -> %.2f N\n",
+      latency_s * 1e3, loop.plant.slip_distance_m() * 1e3, grip_before_n, loop.plant.grip_n());
   EXPECT_GE(latency_s, 0.0);
   EXPECT_LT(latency_s, kSlipLatencyLimitS);
   EXPECT_FALSE(loop.plant.sliding()) << "the slip response did not stop the slip";
@@ -339,17 +353,19 @@ TEST(GripSlipControllerTest, LearnsLowFrictionFromSlipAndThenHolds) {
   ASSERT_FALSE(loop.plant.dropped()) << "the object slid out of the grasp";
   const double latency_s = loop.first_slip_s - loop.plant.slip_onset_s();
   const int events_after_learning = loop.controller.telemetry().slip_events;
-  std::printf("[ measure  ] low friction %.2f (estimate %.2f), 0.5 s lift: detected %.1f ms after onset (%s), "
-              "friction learned %.3f, %d slip events, slid %.2f mm, grip %.2f N for %.2f N needed\n",
-              plant.friction, config.friction_initial, latency_s * 1e3, loop.Cues().c_str(),
-              loop.controller.telemetry().friction_estimate, events_after_learning, max_slid_m * 1e3,
-              loop.plant.grip_n(), 1.2 / plant.friction);
+  std::printf(
+      "[ measure  ] low friction %.2f (estimate %.2f), 0.5 s lift: detected %.1f ms after onset (%s), "
+      "friction learned %.3f, %d slip events, slid %.2f mm, grip %.2f N for %.2f N needed\n",
+      plant.friction, config.friction_initial, latency_s * 1e3, loop.Cues().c_str(),
+      loop.controller.telemetry().friction_estimate, events_after_learning, max_slid_m * 1e3,
+      loop.plant.grip_n(), 1.2 / plant.friction);
   EXPECT_GE(latency_s, 0.0);
   EXPECT_LT(latency_s, kSlowSlideLatencyLimitS);
   EXPECT_LE(loop.controller.telemetry().friction_estimate, plant.friction + 0.05) << "estimate not lowered";
   EXPECT_FALSE(loop.plant.sliding());
   loop.RunUntil(10.0, load, watch);
-  EXPECT_EQ(loop.controller.telemetry().slip_events, events_after_learning) << "slips after the estimate was learned";
+  EXPECT_EQ(loop.controller.telemetry().slip_events, events_after_learning)
+      << "slips after the estimate was learned";
   EXPECT_FALSE(loop.plant.sliding());
   EXPECT_FALSE(loop.plant.dropped());
   EXPECT_LT(max_slid_m, kLowFrictionSlipLimitM);
@@ -367,10 +383,12 @@ TEST(GripSlipControllerTest, FastLiftOfAnObjectWithHalfTheEstimatedFrictionIsHel
   loop.Grasp(0.0, 0.5);
   double dropped_at_s = -1.0;
   double max_slid_m = 0.0;
-  loop.RunUntil(1.5, [](double t) { return std::clamp((t - 0.5) / 0.2, 0.0, 1.0) * 1.2; }, [&](double t) {
-    if (dropped_at_s < 0.0 && loop.plant.dropped()) dropped_at_s = t;
-    max_slid_m = std::max(max_slid_m, loop.plant.slip_distance_m());
-  });
+  loop.RunUntil(
+      1.5, [](double t) { return std::clamp((t - 0.5) / 0.2, 0.0, 1.0) * 1.2; },
+      [&](double t) {
+        if (dropped_at_s < 0.0 && loop.plant.dropped()) dropped_at_s = t;
+        max_slid_m = std::max(max_slid_m, loop.plant.slip_distance_m());
+      });
   ASSERT_GT(loop.first_slip_s, 0.0) << "the slide was never flagged";
   std::printf("[ measure  ] low friction 0.25, 0.2 s lift: flagged %.1f ms after onset, slid %.1f mm, %s\n",
               (loop.first_slip_s - loop.plant.slip_onset_s()) * 1e3, max_slid_m * 1e3,
@@ -407,10 +425,12 @@ TEST(GripSlipControllerTest, CeilingHonouredEvenWhileSlipping) {
     max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n);
     if (t >= 1.2 && t < 1.5) max_grip_during_pull_n = std::max(max_grip_during_pull_n, loop.plant.grip_n());
   });
-  std::printf("[ measure  ] ceiling %.1f N: peak grip %.2f N (pull %.2f N), peak target %.2f N, %d slip events, "
-              "slid %.1f mm, held %d, grip at end %.2f N\n",
-              kCeilingN, loop.max_grip_n, max_grip_during_pull_n, max_target_n, loop.controller.telemetry().slip_events,
-              loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(), loop.plant.grip_n());
+  std::printf(
+      "[ measure  ] ceiling %.1f N: peak grip %.2f N (pull %.2f N), peak target %.2f N, %d slip events, "
+      "slid %.1f mm, held %d, grip at end %.2f N\n",
+      kCeilingN, loop.max_grip_n, max_grip_during_pull_n, max_target_n,
+      loop.controller.telemetry().slip_events, loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(),
+      loop.plant.grip_n());
   ASSERT_FALSE(loop.plant.dropped()) << "the ceiling check needs the object in the hand";
   EXPECT_GT(loop.controller.telemetry().slip_events, 0);
   EXPECT_GT(loop.plant.slip_distance_m(), 1e-3) << "the pull should exceed what the ceiling can hold";
@@ -433,11 +453,14 @@ TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
   loop.controller.SetGripCeiling(8.0);  // the task allows more; the overall ceiling wins
   loop.Grasp(0.2, 1.0);
   double max_target_n = 0.0;
-  loop.RunUntil(4.0, [](double t) { return t < 1.2 ? 0.2 : 0.2 + 0.45 * std::clamp((t - 1.2) / 0.5, 0.0, 1.0); },
-                [&](double) { max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n); });
-  std::printf("[ measure  ] max_grip 4 N: peak grip %.2f N, peak target %.2f N, slid %.2f mm, held %d, grip at end %.2f N\n",
-              loop.max_grip_n, max_target_n, loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(),
-              loop.plant.grip_n());
+  loop.RunUntil(
+      4.0, [](double t) { return t < 1.2 ? 0.2 : 0.2 + 0.45 * std::clamp((t - 1.2) / 0.5, 0.0, 1.0); },
+      [&](double) { max_target_n = std::max(max_target_n, loop.controller.telemetry().grip_target_n); });
+  std::printf(
+      "[ measure  ] max_grip 4 N: peak grip %.2f N, peak target %.2f N, slid %.2f mm, held %d, grip at end "
+      "%.2f N\n",
+      loop.max_grip_n, max_target_n, loop.plant.slip_distance_m() * 1e3, !loop.plant.dropped(),
+      loop.plant.grip_n());
   EXPECT_DOUBLE_EQ(loop.controller.diagnostics().ceiling_n, 4.0);
   EXPECT_FALSE(loop.plant.dropped());
   EXPECT_FALSE(loop.plant.sliding());

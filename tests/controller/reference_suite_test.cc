@@ -42,8 +42,8 @@ class ReferenceSuiteTest : public ::testing::Test {
   }
 
   SuiteRun RunSuite(const std::string& extra_arguments) {
-    const CliResult cli =
-        RunCli("suite scenarios -j 2 --no-plots --json --out " + (dir_ / "out").string() + " " + extra_arguments);
+    const CliResult cli = RunCli("suite scenarios -j 2 --no-plots --json --out " + (dir_ / "out").string() +
+                                 " " + extra_arguments);
     SuiteRun result;
     result.exit_code = cli.exit_code;
     const nlohmann::json suite = nlohmann::json::parse(cli.out, nullptr, /*allow_exceptions=*/false);
@@ -76,8 +76,8 @@ TEST_F(ReferenceSuiteTest, GripSlipPassesEveryShippedScenarioAndOpenLoopLosesThe
     EXPECT_FALSE(run["metrics"]["dropped"].get<bool>());
   }
 
-  const SuiteRun baseline =
-      RunSuite("--controller open_loop --set controller.params.close_effort=" + std::to_string(kBaselineEffort));
+  const SuiteRun baseline = RunSuite("--controller open_loop --set controller.params.close_effort=" +
+                                     std::to_string(kBaselineEffort));
   ASSERT_EQ(baseline.runs.size(), reference.runs.size());
   EXPECT_EQ(baseline.exit_code, 1);
   for (const std::string& name : kLightScenarios) {
@@ -92,7 +92,8 @@ TEST_F(ReferenceSuiteTest, GripSlipPassesEveryShippedScenarioAndOpenLoopLosesThe
     EXPECT_FALSE(run["passed"].get<bool>());
     // Lost for physical reasons, not only for not flagging slip (which a blind controller cannot).
     const std::set<std::string> failed = FailedExpectations(run);
-    EXPECT_TRUE(failed.count("not_dropped") || failed.count("max_slip_mm")) << ::testing::PrintToString(failed);
+    EXPECT_TRUE(failed.count("not_dropped") || failed.count("max_slip_mm"))
+        << ::testing::PrintToString(failed);
     // The reference controller held the same object with less slip than the baseline allowed.
     EXPECT_LT(reference.runs.at(name)["metrics"]["max_slip_mm"].get<double>(),
               run["metrics"]["max_slip_mm"].get<double>());

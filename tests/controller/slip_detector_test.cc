@@ -132,25 +132,29 @@ TEST(SlipDetectorTest, StickSlipVibrationSweptInAmplitudeAtTwoNoiseLevels) {
   double smallest_within_limit[3] = {-1.0, -1.0, -1.0};
   for (int level = 0; level < 3; ++level) {
     const SyntheticTactile::Options sensor = level == 0 ? SyntheticTactile::Options{} : realistic;
-    const double min_rms_n = level == 2 ? 2.0 * realistic.noise_ft_n : SlipDetectorConfig{}.vibration_min_rms_n;
+    const double min_rms_n =
+        level == 2 ? 2.0 * realistic.noise_ft_n : SlipDetectorConfig{}.vibration_min_rms_n;
     bool seen_smaller = false;
     for (const double fraction : {0.8, 0.67, 0.53, 0.4, 0.3, 0.2, 0.1, 0.05}) {
       const double latency_s = VibrationLatencyS(fraction * friction_force_n, sensor, min_rms_n);
       ASSERT_NE(latency_s, -2.0) << "false flag in the quiet hold";
-      std::printf("[ measure  ] vibration cue alone, shear noise %.3f N/unit, floor %.3f N: stick-slip %2.0f %% "
-                  "(%.2f N p-p): %s %.0f ms\n",
-                  sensor.noise_ft_n, min_rms_n, 100 * fraction, fraction * friction_force_n,
-                  latency_s >= 0.0 ? "detected after" : "not detected in", latency_s >= 0.0 ? latency_s * 1e3 : 500.0);
+      std::printf(
+          "[ measure  ] vibration cue alone, shear noise %.3f N/unit, floor %.3f N: stick-slip %2.0f %% "
+          "(%.2f N p-p): %s %.0f ms\n",
+          sensor.noise_ft_n, min_rms_n, 100 * fraction, fraction * friction_force_n,
+          latency_s >= 0.0 ? "detected after" : "not detected in",
+          latency_s >= 0.0 ? latency_s * 1e3 : 500.0);
       const bool within = latency_s >= 0.0 && latency_s < kSlipLatencyLimitS;
       // Larger amplitudes come first: once one is missed, smaller ones are not seen in time either.
       if (within && !seen_smaller) smallest_within_limit[level] = fraction;
       if (!within) seen_smaller = true;
     }
   }
-  std::printf("[ measure  ] smallest stick-slip seen within %.0f ms: %.0f %% at 0.04 N noise, %.0f %% at 0.005 N "
-              "(0.03 N floor), %.0f %% at 0.005 N (0.01 N floor)\n",
-              kSlipLatencyLimitS * 1e3, 100 * smallest_within_limit[0], 100 * smallest_within_limit[1],
-              100 * smallest_within_limit[2]);
+  std::printf(
+      "[ measure  ] smallest stick-slip seen within %.0f ms: %.0f %% at 0.04 N noise, %.0f %% at 0.005 N "
+      "(0.03 N floor), %.0f %% at 0.005 N (0.01 N floor)\n",
+      kSlipLatencyLimitS * 1e3, 100 * smallest_within_limit[0], 100 * smallest_within_limit[1],
+      100 * smallest_within_limit[2]);
   // What the cue must see within the latency limit. At the default noise 80 % of the friction force,
   // not the plant's 30 % (the plant's slides are caught by the contact's travel instead, see
   // LearnsLowFrictionFromSlipAndThenHolds). At a realistic chain's noise the fixed 0.03 N floor, not
@@ -270,11 +274,12 @@ TEST(SlipDetectorTest, ShearLockedInAtTheGraspIsPreloadAndMoreGripAddsNoLoad) {
   EXPECT_NEAR(signals.preload_shear_axial_n, kPreloadRatio * kGripN, 0.06 * kGripN);
   EXPECT_NEAR(signals.tangential_load_n, 0.0, 0.06 * kGripN);
   // Three times the grip with the same locked-in shear: still no load, nothing fires.
-  EXPECT_LT(stream.Run(0.6, 1.0, [&](double t) {
-              SyntheticContact contact = grasp(t);
-              contact.grip_n = kGripN * (1.0 + 2.0 * std::min((t - 0.6) / 0.1, 1.0));
-              return contact;
-            }),
+  EXPECT_LT(stream.Run(0.6, 1.0,
+                       [&](double t) {
+                         SyntheticContact contact = grasp(t);
+                         contact.grip_n = kGripN * (1.0 + 2.0 * std::min((t - 0.6) / 0.1, 1.0));
+                         return contact;
+                       }),
             0.0);
   EXPECT_NEAR(signals.tangential_load_n, 0.0, 0.06 * 3.0 * kGripN);
   // A load on top of the preload, up to the friction limit at 3x the grip: flagged in time.

@@ -56,7 +56,9 @@ class SyntheticTactile {
     return ((row + column) % 2 == 0) == options_.even_units_axial;
   }
   /// Marks a unit permanently invalid (dead) or valid again.
-  void SetUnitValidity(int unit, sensor::UnitValidity validity) { forced_validity_[static_cast<size_t>(unit)] = validity; }
+  void SetUnitValidity(int unit, sensor::UnitValidity validity) {
+    forced_validity_[static_cast<size_t>(unit)] = validity;
+  }
 
   /// The next frame at `time_s` (sequence increments).
   sensor::TactileState Frame(const SyntheticContact& contact, double time_s) {
@@ -123,14 +125,14 @@ class SyntheticTactile {
 class HandPlant {
  public:
   struct Options {
-    double stall_force_n = 17.0;       ///< grip force at effort 1 at stall [N]
+    double stall_force_n = 17.0;  ///< grip force at effort 1 at stall [N]
     double force_time_constant_s = 0.02;
     double closing_speed_per_s = 4.0;  ///< fraction of the closing stroke per second at effort 1
     double start_gap = 0.3;            ///< fraction of the stroke between finger and object at start
     double friction = 0.8;             ///< true friction coefficient at the finger
     double slip_mass_kg = 0.1;         ///< mass the finger's friction accelerates when sliding [kg]
     double stick_slip_hz = 120.0;      ///< stick-slip vibration frequency while sliding [Hz]
-    double stick_slip_fraction = 0.3;   ///< peak stick-slip shear, fraction of the friction force
+    double stick_slip_fraction = 0.3;  ///< peak stick-slip shear, fraction of the friction force
     double pitch_m = 5e-3;             ///< unit pitch the patch travels over [m]
     double drop_distance_m = 20e-3;    ///< after sliding this far the object is gone [m]
   };
@@ -186,7 +188,8 @@ class HandPlant {
       contact.load_axial_n = std::copysign(friction_force, load_n_);
       const double phase = std::fmod(time_s_ * options_.stick_slip_hz, 1.0);
       // Sawtooth: shear builds while sticking, drops at each micro-slip.
-      contact.vibration_n = std::copysign(options_.stick_slip_fraction * friction_force * (phase - 0.5), load_n_);
+      contact.vibration_n =
+          std::copysign(options_.stick_slip_fraction * friction_force * (phase - 0.5), load_n_);
     } else {
       contact.load_axial_n = grip_n_ > 0.0 ? load_n_ : 0.0;
     }

@@ -26,8 +26,8 @@ constexpr double kMinStrainFraction = 0.25;
 constexpr double kBeamTheoryTol = 0.02;
 
 struct BeamErrors {
-  double max_relative = 0.0;       // pointwise, where |eps_eb| >= kMinStrainFraction * peak
-  double max_of_peak = 0.0;        // max |eps_fe - eps_eb| / peak eps_eb, away from load and clamps
+  double max_relative = 0.0;  // pointwise, where |eps_eb| >= kMinStrainFraction * peak
+  double max_of_peak = 0.0;   // max |eps_fe - eps_eb| / peak eps_eb, away from load and clamps
   int compared_points = 0;
 };
 

@@ -16,12 +16,12 @@ namespace graspbed::fea {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using graspbed::testing::CliBinary;
 using graspbed::testing::CliResult;
 using graspbed::testing::ReadText;
 using graspbed::testing::RunCli;
 using graspbed::testing::TempDir;
+using ::testing::HasSubstr;
 
 class FeaCliTest : public ::testing::Test {
  protected:

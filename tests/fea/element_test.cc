@@ -15,10 +15,10 @@
 namespace graspbed::fea {
 namespace {
 
-using ::testing::HasSubstr;
 using graspbed::testing::ErrorOf;
+using ::testing::HasSubstr;
 
-constexpr double kExactTol = 1e-10;    // "exact" up to rounding, for strains of order 1e-3
+constexpr double kExactTol = 1e-10;  // "exact" up to rounding, for strains of order 1e-3
 constexpr double kYoungsMpa = 197000.0;
 constexpr double kPoisson = 0.3;
 constexpr double kThicknessMm = 2.0;
@@ -115,14 +115,14 @@ TEST(ElementTest, TractionPatchTestGivesUniformStress) {
   std::vector<PrescribedDof> supports;
   for (int node = 0; node < static_cast<int>(mesh.nodes.size()); ++node) {
     const Eigen::Vector2d& p = mesh.nodes[node];
-    if (p.x() < 1e-12) supports.push_back({2 * node, 0.0});                  // u_x = 0 on the left
+    if (p.x() < 1e-12) supports.push_back({2 * node, 0.0});                       // u_x = 0 on the left
     if (p.x() < 1e-12 && p.y() < 1e-12) supports.push_back({2 * node + 1, 0.0});  // and one u_y
   }
   const PlaneStressModel model(mesh, {kYoungsMpa, kPoisson, kThicknessMm}, supports);
   Eigen::VectorXd loads = Eigen::VectorXd::Zero(model.DofCount());
   model.AddEdgeTraction(1, Side::kRight, {kTractionMpa, 0.0}, loads);  // elements 1 and 3 are on x = 2
   model.AddEdgeTraction(3, Side::kRight, {kTractionMpa, 0.0}, loads);
-  EXPECT_NEAR(loads.sum(), kTractionMpa * 1.5 * kThicknessMm, 1e-9);   // resultant = traction x area
+  EXPECT_NEAR(loads.sum(), kTractionMpa * 1.5 * kThicknessMm, 1e-9);  // resultant = traction x area
   const Eigen::MatrixXd u = model.Solve(loads);
   constexpr double kStressTolMpa = 1e-8;
   for (int element = 0; element < 4; ++element) {
@@ -145,7 +145,9 @@ TEST(ElementTest, RigidBodyMotionGivesNoStrain) {
   // A small rotation theta about the origin plus a translation, prescribed everywhere on the left
   // edge; nothing loads the beam, so the whole beam follows the rigid motion with zero strain.
   const double theta = 1e-3;
-  auto rigid = [&](const Eigen::Vector2d& p) { return Eigen::Vector2d(0.01 - theta * p.y(), -0.02 + theta * p.x()); };
+  auto rigid = [&](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d(0.01 - theta * p.y(), -0.02 + theta * p.x());
+  };
   std::vector<PrescribedDof> prescribed;
   for (int node = 0; node < static_cast<int>(mesh.nodes.size()); ++node) {
     if (mesh.nodes[node].x() > 1e-12) continue;
@@ -167,31 +169,43 @@ TEST(ElementTest, MeshRectanglesPutsEdgesOnGeometryAndExtraLines) {
   const Mesh mesh = MeshRectangles({{-1.5, 1.5, 3.0, 3.2}, {-1.5, -1.0, 0.0, 3.0}}, 0.05, {0.0, 0.75, -0.33});
   EXPECT_EQ(mesh.CellsY(), 60 + 4);
   for (double line : {-1.0, 0.0, 0.75, -0.33}) {
-    EXPECT_TRUE(std::any_of(mesh.x_lines.begin(), mesh.x_lines.end(),
-                            [&](double x) { return std::abs(x - line) < 1e-12; }))
-        << line;
+    EXPECT_TRUE(std::any_of(mesh.x_lines.begin(), mesh.x_lines.end(), [&](double x) {
+      return std::abs(x - line) < 1e-12;
+    })) << line;
   }
   // The void under the beam right of the brace holds no elements.
   EXPECT_EQ(mesh.CellElement(mesh.CellsX() - 1, 0), -1);
   EXPECT_GE(mesh.CellElement(0, 0), 0);
-  for (size_t k = 1; k < mesh.x_lines.size(); ++k) EXPECT_LE(mesh.x_lines[k] - mesh.x_lines[k - 1], 0.05 + 1e-12);
+  for (size_t k = 1; k < mesh.x_lines.size(); ++k)
+    EXPECT_LE(mesh.x_lines[k] - mesh.x_lines[k - 1], 0.05 + 1e-12);
 }
 
 TEST(ElementTest, RefusesUnconstrainedPartsAndBadInput) {
   const Mesh mesh = MeshRectangles({{0.0, 1.0, 0.0, 0.2}}, 0.1);
-  EXPECT_THAT(ErrorOf([&] { PlaneStressModel(mesh, {kYoungsMpa, kPoisson, kThicknessMm}, {}); }),
+  EXPECT_THAT(ErrorOf([&] {
+                PlaneStressModel(mesh, {kYoungsMpa, kPoisson, kThicknessMm}, {});
+              }),
               HasSubstr("not fully constrained"));
-  EXPECT_THAT(ErrorOf([&] { PlaneStressModel(mesh, {kYoungsMpa, 0.5, kThicknessMm}, {{0, 0.0}}); }),
+  EXPECT_THAT(ErrorOf([&] {
+                PlaneStressModel(mesh, {kYoungsMpa, 0.5, kThicknessMm}, {{0, 0.0}});
+              }),
               HasSubstr("nu = 0.5"));
-  EXPECT_THAT(ErrorOf([&] { PlaneStressModel(mesh, {kYoungsMpa, kPoisson, kThicknessMm}, {{-1, 0.0}}); }),
+  EXPECT_THAT(ErrorOf([&] {
+                PlaneStressModel(mesh, {kYoungsMpa, kPoisson, kThicknessMm}, {{-1, 0.0}});
+              }),
               HasSubstr("prescribed dof -1"));
-  EXPECT_THAT(ErrorOf([&] { MeshRectangles({{0.0, 0.0, 0.0, 0.2}}, 0.1); }), HasSubstr("degenerate rectangle"));
+  EXPECT_THAT(ErrorOf([&] {
+                MeshRectangles({{0.0, 0.0, 0.0, 0.2}}, 0.1);
+              }),
+              HasSubstr("degenerate rectangle"));
   EXPECT_THAT(ErrorOf([&] { MeshRectangles({{0.0, 1.0, 0.0, 0.2}}, -0.1); }), HasSubstr("must be > 0"));
   Mesh inverted = mesh;
   std::swap(inverted.elements[0][0], inverted.elements[0][2]);
   std::swap(inverted.elements[0][3], inverted.elements[0][5]);
   std::swap(inverted.elements[0][6], inverted.elements[0][8]);
-  EXPECT_THAT(ErrorOf([&] { PlaneStressModel(inverted, {kYoungsMpa, kPoisson, kThicknessMm}, {{0, 0.0}}); }),
+  EXPECT_THAT(ErrorOf([&] {
+                PlaneStressModel(inverted, {kYoungsMpa, kPoisson, kThicknessMm}, {{0, 0.0}});
+              }),
               HasSubstr("inverted or degenerate"));
 }
 

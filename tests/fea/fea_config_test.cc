@@ -74,8 +74,9 @@ TEST(FeaConfigTest, InconsistentGeometryIsRefusedAtTheOffendingKey) {
   EXPECT_EQ(LoadError("geometry:\n  beam_length_mm: 3\n  brace_thickness_mm: 1.5\n"),
             "unit.yaml:3: geometry.brace_thickness_mm = 1.5: two braces of this thickness leave no free "
             "span under a beam of length 3 mm");
-  EXPECT_EQ(LoadError("geometry:\n  mesa_length_mm: 2.5\n"),
-            "unit.yaml:2: geometry.mesa_length_mm = 2.5: longer than the free span between the braces (2 mm)");
+  EXPECT_EQ(
+      LoadError("geometry:\n  mesa_length_mm: 2.5\n"),
+      "unit.yaml:2: geometry.mesa_length_mm = 2.5: longer than the free span between the braces (2 mm)");
   EXPECT_EQ(LoadError("gauge:\n  r1: {start_mm: 0.0, end_mm: 1.2}\n"),
             "unit.yaml:2: gauge.r1.end_mm = 1.2: outside the free span under the beam (-1..1 mm)");
   EXPECT_EQ(LoadError("gauge:\n  r2:\n    start_mm: 0.5\n    end_mm: 0.2\n"),

@@ -40,8 +40,15 @@ class FrameModel {
       AddMember({side * brace_x, 0.0}, {side * brace_x, beam_axis_y_}, g.brace_thickness_mm, false);
     }
     // Beam nodes: braces, resistor ends, mesa edges and centre, so strain is linear within a member.
-    std::vector<double> xs = {-brace_x, brace_x, -half_mesa, half_mesa, 0.0, config.gauge.r1.start_mm,
-                              config.gauge.r1.end_mm, config.gauge.r2.start_mm, config.gauge.r2.end_mm};
+    std::vector<double> xs = {-brace_x,
+                              brace_x,
+                              -half_mesa,
+                              half_mesa,
+                              0.0,
+                              config.gauge.r1.start_mm,
+                              config.gauge.r1.end_mm,
+                              config.gauge.r2.start_mm,
+                              config.gauge.r2.end_mm};
     std::sort(xs.begin(), xs.end());
     xs.erase(std::unique(xs.begin(), xs.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }),
              xs.end());
@@ -95,7 +102,8 @@ class FrameModel {
     const double stiffening = m.rigid ? 1e6 : 1.0;  // a rigid block: 1e6 x the beam, no shear strain
     const double ea = stiffening * youngs_ * w * m.thickness_mm;
     const double ei = stiffening * youngs_ * w * std::pow(m.thickness_mm, 3) / 12.0;
-    const double phi = m.rigid ? 0.0 : 12.0 * ei / (5.0 / 6.0 * shear_modulus_ * w * m.thickness_mm * length * length);
+    const double phi =
+        m.rigid ? 0.0 : 12.0 * ei / (5.0 / 6.0 * shear_modulus_ * w * m.thickness_mm * length * length);
     const double l = length;
     const double c = ei / (l * l * l * (1.0 + phi));
     Eigen::Matrix<double, 6, 6> k = Eigen::Matrix<double, 6, 6>::Zero();
@@ -186,7 +194,9 @@ class FrameModel {
       const double ea = youngs_ * w * t;
       const double ei = youngs_ * w * t * t * t / 12.0;
       // Sagging moment at distance s from the first node; sagging stretches the underside.
-      const auto strain = [&](double s) { return tension / ea + (s * end_forces(1) - end_forces(2)) * 0.5 * t / ei; };
+      const auto strain = [&](double s) {
+        return tension / ea + (s * end_forces(1) - end_forces(2)) * 0.5 * t / ei;
+      };
       const double e0 = strain(0.0), e1 = strain(length);
       if (!absolute || e0 * e1 >= 0.0) {
         integral += (absolute ? 0.5 * (std::abs(e0) + std::abs(e1)) : 0.5 * (e0 + e1)) * length;
@@ -256,8 +266,7 @@ TEST_F(FrameModelTest, FeaKtAgreesWithTheBeamModelWithTheMesaMoment) {
   const Eigen::Vector2d shear = frame.ResistorStrains(0.0, force_n);
   EXPECT_NEAR(shear(0), -shear(1), 1e-6 * std::abs(shear(0)));  // antisymmetric
   const double kt_beam = 0.5 * (shear(0) - shear(1)) / force_n;
-  const double tolerance =
-      TrustedFraction(config.geometry) * frame.MeanAbsShearStrainR1(force_n) / force_n;
+  const double tolerance = TrustedFraction(config.geometry) * frame.MeanAbsShearStrainR1(force_n) / force_n;
   EXPECT_GT(kt_beam, 0.0) << "R1 is the half a positive shear stretches (paper eq. 3)";
   EXPECT_NEAR(FeaKt(), kt_beam, tolerance) << "FEA " << FeaKt() << ", beam model " << kt_beam;
 

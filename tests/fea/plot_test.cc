@@ -133,11 +133,12 @@ TEST(NonFiniteTest, NaNPointsBreakTheLineWithoutFailing) {
 std::array<int, 3> PixelAt(const std::string& path, double x, double y) {
   cairo_surface_t* image = cairo_image_surface_create_from_png(path.c_str());
   EXPECT_EQ(cairo_surface_status(image), CAIRO_STATUS_SUCCESS) << path;
-  const uint32_t pixel = *reinterpret_cast<const uint32_t*>(cairo_image_surface_get_data(image) +
-                                                             static_cast<int>(y) * cairo_image_surface_get_stride(image) +
-                                                             4 * static_cast<int>(x));
+  const uint32_t pixel = *reinterpret_cast<const uint32_t*>(
+      cairo_image_surface_get_data(image) + static_cast<int>(y) * cairo_image_surface_get_stride(image) +
+      4 * static_cast<int>(x));
   cairo_surface_destroy(image);
-  return {static_cast<int>((pixel >> 16) & 0xff), static_cast<int>((pixel >> 8) & 0xff), static_cast<int>(pixel & 0xff)};
+  return {static_cast<int>((pixel >> 16) & 0xff), static_cast<int>((pixel >> 8) & 0xff),
+          static_cast<int>(pixel & 0xff)};
 }
 
 // Three rows over 0..10: zero, a step from 0 to 2 at x = 5, and -2 / NaN halves.

@@ -11,11 +11,11 @@
 namespace graspbed::fea {
 namespace {
 
-constexpr double kSymmetryTol = 1e-9;        // relative to the peak strain: mirror-symmetric mesh
-constexpr double kSuperpositionTol = 0.01;   // 1 %, the bound docs/fea.md states
+constexpr double kSymmetryTol = 1e-9;       // relative to the peak strain: mirror-symmetric mesh
+constexpr double kSuperpositionTol = 0.01;  // 1 %, the bound docs/fea.md states
 constexpr double kLinearityMinR2 = 0.9999;
-constexpr double kScalingTol = 1e-9;         // relative; strain scales exactly as 1/E and 1/width
-constexpr double kConvergenceTol = 0.01;     // change of k_n, k_t from h = 0.05 to 0.025 mm, per peak strain
+constexpr double kScalingTol = 1e-9;      // relative; strain scales exactly as 1/E and 1/width
+constexpr double kConvergenceTol = 0.01;  // change of k_n, k_t from h = 0.05 to 0.025 mm, per peak strain
 constexpr double kForceTolN = 1e-9;
 
 class UnitAnalysisTest : public ::testing::Test {
@@ -84,7 +84,8 @@ TEST_F(UnitAnalysisTest, SweepsAreLinearAndStartAtZero) {
   EXPECT_EQ(r.shear_sweep.eps2.front(), 0.0);
   // Doubling the force doubles the strain.
   EXPECT_NEAR(r.normal_sweep.eps1[10], 2.0 * r.normal_sweep.eps1[5], 1e-12);
-  EXPECT_NEAR(r.sensitivities.kn_per_n * 10.0, 0.5 * (r.normal_sweep.eps1[10] + r.normal_sweep.eps2[10]), 1e-12);
+  EXPECT_NEAR(r.sensitivities.kn_per_n * 10.0, 0.5 * (r.normal_sweep.eps1[10] + r.normal_sweep.eps2[10]),
+              1e-12);
 }
 
 TEST_F(UnitAnalysisTest, SignConventionsMatchThePaper) {

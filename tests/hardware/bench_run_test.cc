@@ -183,12 +183,13 @@ class BenchRunTest : public ::testing::Test {
 TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGrip) {
   // The reference simulates the one frame period the hardware path's loop sees each frame late
   // (docs/hardware.md, "The bench workflow": compare like with like).
-  const CliResult sim = RunCli(std::string("run ") + kScenario + " --set sensor.latency_s=" + kFramePeriodText +
-                               " --no-plots --out " + Path("sim"));
+  const CliResult sim =
+      RunCli(std::string("run ") + kScenario + " --set sensor.latency_s=" + kFramePeriodText +
+             " --no-plots --out " + Path("sim"));
   ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
   auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS, "--json"});
-  ChildProcess host({binary_, "run", kScenario, "--backend", "serial", "--port", Path("dev"), "--prompt-actions",
-                     "--log", Path("frames.csv"), "--out", Path("serial")},
+  ChildProcess host({binary_, "run", kScenario, "--backend", "serial", "--port", Path("dev"),
+                     "--prompt-actions", "--log", Path("frames.csv"), "--out", Path("serial")},
                     Path("host.out"), Path("host.err"));
   ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
   ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
@@ -216,7 +217,8 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
   const Csv simulated = ReadCsv(Path("sim") + "/signals.csv");
   EXPECT_EQ(serial.numeric.count("true_squeeze_n"), 0u);
   EXPECT_EQ(serial.numeric.count("object_z_m"), 0u);
-  for (const char* column : {"r1_ohm_0", "fn_est_n_19", "grip_effort", "grip_target_n", "read_status", "session"}) {
+  for (const char* column :
+       {"r1_ohm_0", "fn_est_n_19", "grip_effort", "grip_target_n", "read_status", "session"}) {
     EXPECT_EQ(serial.numeric.count(column), 1u) << column;
   }
 
@@ -230,9 +232,10 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
     if (fresh_seen && stale != 0.0) ++stale_ticks;
   }
   if (bench.at("stale_periods").get<int>() != 0 || bench.at("dropped").get<int>() != 0 || stale_ticks > 0) {
-    std::printf("[   NOTE   ] the serial run fell behind real time (%d stale periods, %d dropped, %d stale ticks): "
-                "its phases and grip are not compared with the simulation's\n",
-                bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
+    std::printf(
+        "[   NOTE   ] the serial run fell behind real time (%d stale periods, %d dropped, %d stale ticks): "
+        "its phases and grip are not compared with the simulation's\n",
+        bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
     return;
   }
   // The simulation's phases, in order, are the bench run's up to the controller's response to the
@@ -250,7 +253,8 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
   EXPECT_EQ(Join(through_first_slip(bench_phases)), Join(through_first_slip(sim_phases)));
   EXPECT_NE(std::find(sim_phases.begin(), sim_phases.end(), "slip"), sim_phases.end())
       << "the simulation saw no slip at the lift: the comparison above stops nowhere";
-  std::printf("[   INFO   ] phases, simulation: %s; serial: %s\n", Join(sim_phases).c_str(), Join(bench_phases).c_str());
+  std::printf("[   INFO   ] phases, simulation: %s; serial: %s\n", Join(sim_phases).c_str(),
+              Join(bench_phases).c_str());
   const double sim_peak_n = *std::max_element(simulated.numeric.at("est_total_fn_n").begin(),
                                               simulated.numeric.at("est_total_fn_n").end());
   const double bench_peak_n = bench.at("peak_est_total_fn_n").get<double>();
@@ -259,14 +263,16 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
   const double bench_hold_n = MeanAtEnd(serial, "est_total_fn_n", kHoldWindowS);
   ASSERT_GT(sim_hold_n, 1.0) << "the simulation does not hold the box";
   EXPECT_NEAR(bench_hold_n, sim_hold_n, kGripTolFraction * sim_hold_n);
-  std::printf("[   INFO   ] sensed grip, simulation vs serial: peak %.3f vs %.3f N, held %.3f vs %.3f N\n", sim_peak_n,
-              bench_peak_n, sim_hold_n, bench_hold_n);
+  std::printf("[   INFO   ] sensed grip, simulation vs serial: peak %.3f vs %.3f N, held %.3f vs %.3f N\n",
+              sim_peak_n, bench_peak_n, sim_hold_n, bench_hold_n);
 }
 
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
-  const CliResult refused = RunCli("run scenarios/pull_ramp.yaml --backend serial --port " + Path("no-device"));
+  const CliResult refused =
+      RunCli("run scenarios/pull_ramp.yaml --backend serial --port " + Path("no-device"));
   EXPECT_EQ(refused.exit_code, 2);
-  EXPECT_NE(refused.err.find("backend serial cannot perform these script actions"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("backend serial cannot perform these script actions"), std::string::npos)
+      << refused.err;
   EXPECT_NE(refused.err.find("scenarios/pull_ramp.yaml:"), std::string::npos) << refused.err;
   EXPECT_NE(refused.err.find(": lift"), std::string::npos) << refused.err;
   EXPECT_NE(refused.err.find(": pull"), std::string::npos) << refused.err;
@@ -283,7 +289,8 @@ TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
   const CliResult fifo = RunCli("run " + LiveScenario(1.0) + " --backend serial --port " + Path("no-device") +
                                 " --intent-fifo " + Path("not_a_fifo"));
   EXPECT_EQ(fifo.exit_code, 2);
-  EXPECT_NE(fifo.err.find("--intent-fifo " + Path("not_a_fifo") + ": exists and is not a FIFO"), std::string::npos)
+  EXPECT_NE(fifo.err.find("--intent-fifo " + Path("not_a_fifo") + ": exists and is not a FIFO"),
+            std::string::npos)
       << fifo.err;
 }
 
@@ -292,8 +299,8 @@ TEST_F(BenchRunTest, LinesOnStdinAndOnAFifoChangeTheIntentAtTheNextTick) {
   int pipe_fds[2];
   ASSERT_EQ(::pipe(pipe_fds), 0);
   const std::string fifo = Path("emg");
-  ChildProcess host({binary_, "run", LiveScenario(4.0), "--backend", "serial", "--port", Path("dev"), "--intent-fifo",
-                     fifo, "--json", "--no-plots", "--out", Path("live")},
+  ChildProcess host({binary_, "run", LiveScenario(4.0), "--backend", "serial", "--port", Path("dev"),
+                     "--intent-fifo", fifo, "--json", "--no-plots", "--out", Path("live")},
                     Path("host.out"), Path("host.err"), pipe_fds[0]);
   ::close(pipe_fds[0]);
   ASSERT_TRUE(WaitForErr(host, "session started")) << host.err();
@@ -336,8 +343,8 @@ TEST_F(BenchRunTest, KeysOnATerminalChangeTheIntentAndQEndsTheSession) {
   int master = -1;
   int slave = -1;
   ASSERT_EQ(::openpty(&master, &slave, nullptr, nullptr, nullptr), 0);
-  ChildProcess host({binary_, "run", LiveScenario(15.0), "--backend", "serial", "--port", Path("dev"), "--json",
-                     "--no-plots", "--out", Path("keys")},
+  ChildProcess host({binary_, "run", LiveScenario(15.0), "--backend", "serial", "--port", Path("dev"),
+                     "--json", "--no-plots", "--out", Path("keys")},
                     Path("host.out"), Path("host.err"), slave);
   ASSERT_TRUE(WaitForErr(host, "session started (15.0 s; live intent: keys c/o/i/q)")) << host.err();
   ASSERT_EQ(::write(master, "c", 1), 1);

@@ -42,7 +42,8 @@ TEST(Cobs, RoundTripsEdgeLengthsAndZeros) {
   for (size_t length : {0u, 1u, 253u, 254u, 255u, 508u, 512u}) {
     for (int zeros : {0, 1, 2}) {  // 0: no zeros, 1: random bytes, 2: all zeros
       std::vector<uint8_t> input(length);
-      for (auto& b : input) b = zeros == 2 ? 0 : static_cast<uint8_t>(zeros == 0 ? 1 + rng() % 255 : rng() % 256);
+      for (auto& b : input)
+        b = zeros == 2 ? 0 : static_cast<uint8_t>(zeros == 0 ? 1 + rng() % 255 : rng() % 256);
       std::vector<uint8_t> encoded(CobsMaxEncodedSize(length));
       const auto size = CobsEncode(input, encoded);
       ASSERT_TRUE(size.has_value());
@@ -62,7 +63,8 @@ TEST(Protocol, DocumentedExamplePacketsOnTheWire) {
   size_t size = EncodePacket(StreamControlPacket{.sequence = 0, .start = true}, out);
   EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
             (std::vector<uint8_t>{0x03, 0x82, 0x01, 0x01, 0x04, 0x01, 0xCA, 0x11, 0x00}));
-  size = EncodePacket(MotorCommandPacket{.sequence = 7, .effort = EffortToWire(0.5), .flags = kMotorEnable}, out);
+  size = EncodePacket(MotorCommandPacket{.sequence = 7, .effort = EffortToWire(0.5), .flags = kMotorEnable},
+                      out);
   EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
             (std::vector<uint8_t>{0x04, 0x81, 0x01, 0x07, 0x01, 0x03, 0x40, 0x01, 0x03, 0xD0, 0xD5, 0x00}));
 }
@@ -134,8 +136,11 @@ TEST(Protocol, FrameRoundTripAndWireSize) {
 TEST(Protocol, OtherPacketsRoundTrip) {
   StreamDecoder decoder;
   DecodedPacket packet;
-  HelloPacket hello{.sequence = 65535, .firmware_version = 0x0102, .unit_count = 9,
-                    .nominal_rate_hz = 1000, .nominal_r0_milliohm = 3'400'000};
+  HelloPacket hello{.sequence = 65535,
+                    .firmware_version = 0x0102,
+                    .unit_count = 9,
+                    .nominal_rate_hz = 1000,
+                    .nominal_r0_milliohm = 3'400'000};
   ASSERT_TRUE(decoder.Feed(Wire(hello), &packet).packet);
   ASSERT_EQ(packet.type, PacketType::kHello);
   EXPECT_EQ(packet.hello.sequence, 65535);
@@ -309,12 +314,14 @@ std::vector<uint8_t> RawPacket(std::vector<uint8_t> body) {
 TEST_F(DecoderResync, UnknownTypeCountedUnknownVersionRejectedBadLengthCorrupt) {
   std::vector<uint8_t> bytes = RawPacket({0x33, 0x01, 0x00, 0x00, 0xAA});  // unknown type
   auto add = [&](const std::vector<uint8_t>& more) { bytes.insert(bytes.end(), more.begin(), more.end()); };
-  add(RawPacket({0x01, 0x02, 0x05, 0x00}));                    // version 2
-  add(RawPacket({0x02, 0x01, 0x00, 0x00, 0x01}));              // HELLO of 5 bytes
+  add(RawPacket({0x01, 0x02, 0x05, 0x00}));        // version 2
+  add(RawPacket({0x02, 0x01, 0x00, 0x00, 0x01}));  // HELLO of 5 bytes
   std::vector<uint8_t> frame_body(10 + 8 * 3, 0x11);
-  frame_body[0] = 0x01; frame_body[1] = 0x01; frame_body[8] = 4;  // says 4 units, carries 3
+  frame_body[0] = 0x01;
+  frame_body[1] = 0x01;
+  frame_body[8] = 4;  // says 4 units, carries 3
   add(RawPacket(frame_body));
-  frame_body[8] = 0;                                           // zero units
+  frame_body[8] = 0;  // zero units
   add(RawPacket(frame_body));
   add(Frames(5, 1));
   EXPECT_EQ(DecodeFrames(decoder_, bytes), (std::vector<uint16_t>{5}));
@@ -331,12 +338,12 @@ TEST_F(DecoderResync, UnknownTypeCountedUnknownVersionRejectedBadLengthCorrupt) 
 TEST_F(DecoderResync, AfterResetJunkIsUncountedButTheFirstGoodCrcSyncs) {
   decoder_.Reset();
   std::vector<uint8_t> bytes = Frames(1, 1);
-  bytes.erase(bytes.begin(), bytes.begin() + 30);                  // tail of a frame: junk
+  bytes.erase(bytes.begin(), bytes.begin() + 30);  // tail of a frame: junk
   auto add = [&](const std::vector<uint8_t>& more) { bytes.insert(bytes.end(), more.begin(), more.end()); };
-  add(RawPacket({0x33, 0x01, 0x00, 0x00, 0xAA}));                  // unknown type, good CRC
+  add(RawPacket({0x33, 0x01, 0x00, 0x00, 0xAA}));  // unknown type, good CRC
   auto broken = Frames(2, 1);
   uint8_t& hit = broken[broken.size() / 2];
-  hit = static_cast<uint8_t>(hit == 0x40 ? 0x41 : hit ^ 0x40);    // a real error after sync (no 0x00)
+  hit = static_cast<uint8_t>(hit == 0x40 ? 0x41 : hit ^ 0x40);  // a real error after sync (no 0x00)
   add(broken);
   add(Frames(3, 1));
   EXPECT_EQ(DecodeFrames(decoder_, bytes), (std::vector<uint16_t>{3}));

@@ -33,17 +33,17 @@ using graspbed::testing::ReadText;
 using graspbed::testing::TempDir;
 
 constexpr char kScenario[] = "tests/hardware/data/e2e_lift.yaml";
-constexpr int kUnits = 20;                 // the scenario's layout (default_20)
-constexpr double kLiftHeightM = 0.05;      // the scenario's lift
-constexpr double kLiftEndS = 1.6;          // lift at 0.8 s over 0.8 s
-constexpr double kHostDurationS = 3.0;     // `hw --duration`
-constexpr double kEmulatorDurationS = 3.5; // simulated; the host normally ends the trial first
+constexpr int kUnits = 20;                  // the scenario's layout (default_20)
+constexpr double kLiftHeightM = 0.05;       // the scenario's lift
+constexpr double kLiftEndS = 1.6;           // lift at 0.8 s over 0.8 s
+constexpr double kHostDurationS = 3.0;      // `hw --duration`
+constexpr double kEmulatorDurationS = 3.5;  // simulated; the host normally ends the trial first
 // Generous deadlines for a machine with both cores busy; none of them is a pass criterion.
 constexpr double kStartupDeadlineS = 30.0;
 constexpr double kRunDeadlineS = 60.0;
-constexpr double kFramePeriodS = 0.001;   // the scenario's 1 kHz sensor
-constexpr double kScriptCloseS = 0.15;    // the scenario's close
-constexpr double kMaxSlipMm = 2.0;        // the scenario's own expectation
+constexpr double kFramePeriodS = 0.001;  // the scenario's 1 kHz sensor
+constexpr double kScriptCloseS = 0.15;   // the scenario's close
+constexpr double kMaxSlipMm = 2.0;       // the scenario's own expectation
 // Outcome tolerances, hardware path vs pure simulation, each from what has to be the same. The
 // scenario's sensor is ideal and the wire carries R1/R2 to 1 mOhm, 3e-7 of R0 in dR/R or 5e-6 N of
 // Fn per unit (G kn = 0.055 /N): the host senses what the simulated sensor measured. The paths
@@ -140,8 +140,8 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // onset and regrips to 10 N, while over the wire, and in simulation with 1 ms latency, it holds at
   // 1.5 N through the lift.
   const nlohmann::json sim =
-      RunJson({"run", kScenario, "--json", "--no-plots", "--set", "sensor.latency_s=" + std::to_string(kFramePeriodS),
-               "--out", Path("sim")},
+      RunJson({"run", kScenario, "--json", "--no-plots", "--set",
+               "sensor.latency_s=" + std::to_string(kFramePeriodS), "--out", Path("sim")},
               "run");
   ASSERT_TRUE(sim.contains("metrics")) << sim.dump();
   const nlohmann::json& sim_metrics = sim.at("metrics");
@@ -149,24 +149,25 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
 
   // 2. The device: `graspbed emulate` behind a pty symlinked at DIR/dev.
   const std::string link = Path("dev");
-  Child emulator({binary_, "emulate", "--link", link, kScenario, "--duration", std::to_string(kEmulatorDurationS),
-                  "--json"},
+  Child emulator({binary_, "emulate", "--link", link, kScenario, "--duration",
+                  std::to_string(kEmulatorDurationS), "--json"},
                  Path("emulate.out"), Path("emulate.err"));
   ASSERT_TRUE(emulator.started());
-  const auto startup_deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kStartupDeadlineS);
+  const auto startup_deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(kStartupDeadlineS);
   struct stat info {};
   while (::lstat(link.c_str(), &info) != 0) {
     ASSERT_FALSE(emulator.Wait(0.0)) << "emulate exited: " << emulator.err();
-    ASSERT_LT(std::chrono::steady_clock::now(), startup_deadline) << "no link from emulate: " << emulator.err();
+    ASSERT_LT(std::chrono::steady_clock::now(), startup_deadline)
+        << "no link from emulate: " << emulator.err();
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 
   // 3. The host: `graspbed hw` with the reference controller, logging every frame.
   const std::string log = Path("frames.csv");
-  const nlohmann::json hw =
-      RunJson({"hw", "--port", link, "--controller", "grip_slip", "--duration", std::to_string(kHostDurationS),
-               "--json", "--log", log},
-              "hw");
+  const nlohmann::json hw = RunJson({"hw", "--port", link, "--controller", "grip_slip", "--duration",
+                                     std::to_string(kHostDurationS), "--json", "--log", log},
+                                    "hw");
   // The host's stream stop ends the emulator's trial; it then prints its outcome.
   const std::optional<int> emulator_code = emulator.Wait(kRunDeadlineS);
   ASSERT_EQ(emulator_code, std::optional<int>(0)) << emulator.err();
@@ -180,7 +181,8 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   const auto frames = hw.at("frames").get<uint64_t>();
   EXPECT_GT(frames, 1000u) << "3 s at 1 kHz should bring about 3000 frames";
   EXPECT_EQ(hw.at("corrupt").get<uint64_t>(), 0u);
-  EXPECT_LE(static_cast<double>(hw.at("dropped").get<uint64_t>()), kMaxDroppedFraction * static_cast<double>(frames))
+  EXPECT_LE(static_cast<double>(hw.at("dropped").get<uint64_t>()),
+            kMaxDroppedFraction * static_cast<double>(frames))
       << hw.dump(2);
   EXPECT_EQ(hw.at("reconnects").get<uint64_t>(), 0u);
   EXPECT_EQ(hw.at("unknown_packets").get<uint64_t>(), 0u);
@@ -211,7 +213,8 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // weight (m g / k = 0.05 mm at the default 20 kN/m; 1 mm leaves room for a softer wrist).
   EXPECT_NEAR(sim_lift_m, kLiftHeightM, 1e-3 * sim_slip_mm + 1e-3) << "the reference itself does not lift";
 
-  // The frame log: the header docs/hardware.md gives, one row per decoded frame, consecutive sequence numbers.
+  // The frame log: the header docs/hardware.md gives, one row per decoded frame, consecutive sequence
+  // numbers.
   std::ifstream csv(log);
   ASSERT_TRUE(csv.good()) << log;
   std::string header;
@@ -258,10 +261,11 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // object, checked above). Measured with both cores taken by other builds: stale periods, dropped
   // frames, slip of several mm and a 10 N regrip in 3 of 5 runs.
   if (hw.at("stale_periods").get<uint64_t>() != 0 || hw.at("dropped").get<uint64_t>() != 0) {
-    std::printf("[   NOTE   ] the hardware path fell behind real time (%llu stale periods, %llu dropped frames): "
-                "its grasp is not compared with the simulation's\n",
-                static_cast<unsigned long long>(hw.at("stale_periods").get<uint64_t>()),
-                static_cast<unsigned long long>(hw.at("dropped").get<uint64_t>()));
+    std::printf(
+        "[   NOTE   ] the hardware path fell behind real time (%llu stale periods, %llu dropped frames): "
+        "its grasp is not compared with the simulation's\n",
+        static_cast<unsigned long long>(hw.at("stale_periods").get<uint64_t>()),
+        static_cast<unsigned long long>(hw.at("dropped").get<uint64_t>()));
     return;
   }
 
@@ -278,8 +282,8 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   ASSERT_GT(sim_final_squeeze_n, 0.5);
   ASSERT_GT(hw_final_squeeze_n, 0.5);
   EXPECT_NEAR(hw_final_sensed_n / hw_final_squeeze_n, sim_final_sensed_n / sim_final_squeeze_n, kShareTol)
-      << "host " << hw_final_sensed_n << " of " << hw_final_squeeze_n << " N, simulation " << sim_final_sensed_n
-      << " of " << sim_final_squeeze_n << " N";
+      << "host " << hw_final_sensed_n << " of " << hw_final_squeeze_n << " N, simulation "
+      << sim_final_sensed_n << " of " << sim_final_squeeze_n << " N";
 
   // The closing impact.
   double rise_n_per_s = 0.0;

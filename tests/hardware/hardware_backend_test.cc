@@ -65,8 +65,10 @@ class ScriptedDevice {
   bool Handshake(uint16_t hello_seq, int units) {
     return testing::WaitFor(
         [&] {
-          HelloPacket hello{.sequence = hello_seq++, .firmware_version = 1,
-                            .unit_count = static_cast<uint8_t>(units), .nominal_rate_hz = 1000,
+          HelloPacket hello{.sequence = hello_seq++,
+                            .firmware_version = 1,
+                            .unit_count = static_cast<uint8_t>(units),
+                            .nominal_rate_hz = 1000,
                             .nominal_r0_milliohm = 3'400'000};
           Send(hello);
           return testing::WaitFor([&] { return ReadStreamStart(); }, 0.05);
@@ -303,7 +305,8 @@ TEST_F(HardwareTest, ScriptedFaultsGiveExactCounters) {
   emulator_->PauseFrames(true);
   const auto emu = emulator_->stats();
   ASSERT_TRUE(WaitHostCaughtUp(host0.frames, emu0.frames_sent, lost))
-      << "sent " << emu.frames_sent - emu0.frames_sent << " host " << backend_->counters().frames - host0.frames;
+      << "sent " << emu.frames_sent - emu0.frames_sent << " host "
+      << backend_->counters().frames - host0.frames;
   const auto host = backend_->counters();
   EXPECT_EQ(host.corrupt - host0.corrupt, 7u);
   // A loaded machine may make the emulator overflow its FIFO (a real device would too): those

@@ -13,10 +13,10 @@
 namespace graspbed::hardware {
 namespace {
 
-using ::testing::HasSubstr;
 using graspbed::testing::CliResult;
 using graspbed::testing::RunCli;
 using graspbed::testing::TempDir;
+using ::testing::HasSubstr;
 
 constexpr int kExitBadInput = 2;
 
@@ -29,8 +29,8 @@ class HwCliTest : public ::testing::Test {
 };
 
 TEST_F(HwCliTest, ControllerParameterOutOfRangeInTheConfigNamesFileLineKeyAndValue) {
-  const std::string config =
-      dir_.Write("hw.yaml", "controller:\n  name: grip_slip\n  params:\n    min_grip_n: 2\n    max_grip_n: 300\n");
+  const std::string config = dir_.Write(
+      "hw.yaml", "controller:\n  name: grip_slip\n  params:\n    min_grip_n: 2\n    max_grip_n: 300\n");
   const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
   EXPECT_EQ(result.exit_code, kExitBadInput);
   EXPECT_THAT(result.err, HasSubstr(config + ":5: controller.params.max_grip_n = 300"));
@@ -41,7 +41,8 @@ TEST_F(HwCliTest, CrossFieldChecksSeeEveryParameterWhateverTheirOrder) {
   // Both orders are valid: the check runs on the whole set, not one key at a time.
   for (const char* params : {"{min_grip_n: 12, max_grip_n: 20}", "{max_grip_n: 20, min_grip_n: 12}"}) {
     SCOPED_TRACE(params);
-    const std::string config = dir_.Write("order.yaml", std::string("controller:\n  params: ") + params + "\n");
+    const std::string config =
+        dir_.Write("order.yaml", std::string("controller:\n  params: ") + params + "\n");
     const CliResult result = RunCli("hw --config " + config + " --port " + dir_.Path("no-device"));
     EXPECT_EQ(result.exit_code, kExitBadInput);
     EXPECT_THAT(result.err, HasSubstr("does not exist"));  // got past the config to the port

@@ -117,7 +117,8 @@ TEST(SerialPort, PermissionDeniedNamesTheGroupToJoin) {
   int status = 0;
   waitpid(child, &status, 0);
   ASSERT_EQ(WEXITSTATUS(status), 0);
-  EXPECT_EQ(message.substr(0, 2), std::to_string(static_cast<int>(PortErrorKind::kPermission)) + "|") << message;
+  EXPECT_EQ(message.substr(0, 2), std::to_string(static_cast<int>(PortErrorKind::kPermission)) + "|")
+      << message;
   EXPECT_NE(message.find("permission denied"), std::string::npos) << message;
   EXPECT_NE(message.find("group 'dialout'"), std::string::npos) << message;
   EXPECT_NE(message.find("usermod -aG dialout"), std::string::npos) << message;

@@ -26,11 +26,11 @@
 namespace graspbed::controller {
 namespace {
 
-using ::testing::HasSubstr;
 using graspbed::testing::CliBinary;
 using graspbed::testing::CliResult;
 using graspbed::testing::RunCli;
 using graspbed::testing::TempDir;
+using ::testing::HasSubstr;
 
 const std::string kPluginDir = GRASPBED_TEST_PLUGIN_DIR;
 const std::string kThreshold = kPluginDir + "/libthreshold_grip.so";
@@ -59,14 +59,21 @@ TEST(PluginLoaderTest, LoadsThePluginItsNameAndDeclaredParameters) {
 }
 
 TEST(PluginLoaderTest, ParametersAreValidatedExactlyLikeABuiltIn) {
-  const std::unique_ptr<GraspController> controller = MakeController(Plugin(kThreshold), {{"target_grip_n", 5.0}});
+  const std::unique_ptr<GraspController> controller =
+      MakeController(Plugin(kThreshold), {{"target_grip_n", 5.0}});
   EXPECT_EQ(controller->name(), "threshold_grip");
-  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"target_grip", 5.0}}); }),
+  EXPECT_THAT(ErrorOf([] {
+                MakeController(Plugin(kThreshold), {{"target_grip", 5.0}});
+              }),
               HasSubstr("has no parameter 'target_grip'; valid parameters: target_grip_n, approach_effort"));
-  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"target_grip_n", 50.0}}); }),
+  EXPECT_THAT(ErrorOf([] {
+                MakeController(Plugin(kThreshold), {{"target_grip_n", 50.0}});
+              }),
               HasSubstr("parameter target_grip_n = 50: must be in [0.2, 10] N"));
   // The plugin's own cross-field check comes back as bad input naming the plugin.
-  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThreshold), {{"contact_n", 4.0}}); }),
+  EXPECT_THAT(ErrorOf([] {
+                MakeController(Plugin(kThreshold), {{"contact_n", 4.0}});
+              }),
               HasSubstr("('threshold_grip'): parameter contact_n = 4.000000: must be below target_grip_n"));
 }
 
@@ -83,7 +90,7 @@ TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
   double effort = 0.0;
   for (int tick = 1; tick <= 100; ++tick) effort = controller->Update(state, 1e-3 * tick).grip_effort;
   EXPECT_NEAR(effort, 0.3 + 0.3 * (3.0 - 1.0) * 0.1, 1e-9);  // gain x error x 100 ms
-  state.stale = true;  // data not to be trusted: hold, never open
+  state.stale = true;                                        // data not to be trusted: hold, never open
   const HandCommand hold = controller->Update(state, 0.2);
   EXPECT_TRUE(hold.brake);
   EXPECT_TRUE(controller->telemetry().safe_hold);
@@ -114,27 +121,29 @@ TEST(PluginLoaderTest, ALibraryThatIsNoPluginIsRefused) {
 
 TEST(PluginLoaderTest, APluginOfAnotherApiVersionIsRefusedBeforeItIsCalled) {
   EXPECT_THAT(ErrorOf([] { ControllerParameters(Plugin(kWrongVersion)); }),
-              HasSubstr(": built against controller API version " + std::to_string(GRASPBED_CONTROLLER_API_VERSION + 1) +
-                        ", this graspbed has version " + std::to_string(GRASPBED_CONTROLLER_API_VERSION) +
-                        "; rebuild the plugin"));
+              HasSubstr(": built against controller API version " +
+                        std::to_string(GRASPBED_CONTROLLER_API_VERSION + 1) + ", this graspbed has version " +
+                        std::to_string(GRASPBED_CONTROLLER_API_VERSION) + "; rebuild the plugin"));
 }
 
 TEST(PluginLoaderTest, AFactoryThatThrowsBecomesBadInput) {
   EXPECT_EQ(ControllerParameters(Plugin(kThrowing)).size(), 1u);
-  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kThrowing), {}); }),
-              HasSubstr("controller plugin " + kThrowing + " ('throws_when_built'): cannot open weights.bin"));
+  EXPECT_THAT(
+      ErrorOf([] { MakeController(Plugin(kThrowing), {}); }),
+      HasSubstr("controller plugin " + kThrowing + " ('throws_when_built'): cannot open weights.bin"));
 }
 
 TEST(PluginLoaderTest, BareNamesAreFoundOnTheSearchPath) {
   ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", ("/nonexistent:" + kPluginDir).c_str(), 1), 0);
   EXPECT_EQ(PluginSearchPath().at(1), kPluginDir);
-  EXPECT_EQ(LoadPlugin(Plugin("threshold_grip")).path, kThreshold);         // libNAME.so
-  EXPECT_EQ(LoadPlugin(Plugin("libthreshold_grip.so")).path, kThreshold);   // the file name itself
+  EXPECT_EQ(LoadPlugin(Plugin("threshold_grip")).path, kThreshold);        // libNAME.so
+  EXPECT_EQ(LoadPlugin(Plugin("libthreshold_grip.so")).path, kThreshold);  // the file name itself
   ::unsetenv("GRASPBED_PLUGIN_PATH");
 }
 
 TEST(PluginLoaderTest, RelativePathsResolveAgainstTheGivenDirectoryBareNamesStay) {
-  EXPECT_EQ(ResolvePluginName("plugin:build/libx.so", "/data/scenarios"), "plugin:/data/scenarios/build/libx.so");
+  EXPECT_EQ(ResolvePluginName("plugin:build/libx.so", "/data/scenarios"),
+            "plugin:/data/scenarios/build/libx.so");
   EXPECT_EQ(ResolvePluginName("plugin:../libx.so", "/data/scenarios"), "plugin:/data/libx.so");
   EXPECT_EQ(ResolvePluginName("plugin:/opt/libx.so", "/data"), "plugin:/opt/libx.so");
   EXPECT_EQ(ResolvePluginName("plugin:mine", "/data"), "plugin:mine");
@@ -176,17 +185,21 @@ TEST(PluginScenarioTest, BadPluginSectionsNameFileLineAndKey) {
       {"controller:\n  plugin: " + kThreshold + "\n  params: {target_grip_n: 40}\n",
        ":7: controller.params.target_grip_n = 40: must be <= 10"},
       {"controller:\n  plugin: " + kThreshold + "\n  params: {contact_n: 4}\n",
-       ":7: controller.params.contact_n = 4: controller plugin " + kThreshold + " ('threshold_grip'): parameter contact_n"},
-      {"controller:\n  plugin: " + kMissing + "\n", ":6: controller.plugin = " + kMissing + ": controller plugin " +
-                                                       kMissing + ": no such file"},
+       ":7: controller.params.contact_n = 4: controller plugin " + kThreshold +
+           " ('threshold_grip'): parameter contact_n"},
+      {"controller:\n  plugin: " + kMissing + "\n",
+       ":6: controller.plugin = " + kMissing + ": controller plugin " + kMissing + ": no such file"},
       {"controller:\n  plugin: " + kWrongVersion + "\n", ":6: controller.plugin = " + kWrongVersion +
-                                                            ": controller plugin " + kWrongVersion + ": built against"},
+                                                             ": controller plugin " + kWrongVersion +
+                                                             ": built against"},
       {"controller:\n  name: plugin:" + kNotAPlugin + "\n", ":6: controller.name = plugin:" + kNotAPlugin +
-                                                               ": controller plugin " + kNotAPlugin + ": not a graspbed"},
-      {"controller:\n  plugin: " + kThrowing + "\n", ":6: controller.plugin = " + kThrowing + ": controller plugin " +
-                                                        kThrowing + " ('throws_when_built'): cannot open weights.bin"},
-      {"controller:\n  name: grip_slip\n  plugin: " + kThreshold + "\n", ":7: controller.plugin = " + kThreshold +
-                                                                            ": give either name or plugin, not both"},
+                                                                ": controller plugin " + kNotAPlugin +
+                                                                ": not a graspbed"},
+      {"controller:\n  plugin: " + kThrowing + "\n", ":6: controller.plugin = " + kThrowing +
+                                                         ": controller plugin " + kThrowing +
+                                                         " ('throws_when_built'): cannot open weights.bin"},
+      {"controller:\n  name: grip_slip\n  plugin: " + kThreshold + "\n",
+       ":7: controller.plugin = " + kThreshold + ": give either name or plugin, not both"},
   };
   for (const Case& c : cases) {
     const std::string file = dir.Write("bad.yaml", std::string(kScenarioHead) + c.controller);
@@ -219,8 +232,8 @@ TEST_F(PluginCliTest, EveryRefusedPluginExitsTwoWithItsReason) {
   };
   for (const Case& c : cases) {
     for (const std::string& command : std::vector<std::string>{
-             "run scenarios/default.yaml --no-plots --out " + dir_.Path("run"), "suite scenarios --out " + dir_.Path("suite"),
-          "hw --port /dev/null --duration 1"}) {
+             "run scenarios/default.yaml --no-plots --out " + dir_.Path("run"),
+             "suite scenarios --out " + dir_.Path("suite"), "hw --port /dev/null --duration 1"}) {
       const CliResult result = RunCli(command + " --controller plugin:" + c.library);
       EXPECT_EQ(result.exit_code, 2) << command << " " << c.library << ": " << result.err;
       EXPECT_THAT(result.err, HasSubstr("graspbed: error: ")) << command;
@@ -243,14 +256,16 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   EXPECT_FALSE(summary.at("metrics").at("dropped").get<bool>());
   // By bare name on GRASPBED_PLUGIN_PATH (the child inherits it), with a parameter through --set.
   ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", kPluginDir.c_str(), 1), 0);
-  const CliResult named = RunCli("run scenarios/default.yaml --no-plots --json --out " + dir_.Path("named") +
-                                 " --controller plugin:threshold_grip --set controller.params.target_grip_n=4");
+  const CliResult named =
+      RunCli("run scenarios/default.yaml --no-plots --json --out " + dir_.Path("named") +
+             " --controller plugin:threshold_grip --set controller.params.target_grip_n=4");
   ASSERT_EQ(named.exit_code, 0) << named.err << named.out;
   const nlohmann::json named_summary = nlohmann::json::parse(named.out);
   EXPECT_EQ(named_summary.at("controller"), "plugin:threshold_grip");
   EXPECT_FALSE(named_summary.at("metrics").at("dropped").get<bool>());
-  const CliResult out_of_range = RunCli("run scenarios/default.yaml --no-plots --out " + dir_.Path("range") +
-                                        " --controller plugin:threshold_grip --set controller.params.target_grip_n=40");
+  const CliResult out_of_range =
+      RunCli("run scenarios/default.yaml --no-plots --out " + dir_.Path("range") +
+             " --controller plugin:threshold_grip --set controller.params.target_grip_n=40");
   ::unsetenv("GRASPBED_PLUGIN_PATH");
   EXPECT_EQ(out_of_range.exit_code, 2);
   EXPECT_THAT(out_of_range.err, HasSubstr("--set controller.params.target_grip_n=40: "));
@@ -268,17 +283,19 @@ script:
 expectations: {not_dropped: true}
 )");
   const std::string plugin = " --controller plugin:" + kThreshold;
-  const CliResult suite = RunCli("suite " + dir_.Path("scenarios") + " --no-plots --out " + dir_.Path("suite") + plugin);
+  const CliResult suite =
+      RunCli("suite " + dir_.Path("scenarios") + " --no-plots --out " + dir_.Path("suite") + plugin);
   ASSERT_EQ(suite.exit_code, 0) << suite.err << suite.out;
   EXPECT_THAT(suite.out, HasSubstr("plugin:"));
-  const nlohmann::json suite_json = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("suite/suite.json")));
+  const nlohmann::json suite_json =
+      nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("suite/suite.json")));
   ASSERT_EQ(suite_json.at("runs").size(), 1u);
   EXPECT_EQ(suite_json.at("runs")[0].at("controller"), "plugin:" + kThreshold);
   EXPECT_TRUE(suite_json.at("runs")[0].at("passed").get<bool>());
 
   // The sweep tunes the plugin's own parameter on top of --controller.
-  const std::string spec = dir_.Write("sweep.yaml", "scenario: " + scenario +
-                                                        "\nparameters:\n  controller.params.target_grip_n: [2, 4]\n");
+  const std::string spec = dir_.Write(
+      "sweep.yaml", "scenario: " + scenario + "\nparameters:\n  controller.params.target_grip_n: [2, 4]\n");
   const CliResult sweep = RunCli("sweep " + spec + " --out " + dir_.Path("sweep") + plugin);
   ASSERT_EQ(sweep.exit_code, 0) << sweep.err << sweep.out;
   const std::string rows = graspbed::testing::ReadText(dir_.Path("sweep/results.jsonl"));
@@ -286,10 +303,12 @@ expectations: {not_dropped: true}
   // A parameter only the plugin has: the sweep really ran the plugin (grip_slip would refuse it).
   EXPECT_THAT(rows, HasSubstr("\"controller.params.target_grip_n\":4"));
 
-  const CliResult score = RunCli("score --limit 1 --out " + dir_.Path("score") + " --controller open_loop" + plugin);
+  const CliResult score =
+      RunCli("score --limit 1 --out " + dir_.Path("score") + " --controller open_loop" + plugin);
   ASSERT_EQ(score.exit_code, 0) << score.err << score.out;
   EXPECT_THAT(score.out, HasSubstr("plugin:" + kThreshold.substr(0, 10)));
-  const nlohmann::json card = nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("score/scorecard.json")));
+  const nlohmann::json card =
+      nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("score/scorecard.json")));
   ASSERT_EQ(card.at("controllers").size(), 2u);
   EXPECT_EQ(card.at("controllers")[1].at("controller"), "plugin:" + kThreshold);
 }

@@ -53,7 +53,8 @@ TEST(RenderCliTest, RefusesBadInputWithExit2AndAMessage) {
     std::string message;
   };
   const Case cases[] = {
-      {"render " + scenario + " --at 9" + out, "--at 9: outside the scenario default (0 .. 2.5 s, duration_s in "},
+      {"render " + scenario + " --at 9" + out,
+       "--at 9: outside the scenario default (0 .. 2.5 s, duration_s in "},
       {"render " + scenario + " --at 1 --view 1,2,3" + out, "--view 1,2,3: expected 6 numbers"},
       {"render " + scenario + " --at 1 --width 2" + out, "width_px = 2: must be in 16..4096"},
       {"render " + scenario + " --at 0.01 --camera nosuch" + out,

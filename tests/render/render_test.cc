@@ -66,8 +66,8 @@ Color MeanColor(const image::RgbImage& picture, double column, double row, int h
 }
 
 std::string Describe(const Color& c) {
-  return "rgb(" + std::to_string(static_cast<int>(c.r)) + ", " + std::to_string(static_cast<int>(c.g)) + ", " +
-         std::to_string(static_cast<int>(c.b)) + ")";
+  return "rgb(" + std::to_string(static_cast<int>(c.r)) + ", " + std::to_string(static_cast<int>(c.g)) +
+         ", " + std::to_string(static_cast<int>(c.b)) + ")";
 }
 
 // The holder shell and the digits are a light beige (0.85 0.82 0.75): bright, red ~ green > blue.
@@ -185,7 +185,8 @@ TEST_F(RenderTest, PressedUnitTurnsFromGreyToRedWhereProjectSays) {
     if (instant_s == kBeforeContactS) {
       before_valid = state.valid_count == state.unit_count;
       for (int i = 0; i < simulation.unit_count(); ++i) {
-        const std::optional<std::array<double, 2>> pixel = renderer.Project(renderer.UnitCenter(simulation, i));
+        const std::optional<std::array<double, 2>> pixel =
+            renderer.Project(renderer.UnitCenter(simulation, i));
         ASSERT_TRUE(pixel.has_value()) << "unit " << i;
         before.push_back(MeanColor(picture, (*pixel)[0], (*pixel)[1]));
       }
@@ -193,7 +194,8 @@ TEST_F(RenderTest, PressedUnitTurnsFromGreyToRedWhereProjectSays) {
     }
     pressed = MostLoadedUnit(state);
     pressed_fn = state.fn_n[pressed];
-    const std::optional<std::array<double, 2>> pixel = renderer.Project(renderer.UnitCenter(simulation, pressed));
+    const std::optional<std::array<double, 2>> pixel =
+        renderer.Project(renderer.UnitCenter(simulation, pressed));
     ASSERT_TRUE(pixel.has_value());
     during = MeanColor(picture, (*pixel)[0], (*pixel)[1]);
   });
@@ -202,9 +204,11 @@ TEST_F(RenderTest, PressedUnitTurnsFromGreyToRedWhereProjectSays) {
   ASSERT_GT(pressed_fn, kPressedFnN) << "no unit pressed in the pinch";
   const Color& grey = before[static_cast<size_t>(pressed)];
   EXPECT_LT(std::abs(Redness(grey)), 15.0) << "unit " << pressed << " before contact: " << Describe(grey);
-  EXPECT_GT(grey.r, 80.0) << "unit " << pressed << " before contact: " << Describe(grey) << " (not lit or hidden)";
+  EXPECT_GT(grey.r, 80.0) << "unit " << pressed << " before contact: " << Describe(grey)
+                          << " (not lit or hidden)";
   EXPECT_GT(Redness(during), Redness(grey) + 40.0)
-      << "unit " << pressed << " at " << pressed_fn << " N: " << Describe(during) << ", before " << Describe(grey);
+      << "unit " << pressed << " at " << pressed_fn << " N: " << Describe(during) << ", before "
+      << Describe(grey);
 }
 
 bool IsCrossYellow(const uint8_t* p) { return p[0] > 170 && p[1] > 140 && p[2] < 100; }
@@ -212,10 +216,12 @@ bool IsLegendRed(const uint8_t* p) { return p[0] > 200 && p[1] < 50 && p[2] < 50
 bool IsLegendMagenta(const uint8_t* p) { return p[0] > 200 && p[1] < 50 && p[2] > 200; }
 
 /// Pixels of `picture` in the box [c0, c1) x [r0, r1) for which `test` holds.
-int CountPixels(const image::RgbImage& picture, int c0, int c1, int r0, int r1, bool (*test)(const uint8_t*)) {
+int CountPixels(const image::RgbImage& picture, int c0, int c1, int r0, int r1,
+                bool (*test)(const uint8_t*)) {
   int count = 0;
   for (int r = std::max(r0, 0); r < std::min(r1, picture.height_px); ++r) {
-    for (int c = std::max(c0, 0); c < std::min(c1, picture.width_px); ++c) count += test(picture.At(c, r)) ? 1 : 0;
+    for (int c = std::max(c0, 0); c < std::min(c1, picture.width_px); ++c)
+      count += test(picture.At(c, r)) ? 1 : 0;
   }
   return count;
 }
@@ -236,7 +242,8 @@ TEST_F(RenderTest, UnusableUnitIsCrossedAndTheLegendShowsTheScale) {
     Renderer& renderer = RendererFor(rig, 0.0);
     const CameraSpec camera = CameraByName("fingertip");
     const auto yellow_near_unit = [&](const image::RgbImage& picture) {
-      const std::optional<std::array<double, 2>> pixel = renderer.Project(renderer.UnitCenter(simulation, pressed));
+      const std::optional<std::array<double, 2>> pixel =
+          renderer.Project(renderer.UnitCenter(simulation, pressed));
       if (!pixel) return -1;
       const int c = static_cast<int>((*pixel)[0]);
       const int r = static_cast<int>((*pixel)[1]);
@@ -253,7 +260,8 @@ TEST_F(RenderTest, UnusableUnitIsCrossedAndTheLegendShowsTheScale) {
     legend.height_px = kLegendHeightPx;
     legend.object_alpha = 0.0;
     const auto corner = [](const image::RgbImage& picture, bool (*test)(const uint8_t*)) {
-      return CountPixels(picture, 2 * kLegendWidthPx / 3, kLegendWidthPx, kLegendHeightPx / 3, kLegendHeightPx, test);
+      return CountPixels(picture, 2 * kLegendWidthPx / 3, kLegendWidthPx, kLegendHeightPx / 3,
+                         kLegendHeightPx, test);
     };
     Renderer with_legend(gl_, simulation, legend);
     const image::RgbImage& shown = with_legend.Render(simulation, &state, camera);
@@ -316,7 +324,8 @@ TEST(UnitColorTest, GreyUnloadedRedAtRatedMagentaSaturatedBlackUnusable) {
   EXPECT_NEAR(quarter[0], 0.5f * (zero[0] + rated[0]), 1e-6);
   const std::array<float, 4> saturated = UnitColor(12.0, UnitValidity::kOutOfRange, 10.0);
   EXPECT_GT(saturated[2], 0.8f);
-  for (UnitValidity v : {UnitValidity::kOpen, UnitValidity::kShort, UnitValidity::kImplausible, UnitValidity::kNotTared}) {
+  for (UnitValidity v :
+       {UnitValidity::kOpen, UnitValidity::kShort, UnitValidity::kImplausible, UnitValidity::kNotTared}) {
     EXPECT_LT(UnitColor(3.0, v, 10.0)[0], 0.1f);
   }
 }
@@ -336,7 +345,9 @@ TEST(FreeViewTest, ParsesSixNumbersAndNamesWhatIsWrong) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(message("1,2,3"), "--view 1,2,3: expected 6 numbers azimuth,elevation,distance,x,y,z (deg, deg, m, m, m, m), got 3");
+  EXPECT_EQ(
+      message("1,2,3"),
+      "--view 1,2,3: expected 6 numbers azimuth,elevation,distance,x,y,z (deg, deg, m, m, m, m), got 3");
   EXPECT_EQ(message("1,2,x,0,0,0"), "--view 1,2,x,0,0,0: distance 'x' is not a number");
   EXPECT_EQ(message("0,90,0.3,0,0,0"), "--view 0,90,0.3,0,0,0: elevation 90 must be in (-90, 90) deg");
   EXPECT_EQ(message("0,0,-1,0,0,0"), "--view 0,0,-1,0,0,0: distance -1 must be > 0 m");

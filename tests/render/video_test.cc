@@ -45,8 +45,10 @@ std::string ReadFile(const std::string& path) {
 
 /// ffprobe's answer for the video stream of `path`: "width,height,frames".
 std::string Probe(const std::string& path) {
-  const std::string command = "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
-                              "stream=width,height,nb_read_frames -of csv=p=0 '" + path + "' 2>&1";
+  const std::string command =
+      "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+      "stream=width,height,nb_read_frames -of csv=p=0 '" +
+      path + "' 2>&1";
   std::FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return "popen failed";
   std::string out;
@@ -66,8 +68,8 @@ TEST(VideoCliTest, DefaultScenarioVideoHasTheFrameCountAndSizeAskedFor) {
   const scenario::ScenarioConfig config = scenario::LoadScenario(SourcePath("scenarios/default.yaml"));
   const int expected_frames = render::VideoFrameCount(config.duration_s, kFps);
   EXPECT_EQ(expected_frames, 26);  // 0, 0.1, ..., 2.5 s
-  EXPECT_EQ(Probe(out + "/video.mp4"),
-            std::to_string(kWidthPx) + "," + std::to_string(kHeightPx) + "," + std::to_string(expected_frames));
+  EXPECT_EQ(Probe(out + "/video.mp4"), std::to_string(kWidthPx) + "," + std::to_string(kHeightPx) + "," +
+                                           std::to_string(expected_frames));
   EXPECT_NE(result.err.find("ms/frame"), std::string::npos) << result.err;
   // The strip: 6 tiles of 320 x 240 side by side.
   const image::RgbImage strip = image::ReadPng(out + "/video_strip.png");
@@ -86,15 +88,16 @@ TEST(VideoCliTest, SuiteAndSweepWriteOneVideoPerRun) {
   }
   const std::string video = " --video --video-fps 10 --video-size 160x120";
   // 1 s of each at 10 fps: frames at 0, 0.1, ..., 1 s (the lift starts at 0.8 s).
-  const CliResult suite =
-      RunCli("suite " + dir.Path("suite") + " -j 2 --no-plots --set duration_s=1 --out " + dir.Path("out") + video);
+  const CliResult suite = RunCli("suite " + dir.Path("suite") + " -j 2 --no-plots --set duration_s=1 --out " +
+                                 dir.Path("out") + video);
   EXPECT_NE(suite.exit_code, kExitBadInput) << suite.out << suite.err;
   for (const char* name : {"default", "wide_box"}) {
     EXPECT_EQ(Probe(dir.Path("out/") + name + "/video.mp4"), "160,120,11") << name;
     EXPECT_TRUE(fs::exists(dir.Path("out/") + name + "/video_strip.png")) << name;
   }
-  std::ofstream(dir.Path("grid.yaml")) << "scenario: " << SourcePath("scenarios/default.yaml")
-                                        << "\nset: {duration_s: 1}\nparameters:\n  object.mass_kg: [0.1, 0.2]\n";
+  std::ofstream(dir.Path("grid.yaml"))
+      << "scenario: " << SourcePath("scenarios/default.yaml")
+      << "\nset: {duration_s: 1}\nparameters:\n  object.mass_kg: [0.1, 0.2]\n";
   const CliResult sweep = RunCli("sweep " + dir.Path("grid.yaml") + " --out " + dir.Path("sweep") + video);
   ASSERT_EQ(sweep.exit_code, kExitOk) << sweep.out << sweep.err;
   for (const char* run : {"run_0", "run_1"}) {
@@ -104,7 +107,8 @@ TEST(VideoCliTest, SuiteAndSweepWriteOneVideoPerRun) {
 
 TEST(VideoCliTest, RefusesBadVideoOptionsBeforeRunning) {
   TempDir dir("video_cli_bad");
-  const std::string run = "run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + dir.Path("run") + " --video";
+  const std::string run =
+      "run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + dir.Path("run") + " --video";
   const struct {
     std::string arguments;
     std::string message;
@@ -161,12 +165,14 @@ TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
 
 TEST(VideoCliTest, WithoutFfmpegSaysSoBeforeSimulating) {
   TempDir dir("video_no_ffmpeg");
-  const CliResult result = testing::RunCliUnder(
-      "env PATH=/nonexistent ", "run " + SourcePath("scenarios/default.yaml") + " --out " + dir.Path("run") + " --video");
+  const CliResult result =
+      testing::RunCliUnder("env PATH=/nonexistent ", "run " + SourcePath("scenarios/default.yaml") +
+                                                         " --out " + dir.Path("run") + " --video");
   EXPECT_EQ(result.exit_code, 1) << result.err;
-  EXPECT_NE(result.err.find("video: the ffmpeg program ('ffmpeg') is not installed or not on PATH (on Debian: "
-                            "apt-get install ffmpeg)"),
-            std::string::npos)
+  EXPECT_NE(
+      result.err.find("video: the ffmpeg program ('ffmpeg') is not installed or not on PATH (on Debian: "
+                      "apt-get install ffmpeg)"),
+      std::string::npos)
       << result.err;
   EXPECT_FALSE(fs::exists(dir.Path("run/signals.csv")));
 }

@@ -38,9 +38,9 @@ int ShownFrames(const std::string& out) {
 }
 
 TEST(ViewCliTest, LiveScenarioShowsFramesAndAdvancesTime) {
-  const CliResult result = RunCliUnder(
-      kVirtualDisplay, "view " + SourcePath("scenarios/default.yaml") + " --frames " + std::to_string(kFrames) +
-                           " --size 320x240 --speed 4");
+  const CliResult result =
+      RunCliUnder(kVirtualDisplay, "view " + SourcePath("scenarios/default.yaml") + " --frames " +
+                                       std::to_string(kFrames) + " --size 320x240 --speed 4");
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
   EXPECT_EQ(ShownFrames(result.out), kFrames) << result.out;
   // Running at 4x real time for 12 frames: well past the start.
@@ -52,8 +52,8 @@ TEST(ViewCliTest, ReplaysAFinishedRunWithoutSimulatingIt) {
   const std::string out = dir.Path("run");
   const CliResult run = RunCli("run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + out);
   ASSERT_EQ(run.exit_code, kExitOk) << run.err;
-  const CliResult result = RunCliUnder(kVirtualDisplay, "view " + out + " --frames " + std::to_string(kFrames) +
-                                                            " --size 320x240 --speed 8");
+  const CliResult result = RunCliUnder(
+      kVirtualDisplay, "view " + out + " --frames " + std::to_string(kFrames) + " --size 320x240 --speed 8");
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
   EXPECT_EQ(ShownFrames(result.out), kFrames) << result.out;
   EXPECT_GT(ShownTime(result.out), 0.01) << result.out;

@@ -17,12 +17,12 @@
 namespace graspbed::scenario {
 namespace {
 
+using graspbed::testing::TempDir;
 using testing::HeldBoxScenario;
 using testing::kHeldInAirS;
 using testing::RunScenarioText;
 using testing::ScenarioRun;
 using testing::Signals;
-using graspbed::testing::TempDir;
 
 constexpr double kPositionTolM = 1.5e-3;  // wrist servo tracking and object settling
 constexpr double kForceTolN = 1e-6;       // script force/mass columns are set exactly
@@ -62,7 +62,8 @@ double StdDev(const Signals& s, const std::string& column, double t0, double t1)
 int BusiestUnit(const Signals& s, double time_s, int units = 20) {
   int best = 0;
   for (int u = 1; u < units; ++u) {
-    if (s.AtTime("fn_true_n_" + std::to_string(u), time_s) > s.AtTime("fn_true_n_" + std::to_string(best), time_s)) {
+    if (s.AtTime("fn_true_n_" + std::to_string(u), time_s) >
+        s.AtTime("fn_true_n_" + std::to_string(best), time_s)) {
       best = u;
     }
   }
@@ -100,14 +101,16 @@ TEST_F(ActionsTest, CloseSqueezesTheObjectAndLiftRaisesIt) {
   EXPECT_LT(run.result.metrics.grasp_time_s, 0.15);
   // The lift carries wrist and box up 50 mm with it.
   EXPECT_NEAR(s.AtTime("object_height_m", 0.14), 0.0, kPositionTolM);
-  EXPECT_NEAR(s.AtTime("wrist_target_z_m", kHeldInAirS) - s.AtTime("wrist_target_z_m", 0.14), kLiftHeightM, 1e-9);
+  EXPECT_NEAR(s.AtTime("wrist_target_z_m", kHeldInAirS) - s.AtTime("wrist_target_z_m", 0.14), kLiftHeightM,
+              1e-9);
   EXPECT_NEAR(s.AtTime("wrist_z_m", kHeldInAirS) - s.AtTime("wrist_z_m", 0.14), kLiftHeightM, kPositionTolM);
   EXPECT_NEAR(s.AtTime("object_height_m", kHeldInAirS), kLiftHeightM, kPositionTolM);
   // Minimum-jerk profile. A row holds the target the script set for the physics step that ended at
   // its time, i.e. the target at the step's start.
   for (double t : {0.2, 0.25, 0.3}) {
     EXPECT_NEAR(s.AtTime("wrist_target_z_m", t) - s.AtTime("wrist_target_z_m", 0.14),
-                kLiftHeightM * ProfileProgress(Profile::kMinimumJerk, (t - kPhysicsStepS - 0.15) / 0.2), 1e-9);
+                kLiftHeightM * ProfileProgress(Profile::kMinimumJerk, (t - kPhysicsStepS - 0.15) / 0.2),
+                1e-9);
   }
   EXPECT_FALSE(run.result.metrics.dropped);
 }
@@ -156,11 +159,12 @@ controller: {name: open_loop}
   const double y0 = probe.signals.At("wrist_y_m", 0);
   const double z0 = probe.signals.At("wrist_z_m", 0);
   char script[512];
-  std::snprintf(script, sizeof(script),
-                "script:\n"
-                "  - {at_s: 0.05, action: move, offset_m: [0.01, 0, 0.02], duration_s: 0.15}\n"
-                "  - {at_s: 0.35, action: move, position_m: [%.9g, %.9g, %.9g], duration_s: 0.15, profile: linear}\n",
-                x0 - 0.01, y0 + 0.005, z0 + 0.04);
+  std::snprintf(
+      script, sizeof(script),
+      "script:\n"
+      "  - {at_s: 0.05, action: move, offset_m: [0.01, 0, 0.02], duration_s: 0.15}\n"
+      "  - {at_s: 0.35, action: move, position_m: [%.9g, %.9g, %.9g], duration_s: 0.15, profile: linear}\n",
+      x0 - 0.01, y0 + 0.005, z0 + 0.04);
   const ScenarioRun run = RunScenarioText(dir_, "move", "duration_s: 0.65\n" + scene + script);
   const Signals& s = run.signals;
   EXPECT_NEAR(s.AtTime("wrist_x_m", 0.34), x0 + 0.01, kPositionTolM);
@@ -168,7 +172,8 @@ controller: {name: open_loop}
   EXPECT_NEAR(s.AtTime("wrist_z_m", 0.34), z0 + 0.02, kPositionTolM);
   EXPECT_NEAR(s.AtTime("wrist_target_z_m", 0.34), z0 + 0.02, 1e-9);
   // Linear from +20 mm to +40 mm (a row holds the target at the start of its physics step).
-  EXPECT_NEAR(s.AtTime("wrist_target_z_m", 0.40), z0 + 0.02 + 0.02 * (0.40 - kPhysicsStepS - 0.35) / 0.15, 1e-7);
+  EXPECT_NEAR(s.AtTime("wrist_target_z_m", 0.40), z0 + 0.02 + 0.02 * (0.40 - kPhysicsStepS - 0.35) / 0.15,
+              1e-7);
   EXPECT_NEAR(s.AtTime("wrist_x_m", 0.65), x0 - 0.01, kPositionTolM);
   EXPECT_NEAR(s.AtTime("wrist_y_m", 0.65), y0 + 0.005, kPositionTolM);
   EXPECT_NEAR(s.AtTime("wrist_z_m", 0.65), z0 + 0.04, kPositionTolM);
@@ -179,8 +184,9 @@ TEST_F(ActionsTest, ShakeOscillatesTheWristAtItsFrequencyAndAmplitudeAndStops) {
   constexpr double kFrequencyHz = 5.0;
   const ScenarioRun run = RunScenarioText(
       dir_, "shake",
-      HeldBoxScenario(0.95, "  - {at_s: 0.45, action: shake, frequency_hz: 5, amplitude_m: 0.005, duration_s: 0.4, "
-                            "axis: [0, 0, 2]}\n"));
+      HeldBoxScenario(0.95,
+                      "  - {at_s: 0.45, action: shake, frequency_hz: 5, amplitude_m: 0.005, duration_s: 0.4, "
+                      "axis: [0, 0, 2]}\n"));
   const Signals& s = run.signals;
   const double base = s.AtTime("wrist_target_z_m", 0.44);
   const auto [low, high] = Range(s, "wrist_target_z_m", 0.45, 0.85);
@@ -210,16 +216,16 @@ TEST_F(ActionsTest, ShakeOscillatesTheWristAtItsFrequencyAndAmplitudeAndStops) {
 }
 
 TEST_F(ActionsTest, AddMassStepBeyondTheGripDropsTheObjectAndASmallOneDoesNot) {
-  const ScenarioRun heavy =
-      RunScenarioText(dir_, "heavy", HeldBoxScenario(0.7, "  - {at_s: 0.45, action: add_mass, mass_kg: 2.0}\n"));
+  const ScenarioRun heavy = RunScenarioText(
+      dir_, "heavy", HeldBoxScenario(0.7, "  - {at_s: 0.45, action: add_mass, mass_kg: 2.0}\n"));
   EXPECT_NEAR(heavy.signals.AtTime("object_mass_kg", 0.44), 0.1, kMassTolKg);
   EXPECT_NEAR(heavy.signals.AtTime("object_mass_kg", 0.451), 2.1, kMassTolKg);
   EXPECT_TRUE(heavy.result.metrics.dropped);
   EXPECT_GT(heavy.result.metrics.drop_time_s, 0.45);
   EXPECT_LT(heavy.result.metrics.drop_time_s, 0.6);
 
-  const ScenarioRun light =
-      RunScenarioText(dir_, "light", HeldBoxScenario(0.7, "  - {at_s: 0.45, action: add_mass, mass_kg: 0.3}\n"));
+  const ScenarioRun light = RunScenarioText(
+      dir_, "light", HeldBoxScenario(0.7, "  - {at_s: 0.45, action: add_mass, mass_kg: 0.3}\n"));
   EXPECT_NEAR(light.signals.AtTime("object_mass_kg", 0.7), 0.4, kMassTolKg);
   EXPECT_FALSE(light.result.metrics.dropped);
   // The extra weight hangs on the fingertips: more shear on the sensor.
@@ -233,7 +239,8 @@ TEST_F(ActionsTest, AddMassStepBeyondTheGripDropsTheObjectAndASmallOneDoesNot) {
 TEST_F(ActionsTest, AddMassRampFillsGraduallyAndDropsLaterThanAStep) {
   const ScenarioRun run = RunScenarioText(
       dir_, "pour",
-      HeldBoxScenario(0.95, "  - {at_s: 0.45, action: add_mass, mass_kg: 2.0, ramp_s: 0.4, profile: linear}\n"));
+      HeldBoxScenario(0.95,
+                      "  - {at_s: 0.45, action: add_mass, mass_kg: 2.0, ramp_s: 0.4, profile: linear}\n"));
   const Signals& s = run.signals;
   EXPECT_NEAR(s.AtTime("object_mass_kg", 0.45), 0.1, 0.01);
   EXPECT_NEAR(s.AtTime("object_mass_kg", 0.55), 0.6, 0.01);
@@ -246,8 +253,8 @@ TEST_F(ActionsTest, AddMassRampFillsGraduallyAndDropsLaterThanAStep) {
 }
 
 TEST_F(ActionsTest, PullStepAndRampAndTimedPull) {
-  const ScenarioRun step =
-      RunScenarioText(dir_, "pull_step", HeldBoxScenario(0.6, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -20]}\n"));
+  const ScenarioRun step = RunScenarioText(
+      dir_, "pull_step", HeldBoxScenario(0.6, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -20]}\n"));
   EXPECT_NEAR(step.signals.AtTime("external_force_z_n", 0.44), 0.0, kForceTolN);
   EXPECT_NEAR(step.signals.AtTime("external_force_z_n", 0.451), -20.0, kForceTolN);
   EXPECT_TRUE(step.result.metrics.dropped);
@@ -255,7 +262,8 @@ TEST_F(ActionsTest, PullStepAndRampAndTimedPull) {
 
   const ScenarioRun ramp = RunScenarioText(
       dir_, "pull_ramp",
-      HeldBoxScenario(0.9, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -20], ramp_s: 0.4, profile: linear}\n"));
+      HeldBoxScenario(
+          0.9, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -20], ramp_s: 0.4, profile: linear}\n"));
   EXPECT_NEAR(ramp.signals.AtTime("external_force_z_n", 0.55), -5.0, 0.1);
   EXPECT_NEAR(ramp.signals.AtTime("external_force_z_n", 0.65), -10.0, 0.1);
   EXPECT_TRUE(ramp.result.metrics.dropped);
@@ -264,7 +272,8 @@ TEST_F(ActionsTest, PullStepAndRampAndTimedPull) {
 
   // A 3 N sideways tug for 0.1 s: the box yields a little on the compliant contacts and is kept.
   const ScenarioRun tug = RunScenarioText(
-      dir_, "tug", HeldBoxScenario(0.65, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -3], duration_s: 0.1}\n"));
+      dir_, "tug",
+      HeldBoxScenario(0.65, "  - {at_s: 0.45, action: pull, force_n: [0, 0, -3], duration_s: 0.1}\n"));
   EXPECT_NEAR(tug.signals.AtTime("external_force_z_n", 0.5), -3.0, kForceTolN);
   EXPECT_NEAR(tug.signals.AtTime("external_force_z_n", 0.56), 0.0, kForceTolN);
   EXPECT_FALSE(tug.result.metrics.dropped);
@@ -283,7 +292,8 @@ TEST_F(ActionsTest, SetFrictionStepDropsTheObjectAndARampDropsItLater) {
 
   const ScenarioRun ramp = RunScenarioText(
       dir_, "slippery_ramp",
-      HeldBoxScenario(0.95, "  - {at_s: 0.45, action: set_friction, friction: 0.02, ramp_s: 0.4, profile: linear}\n"));
+      HeldBoxScenario(
+          0.95, "  - {at_s: 0.45, action: set_friction, friction: 0.02, ramp_s: 0.4, profile: linear}\n"));
   EXPECT_TRUE(ramp.result.metrics.dropped);
   // Friction 0.7 -> 0.02 linearly: the 10 N pinch holds 1 N of weight until mu falls near 0.05.
   EXPECT_GT(ramp.result.metrics.drop_time_s, step.result.metrics.drop_time_s + 0.2);
@@ -299,14 +309,17 @@ class SensorFaultTest : public ActionsTest {
   ScenarioRun Run(const std::string& name, const std::string& fault_script, const std::string& extra = "") {
     return RunScenarioText(dir_, name, HeldBoxScenario(kDurationS, fault_script, extra));
   }
-  static std::string U(const char* column, int unit) { return std::string(column) + "_" + std::to_string(unit); }
+  static std::string U(const char* column, int unit) {
+    return std::string(column) + "_" + std::to_string(unit);
+  }
 };
 
 TEST_F(SensorFaultTest, DeadUnitReadsOpenCircuitIsInvalidAndLeavesTheEstimate) {
   const ScenarioRun clean = Run("clean", "");
   const int unit = BusiestUnit(clean.signals, kFaultS);
   ASSERT_GT(clean.signals.AtTime(U("fn_true_n", unit), kFaultS), 0.5);
-  const ScenarioRun dead = Run("dead", "  - {at_s: 0.5, action: dead_unit, unit: " + std::to_string(unit) + "}\n");
+  const ScenarioRun dead =
+      Run("dead", "  - {at_s: 0.5, action: dead_unit, unit: " + std::to_string(unit) + "}\n");
   const Signals& s = dead.signals;
   EXPECT_EQ(s.AtTime(U("validity", unit), 0.49), static_cast<double>(sensor::UnitValidity::kValid));
   EXPECT_EQ(s.AtTime(U("validity", unit), 0.6), static_cast<double>(sensor::UnitValidity::kOpen));
@@ -316,7 +329,8 @@ TEST_F(SensorFaultTest, DeadUnitReadsOpenCircuitIsInvalidAndLeavesTheEstimate) {
   EXPECT_DOUBLE_EQ(s.AtTime(U("fn_true_n", unit), 0.6), clean.signals.AtTime(U("fn_true_n", unit), 0.6));
   EXPECT_EQ(s.AtTime("valid_units", 0.6), clean.signals.AtTime("valid_units", 0.6) - 1);
   EXPECT_NEAR(s.AtTime("est_total_fn_n", 0.6),
-              clean.signals.AtTime("est_total_fn_n", 0.6) - clean.signals.AtTime(U("fn_est_n", unit), 0.6), 1e-6);
+              clean.signals.AtTime("est_total_fn_n", 0.6) - clean.signals.AtTime(U("fn_est_n", unit), 0.6),
+              1e-6);
 }
 
 TEST_F(SensorFaultTest, ShortedUnitReadsShortCircuitUntilRestored) {
@@ -324,8 +338,10 @@ TEST_F(SensorFaultTest, ShortedUnitReadsShortCircuitUntilRestored) {
   const int unit = BusiestUnit(clean.signals, kFaultS);  // loaded: its reading is not just R0
   ASSERT_GT(clean.signals.AtTime(U("fn_true_n", unit), kFaultS), 0.5);
   const std::string u = std::to_string(unit);
-  const ScenarioRun run = Run("short", "  - {at_s: 0.5, action: short_unit, unit: " + u + "}\n"
-                                       "  - {at_s: 0.58, action: restore_unit, unit: " + u + "}\n");
+  const ScenarioRun run = Run("short", "  - {at_s: 0.5, action: short_unit, unit: " + u +
+                                           "}\n"
+                                           "  - {at_s: 0.58, action: restore_unit, unit: " +
+                                           u + "}\n");
   const Signals& s = run.signals;
   // Before the fault the unit reads what it reads without one: the same seeded run up to 0.5 s, so
   // the same resistance to the last digit of signals.csv.
@@ -348,8 +364,8 @@ TEST_F(SensorFaultTest, BiasShiftsTheResistancesAndTheEstimateByTheModelsAmount)
   constexpr double kFtShiftN = (kR1BiasOhm - kR2BiasOhm) / kR0Ohm / (2 * 100 * 4.1e-4);
   const ScenarioRun clean = Run("clean", "");
   const int unit = BusiestUnit(clean.signals, kFaultS);
-  const ScenarioRun biased =
-      Run("bias", "  - {at_s: 0.5, action: bias, unit: " + std::to_string(unit) + ", r1_ohm: 20, r2_ohm: -10}\n");
+  const ScenarioRun biased = Run(
+      "bias", "  - {at_s: 0.5, action: bias, unit: " + std::to_string(unit) + ", r1_ohm: 20, r2_ohm: -10}\n");
   for (double t : {0.49, 0.6}) {
     SCOPED_TRACE(t);
     const bool on = t > kFaultS;
@@ -359,10 +375,12 @@ TEST_F(SensorFaultTest, BiasShiftsTheResistancesAndTheEstimateByTheModelsAmount)
                 on ? kR2BiasOhm : 0.0, 1e-6);
   }
   // The inverted load carries the bias (within a percent: R1, R2 are loaded, not R0).
-  EXPECT_NEAR(biased.signals.AtTime(U("fn_est_n", unit), 0.6) - clean.signals.AtTime(U("fn_est_n", unit), 0.6),
-              kFnShiftN, 0.02 * kFnShiftN);
-  EXPECT_NEAR(biased.signals.AtTime(U("ft_est_n", unit), 0.6) - clean.signals.AtTime(U("ft_est_n", unit), 0.6),
-              kFtShiftN, 0.02 * kFtShiftN);
+  EXPECT_NEAR(
+      biased.signals.AtTime(U("fn_est_n", unit), 0.6) - clean.signals.AtTime(U("fn_est_n", unit), 0.6),
+      kFnShiftN, 0.02 * kFnShiftN);
+  EXPECT_NEAR(
+      biased.signals.AtTime(U("ft_est_n", unit), 0.6) - clean.signals.AtTime(U("ft_est_n", unit), 0.6),
+      kFtShiftN, 0.02 * kFtShiftN);
   // And so the estimation error metric sees it.
   EXPECT_GT(*biased.result.metrics.fn_rmse_n, *clean.result.metrics.fn_rmse_n + 0.005);
 }
@@ -372,7 +390,8 @@ TEST_F(SensorFaultTest, NoiseBurstMultipliesTheNoiseForItsDuration) {
   constexpr double kNoiseOhm = 0.5;
   const std::string noisy = "sensor: {strain_model: {noise_ohm: 0.5}}\n";
   const ScenarioRun steady = Run("steady", "", noisy);
-  const ScenarioRun run = Run("burst", "  - {at_s: 0.5, action: noise_burst, scale: 10, duration_s: 0.08}\n", noisy);
+  const ScenarioRun run =
+      Run("burst", "  - {at_s: 0.5, action: noise_burst, scale: 10, duration_s: 0.08}\n", noisy);
   const int unit = IdleUnit(run.signals);
   // The noise is N(0, noise_ohm) drawn from the seeded stream, the same draws with or without the
   // burst; the burst multiplies them. So an idle unit's deviation from R0 is exactly kScale times the
@@ -387,8 +406,8 @@ TEST_F(SensorFaultTest, NoiseBurstMultipliesTheNoiseForItsDuration) {
     if (t < 0.40 || edge) continue;
     const bool during = t > 0.5 && t < 0.58;
     ASSERT_EQ(steady.signals.At("time_s", r), t);
-    EXPECT_NEAR(run.signals.At(column, r) - kR0Ohm, (during ? kScale : 1.0) * (steady.signals.At(column, r) - kR0Ohm),
-                kCsvRoundingOhm)
+    EXPECT_NEAR(run.signals.At(column, r) - kR0Ohm,
+                (during ? kScale : 1.0) * (steady.signals.At(column, r) - kR0Ohm), kCsvRoundingOhm)
         << "t = " << t;
     ++compared;
   }
@@ -412,7 +431,8 @@ TEST_F(SensorFaultTest, DropFramesLosesFramesAndTheStateGoesStale) {
   EXPECT_EQ(gap.signals.AtTime("stale", 0.54), 1.0);
   EXPECT_EQ(gap.signals.AtTime("stale", 0.56), 0.0);
   // Half of the frames for 100 ms: about 50 lost, seeded.
-  const ScenarioRun lossy = Run("lossy", "  - {at_s: 0.5, action: drop_frames, duration_s: 0.1, probability: 0.5}\n");
+  const ScenarioRun lossy =
+      Run("lossy", "  - {at_s: 0.5, action: drop_frames, duration_s: 0.1, probability: 0.5}\n");
   EXPECT_NEAR(static_cast<double>(lossy.result.dropped_frames), 50.0, 20.0);
 }
 
@@ -426,8 +446,10 @@ TEST_F(SensorFaultTest, AddedLatencyDelaysTheEstimateByExactlyThatMuch) {
   double worst_unshifted = 0.0;
   for (size_t r = b.RowAt(0.05); r < b.RowAt(0.45); ++r) {
     const double t = b.At("time_s", r);
-    worst_shifted = std::max(worst_shifted, std::abs(b.At("est_total_fn_n", r) - a.AtTime("est_total_fn_n", t - 0.01)));
-    worst_unshifted = std::max(worst_unshifted, std::abs(b.At("est_total_fn_n", r) - a.AtTime("est_total_fn_n", t)));
+    worst_shifted =
+        std::max(worst_shifted, std::abs(b.At("est_total_fn_n", r) - a.AtTime("est_total_fn_n", t - 0.01)));
+    worst_unshifted =
+        std::max(worst_unshifted, std::abs(b.At("est_total_fn_n", r) - a.AtTime("est_total_fn_n", t)));
   }
   EXPECT_LT(worst_shifted, 1e-6);
   EXPECT_GT(worst_unshifted, 0.1);

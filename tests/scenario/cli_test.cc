@@ -33,12 +33,12 @@ namespace graspbed::scenario {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::HeldBoxScenario;
 using graspbed::testing::CliBinary;
 using graspbed::testing::CliResult;
 using graspbed::testing::ReadText;
 using graspbed::testing::RunCli;
 using graspbed::testing::TempDir;
+using testing::HeldBoxScenario;
 
 // Exit codes of the CLI (app/command_registry.h, app/cmd_run.cc).
 constexpr int kExitOk = 0;
@@ -93,23 +93,26 @@ class CliTest : public ::testing::Test {
 // ---- run: exit codes and outputs ---------------------------------------------------------------------
 
 TEST_F(CliTest, RunExitsZeroWhenEveryExpectationHoldsAndWritesEveryOutput) {
-  const std::string file = dir_.Write("held.yaml", HeldBoxScenario(0.5, "", "expectations: {not_dropped: true}\n"));
+  const std::string file =
+      dir_.Write("held.yaml", HeldBoxScenario(0.5, "", "expectations: {not_dropped: true}\n"));
   const std::string out = dir_.Path("out");
   const CliResult result = RunCli("run " + file + " --out " + out);
   EXPECT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find("scenario held, controller open_loop, seed 1: PASSED"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("scenario held, controller open_loop, seed 1: PASSED"), std::string::npos)
+      << result.out;
   EXPECT_NE(result.out.find("[pass] not_dropped"), std::string::npos) << result.out;
   // Off a terminal there is no progress line: stderr stays empty.
   EXPECT_EQ(result.err, "");
-  const std::set<std::string> expected = {"config.yaml", "signals.csv", "states.csv", "summary.json", "forces.png",
-                                          "estimate_vs_truth.png", "grip.png", "slip.png", "height.png",
-                                          "taxels_fn.png", "taxels_ft.png"};
+  const std::set<std::string> expected = {
+      "config.yaml", "signals.csv", "states.csv", "summary.json",  "forces.png",   "estimate_vs_truth.png",
+      "grip.png",    "slip.png",    "height.png", "taxels_fn.png", "taxels_ft.png"};
   EXPECT_EQ(FilesUnder(out), expected);
   const nlohmann::json summary = ReadJson(out + "/summary.json");
   EXPECT_EQ(summary.at("passed"), true);
   EXPECT_EQ(summary.at("completed"), true);
-  for (const char* key : {"dropped", "max_slip_mm", "peak_grip_n", "crushed", "slip_detect_latency_ms",
-                          "false_slip_per_min", "fn_rmse_n", "ft_rmse_n", "time_to_stable_s", "sim_s", "wall_s"}) {
+  for (const char* key :
+       {"dropped", "max_slip_mm", "peak_grip_n", "crushed", "slip_detect_latency_ms", "false_slip_per_min",
+        "fn_rmse_n", "ft_rmse_n", "time_to_stable_s", "sim_s", "wall_s"}) {
     EXPECT_TRUE(summary.at("metrics").contains(key)) << key;
   }
   EXPECT_NEAR(summary.at("metrics").at("sim_s").get<double>(), 0.5, 1e-6);
@@ -121,14 +124,15 @@ TEST_F(CliTest, RunExitsZeroWhenEveryExpectationHoldsAndWritesEveryOutput) {
 }
 
 TEST_F(CliTest, RunExitsOneWhenAnExpectationFailsAndJsonGoesToStdout) {
-  const std::string file =
-      dir_.Write("tight.yaml", HeldBoxScenario(0.3, "", "expectations: {not_dropped: true, max_peak_grip_n: 1}\n"));
+  const std::string file = dir_.Write(
+      "tight.yaml", HeldBoxScenario(0.3, "", "expectations: {not_dropped: true, max_peak_grip_n: 1}\n"));
   const std::string out = dir_.Path("out");
   const CliResult table = RunCli("run " + file + " --out " + out + " --no-plots");
   EXPECT_EQ(table.exit_code, kExitFailed) << table.out << table.err;
   EXPECT_NE(table.out.find("FAILED"), std::string::npos);
   EXPECT_NE(table.out.find("[FAIL] max_peak_grip_n"), std::string::npos) << table.out;
-  EXPECT_EQ(FilesUnder(out), (std::set<std::string>{"config.yaml", "signals.csv", "states.csv", "summary.json"}));
+  EXPECT_EQ(FilesUnder(out),
+            (std::set<std::string>{"config.yaml", "signals.csv", "states.csv", "summary.json"}));
 
   const CliResult json = RunCli("run " + file + " --out " + out + " --no-plots --json");
   EXPECT_EQ(json.exit_code, kExitFailed);
@@ -163,7 +167,8 @@ TEST_F(CliTest, RunExitsTwoOnBadInputWithFileLineAndKeyAndWritesNothing) {
       {"run " + good + " --set object.mass_kg=-2", "--set object.mass_kg=-2: "},
       {"run " + good + " --set object.mass_kg", "--set object.mass_kg: expected key=value"},
       {"run " + good + " --controller pid", "controller.name = pid: unknown name; valid names: "},
-      {"run " + good + " --set script[0].action=jump", "script[0].action = jump: unknown name; valid names: close"},
+      {"run " + good + " --set script[0].action=jump",
+       "script[0].action = jump: unknown name; valid names: close"},
       {"run " + dir_.Path("missing.yaml"), dir_.Path("missing.yaml") + ": cannot open scenario file"},
       {"run " + good + " --seed -1", ""},
       {"run", ""},
@@ -197,9 +202,10 @@ TEST_F(CliTest, RunExitsTwoOnBadInputWithFileLineAndKeyAndWritesNothing) {
 
 TEST_F(CliTest, SameSeedGivesIdenticalSignalsAndADifferentSeedDoes) {
   // Noise, R0 spread and random frame loss all drawn from the seed.
-  const std::string file = dir_.Write(
-      "noisy.yaml",
-      HeldBoxScenario(0.4, "", "seed: 5\nsensor: {drop_probability: 0.05, strain_model: {noise_ohm: 2, r0_spread_fraction: 0.01}}\n"));
+  const std::string file =
+      dir_.Write("noisy.yaml", HeldBoxScenario(0.4, "",
+                                               "seed: 5\nsensor: {drop_probability: 0.05, strain_model: "
+                                               "{noise_ohm: 2, r0_spread_fraction: 0.01}}\n"));
   const auto signals = [&](const std::string& name, const std::string& extra) {
     const CliResult result = RunCli("run " + file + " --no-plots --out " + dir_.Path(name) + extra);
     EXPECT_EQ(result.exit_code, kExitOk) << result.err;
@@ -220,15 +226,18 @@ TEST_F(CliTest, SameSeedGivesIdenticalSignalsAndADifferentSeedDoes) {
   EXPECT_TRUE(ReadText(dir_.Path("d") + "/signals.csv") == first) << "config.yaml does not reproduce the run";
 }
 
-// ---- suites --------------------------------------------------------------------------------------------------
+// ---- suites
+// --------------------------------------------------------------------------------------------------
 
 TEST_F(CliTest, SuiteInParallelGivesTheSameResultsAsSerial) {
   const std::string suite = dir_.Path("suite");
   dir_.Write("suite/a_hold.yaml", HeldBoxScenario(0.4, "", "expectations: {not_dropped: true}\n"));
   dir_.Write("suite/b_heavy.yaml", HeldBoxScenario(0.6, "  - {at_s: 0.45, action: add_mass, mass_kg: 2}\n",
-                                                  "expectations: {not_dropped: true}\n"));
-  dir_.Write("suite/c_noisy.yaml",
-             HeldBoxScenario(0.3, "", "seed: 3\nsensor: {strain_model: {noise_ohm: 2}}\nexpectations: {max_slip_mm: 5}\n"));
+                                                   "expectations: {not_dropped: true}\n"));
+  dir_.Write(
+      "suite/c_noisy.yaml",
+      HeldBoxScenario(0.3, "",
+                      "seed: 3\nsensor: {strain_model: {noise_ohm: 2}}\nexpectations: {max_slip_mm: 5}\n"));
   dir_.Write("suite/notes.txt", "not a scenario\n");
   const CliResult serial = RunCli("suite " + suite + " -j 1 --no-plots --out " + dir_.Path("j1"));
   const CliResult parallel = RunCli("suite " + suite + " -j 2 --no-plots --out " + dir_.Path("j2"));
@@ -249,7 +258,8 @@ TEST_F(CliTest, SuiteInParallelGivesTheSameResultsAsSerial) {
     const std::string name = j1.at("runs")[i].at("scenario");
     SCOPED_TRACE(name);
     EXPECT_EQ(Deterministic(j1.at("runs")[i]), Deterministic(j2.at("runs")[i]));
-    EXPECT_TRUE(ReadText(dir_.Path("j1/" + name + "/signals.csv")) == ReadText(dir_.Path("j2/" + name + "/signals.csv")));
+    EXPECT_TRUE(ReadText(dir_.Path("j1/" + name + "/signals.csv")) ==
+                ReadText(dir_.Path("j2/" + name + "/signals.csv")));
     EXPECT_EQ(j1.at("runs")[i].at("passed"), name != "b_heavy");
   }
   ExpectNoTemporaries(dir_.Path("j2"));
@@ -274,7 +284,8 @@ TEST_F(CliTest, SuiteWithOneBadFileRunsNothing) {
   EXPECT_EQ(RunCli("suite " + dir_.Path("empty_dir_that_is_missing")).exit_code, kExitBadInput);
 }
 
-// ---- sweeps, shards and merge ---------------------------------------------------------------------------------
+// ---- sweeps, shards and merge
+// ---------------------------------------------------------------------------------
 
 // Rows of a results.jsonl without the wall-clock column.
 std::vector<nlohmann::json> Rows(const std::string& dir) {
@@ -333,14 +344,16 @@ parameters:
   // Shard K/N (1-based) holds the runs with index % N == K - 1.
   EXPECT_EQ(ReadJson(dir_.Path("s1") + "/manifest.json").at("runs"), nlohmann::json({0, 2}));
   EXPECT_EQ(ReadJson(dir_.Path("s2") + "/manifest.json").at("runs"), nlohmann::json({1, 3}));
-  const CliResult merged = RunCli("merge " + dir_.Path("s2") + " " + dir_.Path("s1") + " --out " + dir_.Path("m"));
+  const CliResult merged =
+      RunCli("merge " + dir_.Path("s2") + " " + dir_.Path("s1") + " --out " + dir_.Path("m"));
   ASSERT_EQ(merged.exit_code, kExitOk) << merged.err;
   EXPECT_NE(merged.out.find("4 rows"), std::string::npos) << merged.out;
 
   const std::vector<nlohmann::json> expected = Rows(dir_.Path("whole"));
   ASSERT_EQ(expected.size(), 4u);
   EXPECT_EQ(Rows(dir_.Path("m")), expected);
-  EXPECT_EQ(CsvWithoutWall(dir_.Path("m") + "/results.csv"), CsvWithoutWall(dir_.Path("whole") + "/results.csv"));
+  EXPECT_EQ(CsvWithoutWall(dir_.Path("m") + "/results.csv"),
+            CsvWithoutWall(dir_.Path("whole") + "/results.csv"));
   // Grid order: last parameter fastest; the values are real parameters of the runs.
   EXPECT_EQ(expected[1].at("object.mass_kg"), 0.1);
   EXPECT_EQ(expected[1].at("controller.params.close_effort"), 0.7);
@@ -400,7 +413,8 @@ parameters:
 
 TEST_F(CliTest, SweepRefusesBadSpecsAndShardsWithFileAndLine) {
   dir_.Write("base.yaml", HeldBoxScenario(0.2));
-  const std::string spec = dir_.Write("grid.yaml", "scenario: base.yaml\nparameters:\n  object.mass_kg: [0.1]\n");
+  const std::string spec =
+      dir_.Write("grid.yaml", "scenario: base.yaml\nparameters:\n  object.mass_kg: [0.1]\n");
   for (const char* shard : {"0/2", "3/2", "1", "a/b", "1/0"}) {
     SCOPED_TRACE(shard);
     const CliResult result = RunCli("sweep " + spec + " --shard " + shard + " --out " + dir_.Path("out"));
@@ -413,10 +427,12 @@ TEST_F(CliTest, SweepRefusesBadSpecsAndShardsWithFileAndLine) {
   } cases[] = {
       {"scenario: base.yaml\nparameters:\n  object.mass_kg: [-1]\n", "run 0: --set object.mass_kg=-1: "},
       {"scenario: base.yaml\nparameters:\n  object.mass: [0.1]\n", "object.mass: unknown key"},
-      {"scenario: nope.yaml\nparameters:\n  seed: [1]\n", "bad.yaml:1: scenario = nope.yaml: no such scenario file"},
+      {"scenario: nope.yaml\nparameters:\n  seed: [1]\n",
+       "bad.yaml:1: scenario = nope.yaml: no such scenario file"},
       {"scenario: base.yaml\nparameters:\n  seed: {min: 1, max: 2}\n",
        "bad.yaml:3: parameters.seed = {...}: a range {min, max} needs mode: random"},
-      {"scenario: base.yaml\nmode: random\nparameters:\n  seed: [1]\n", "bad.yaml:1: samples = null: missing required key"},
+      {"scenario: base.yaml\nmode: random\nparameters:\n  seed: [1]\n",
+       "bad.yaml:1: samples = null: missing required key"},
       {"scenario: base.yaml\nparameters: {}\n", "bad.yaml:2: parameters"},
       {"scenario: base.yaml\nparameter:\n  seed: [1]\n", "bad.yaml"},
   };
@@ -430,7 +446,8 @@ TEST_F(CliTest, SweepRefusesBadSpecsAndShardsWithFileAndLine) {
   }
 }
 
-// ---- progress on a terminal --------------------------------------------------------------------------------
+// ---- progress on a terminal
+// --------------------------------------------------------------------------------
 
 TEST_F(CliTest, ProgressLineUpdatesInPlaceOnATerminal) {
   const std::string file = dir_.Write("held.yaml", HeldBoxScenario(0.6));
@@ -473,7 +490,8 @@ TEST_F(CliTest, ProgressLineUpdatesInPlaceOnATerminal) {
   EXPECT_NE(ReadText(dir_.Path("stdout")).find("PASSED"), std::string::npos);
 }
 
-// ---- Ctrl-C ----------------------------------------------------------------------------------------------------
+// ---- Ctrl-C
+// ----------------------------------------------------------------------------------------------------
 
 // A child graspbed process with stdout/stderr in files.
 class Child {

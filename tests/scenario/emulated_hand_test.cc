@@ -18,7 +18,7 @@ namespace {
 constexpr double kFramePeriodS = 0.001;  // the scenario's 1 kHz sensor
 // Simulated time moves in physics steps (0.5 ms): a frame's target is reached to within one step.
 constexpr double kStepS = 0.0005;
-constexpr int kCloseFrames = 600;        // 0.6 s of closing: the 5 mm gap is long closed and settled
+constexpr int kCloseFrames = 600;  // 0.6 s of closing: the 5 mm gap is long closed and settled
 constexpr double kCloseEffort = 0.3;
 
 class EmulatedHandTest : public ::testing::Test {
@@ -67,7 +67,8 @@ TEST_F(EmulatedHandTest, TheHostsMotorGraspsAndItsStreamStopFreezesTheOutcome) {
   // The sensed frame shows the load: some unit's R1 has left its unloaded value.
   double largest_change_ohm = 0.0;
   for (int u = 0; u < frame.unit_count; ++u) {
-    largest_change_ohm = std::max(largest_change_ohm, std::abs(frame.r1_ohm[u] - config_.sensor.strain_model.nominal.r0_ohm));
+    largest_change_ohm =
+        std::max(largest_change_ohm, std::abs(frame.r1_ohm[u] - config_.sensor.strain_model.nominal.r0_ohm));
   }
   EXPECT_GT(largest_change_ohm, 10.0);
   // Only the host's controller scores its estimates.

@@ -17,10 +17,10 @@
 namespace graspbed::scenario {
 namespace {
 
+using graspbed::testing::TempDir;
 using testing::HeldBoxScenario;
 using testing::RunScenarioText;
 using testing::ScenarioRun;
-using graspbed::testing::TempDir;
 
 constexpr double kTimeTolS = 1e-9;
 constexpr double kTickS = 0.001;  // control period of the synthetic ticks
@@ -220,8 +220,8 @@ class TrackerTest : public ::testing::Test {
 
 TEST_F(TrackerTest, SlipEventDetectedLateGivesItsLatencyAndDistance) {
   Run(0.5, 0.0);
-  Run(0.52, 0.01);        // slipping at 10 mm/s, not flagged for 20 ms
-  Run(0.6, 0.01, true);   // flagged from 0.52 s
+  Run(0.52, 0.01);       // slipping at 10 mm/s, not flagged for 20 ms
+  Run(0.6, 0.01, true);  // flagged from 0.52 s
   Run(1.0, 0.0);
   const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
   EXPECT_EQ(m.slip_events, 1);
@@ -329,7 +329,8 @@ TEST_F(TrackerTest, StableWindowAndCrushAndEstimationError) {
   EXPECT_EQ(m.estimation_samples, 800);
 }
 
-// ---- expectations on real runs -----------------------------------------------------------------------------
+// ---- expectations on real runs
+// -----------------------------------------------------------------------------
 
 TEST(ExpectationsOnRunsTest, FragileObjectCrushedByAHardGripAndSparedByASoftOne) {
   TempDir dir;
@@ -358,7 +359,8 @@ controller:
 TEST(ExpectationsOnRunsTest, EstimationErrorGrowsWithSensorNoiseAsTheModelPredicts) {
   TempDir dir;
   // Ideal sensor: the inversion is exact, the RMSE is rounding.
-  const ScenarioRun ideal = RunScenarioText(dir, "ideal", HeldBoxScenario(0.3, "", "expectations: {max_estimation_error_n: 0.01}\n"));
+  const ScenarioRun ideal = RunScenarioText(
+      dir, "ideal", HeldBoxScenario(0.3, "", "expectations: {max_estimation_error_n: 0.01}\n"));
   ASSERT_TRUE(ideal.result.metrics.fn_rmse_n.has_value());
   EXPECT_LT(*ideal.result.metrics.fn_rmse_n, 1e-9);
   EXPECT_GT(ideal.result.metrics.estimation_samples, 100);
@@ -367,7 +369,8 @@ TEST(ExpectationsOnRunsTest, EstimationErrorGrowsWithSensorNoiseAsTheModelPredic
   // (plus a little from the tare's own noise).
   const ScenarioRun noisy = RunScenarioText(
       dir, "noisy",
-      HeldBoxScenario(0.3, "", "sensor: {strain_model: {noise_ohm: 3}}\nexpectations: {max_estimation_error_n: 0.01}\n"));
+      HeldBoxScenario(
+          0.3, "", "sensor: {strain_model: {noise_ohm: 3}}\nexpectations: {max_estimation_error_n: 0.01}\n"));
   EXPECT_NEAR(*noisy.result.metrics.fn_rmse_n, 0.0113, 0.003);
   EXPECT_NEAR(*noisy.result.metrics.ft_rmse_n, 0.0152, 0.004);
   EXPECT_FALSE(Find(noisy.result.outcomes, "max_estimation_error_n").passed);
@@ -394,8 +397,8 @@ expectations: {slip_detected_within_ms: 50, not_dropped: true}
   EXPECT_TRUE(Find(seeing.result.outcomes, "not_dropped").passed);
   EXPECT_TRUE(seeing.result.passed);
   // A blind 6 N pinch (capacity about 8.4 N) loses the box and never flags the slip.
-  const ScenarioRun blind =
-      RunScenarioText(dir, "blind", scenario + "controller: {name: open_loop, params: {close_effort: 0.3}}\n");
+  const ScenarioRun blind = RunScenarioText(
+      dir, "blind", scenario + "controller: {name: open_loop, params: {close_effort: 0.3}}\n");
   EXPECT_GE(blind.result.metrics.slip_events, 1);
   EXPECT_EQ(blind.result.metrics.missed_slip_events, blind.result.metrics.slip_events);
   EXPECT_EQ(blind.result.metrics.controller_slip_flags, 0);

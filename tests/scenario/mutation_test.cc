@@ -42,9 +42,9 @@ constexpr int kMaxMutationsPerRun = 3;
 constexpr double kRunLimitS = 60.0;
 
 // Values a typo, a unit mix-up or a bad generator puts into a file.
-const std::vector<std::string> kValues = {"1.0e+308", "-1.0e+308", "1.0e-308", "-1.0e-308", "1.0e+9", "-1.0e+9",
-                                          "1.0e-9",   "-1.0e-9",   "0",        "-0.0",      "-1",     "nan",
-                                          ".nan",     ".inf",      "-.inf",    "1e999",     "3600",   "0.3"};
+const std::vector<std::string> kValues = {
+    "1.0e+308", "-1.0e+308", "1.0e-308", "-1.0e-308", "1.0e+9", "-1.0e+9", "1.0e-9", "-1.0e-9", "0",
+    "-0.0",     "-1",        "nan",      ".nan",      ".inf",   "-.inf",   "1e999",  "3600",    "0.3"};
 
 // Factors applied to the file's own value.
 constexpr double kScales[] = {1e3, 1e-3, -1.0, 1e6, 1e-6, 10.0, 0.1};
@@ -67,11 +67,13 @@ bool IsNumber(const std::string& text) {
 }
 
 // Every numeric scalar below `node`, with its dotted path (for the report).
-void CollectNumbers(YAML::Node node, const std::string& path, std::vector<std::pair<std::string, YAML::Node>>* out) {
+void CollectNumbers(YAML::Node node, const std::string& path,
+                    std::vector<std::pair<std::string, YAML::Node>>* out) {
   if (node.IsScalar()) {
     if (IsNumber(node.Scalar())) out->emplace_back(path, node);
   } else if (node.IsSequence()) {
-    for (size_t i = 0; i < node.size(); ++i) CollectNumbers(node[i], path + "[" + std::to_string(i) + "]", out);
+    for (size_t i = 0; i < node.size(); ++i)
+      CollectNumbers(node[i], path + "[" + std::to_string(i) + "]", out);
   } else if (node.IsMap()) {
     for (auto entry : node) {
       CollectNumbers(entry.second, (path.empty() ? "" : path + ".") + entry.first.Scalar(), out);
@@ -84,7 +86,8 @@ void CollectNumbers(YAML::Node node, const std::string& path, std::vector<std::p
 std::vector<std::string> ShippedScenarios() {
   const char* dir = std::getenv("GRASPBED_MUTATION_SCENARIOS");
   std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(dir != nullptr ? std::string(dir) : SourcePath("scenarios"))) {
+  for (const auto& entry :
+       fs::directory_iterator(dir != nullptr ? std::string(dir) : SourcePath("scenarios"))) {
     if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
   }
   std::sort(files.begin(), files.end());
@@ -93,7 +96,8 @@ std::vector<std::string> ShippedScenarios() {
 
 TEST(MutationTest, EveryMutatedShippedScenarioEndsWithExitZeroOneOrTwo) {
   if (CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
-  const uint64_t seed = static_cast<uint64_t>(EnvInt("GRASPBED_MUTATION_SEED", static_cast<int>(kDefaultSeed)));
+  const uint64_t seed =
+      static_cast<uint64_t>(EnvInt("GRASPBED_MUTATION_SEED", static_cast<int>(kDefaultSeed)));
   const int runs = EnvInt("GRASPBED_MUTATION_RUNS", kDefaultRuns);
   const double limit_s = EnvInt("GRASPBED_MUTATION_LIMIT_S", static_cast<int>(kRunLimitS));
   const std::vector<std::string> files = ShippedScenarios();
@@ -136,7 +140,8 @@ TEST(MutationTest, EveryMutatedShippedScenarioEndsWithExitZeroOneOrTwo) {
     }
     YAML::Emitter emitter;
     emitter << root;
-    const std::string mutated = dir.Write("run" + std::to_string(run) + ".yaml", std::string(emitter.c_str()) + "\n");
+    const std::string mutated =
+        dir.Write("run" + std::to_string(run) + ".yaml", std::string(emitter.c_str()) + "\n");
     const std::string out = dir.Path("out" + std::to_string(run));
 
     const auto start = std::chrono::steady_clock::now();

@@ -84,8 +84,8 @@ class ReplayCompareTest : public ::testing::Test {
 
 TEST_F(ReplayCompareTest, ReplayWithTheRecordedControllerReproducesEveryCommandBitForBit) {
   RunSimulation();
-  const CliResult replay = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
-                                  "/signals.csv --no-plots --out " + Path("replay"));
+  const CliResult replay = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " +
+                                  Path("sim") + "/signals.csv --no-plots --out " + Path("replay"));
   ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
   const nlohmann::json bench = Summary("replay").at("bench");
   const size_t rows = ColumnText(Path("sim") + "/signals.csv", "time_s").size();
@@ -96,8 +96,10 @@ TEST_F(ReplayCompareTest, ReplayWithTheRecordedControllerReproducesEveryCommandB
   EXPECT_EQ(bench.at("max_effort_difference").get<double>(), 0.0);
   EXPECT_EQ(bench.at("intent_from").get<std::string>(), "recording");
   // The same text, cell by cell: the commands, the controller's target and the estimate.
-  for (const char* column : {"grip_effort", "grip_target_n", "est_total_fn_n", "phase", "intent", "slip_flag"}) {
-    EXPECT_TRUE(ColumnText(Path("sim") + "/signals.csv", column) == ColumnText(Path("replay") + "/signals.csv", column))
+  for (const char* column :
+       {"grip_effort", "grip_target_n", "est_total_fn_n", "phase", "intent", "slip_flag"}) {
+    EXPECT_TRUE(ColumnText(Path("sim") + "/signals.csv", column) ==
+                ColumnText(Path("replay") + "/signals.csv", column))
         << column << " differs between the run and its replay";
   }
   // The recorded commands are written beside the new ones.
@@ -112,8 +114,9 @@ TEST_F(ReplayCompareTest, ReplayWithTheRecordedControllerReproducesEveryCommandB
 
 TEST_F(ReplayCompareTest, AnotherControllerShowsItsCommandsBesideTheRecordedOnes) {
   RunSimulation();
-  const CliResult replay = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
-                                  "/signals.csv --controller open_loop --out " + Path("open_loop"));
+  const CliResult replay =
+      RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("sim") +
+             "/signals.csv --controller open_loop --out " + Path("open_loop"));
   ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
   const nlohmann::json bench = Summary("open_loop").at("bench");
   EXPECT_GT(bench.at("commands_differing").get<size_t>(), 0u);
@@ -131,7 +134,8 @@ TEST_F(ReplayCompareTest, AFrameLogReplaysFrameByFrameUnderTheScenariosIntentScr
   // A frame log as `hw --log` writes it: 150 unloaded frames (the tare takes 100), then 5 N on every unit.
   std::ofstream log(Path("frames.csv"));
   log << "seq,device_time_s";
-  for (int k = 0; k < kUnits; ++k) log << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
+  for (int k = 0; k < kUnits; ++k)
+    log << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
   log << '\n';
   constexpr int kFrames = 300;
   for (int i = 0; i < kFrames; ++i) {
@@ -145,8 +149,8 @@ TEST_F(ReplayCompareTest, AFrameLogReplaysFrameByFrameUnderTheScenariosIntentScr
   scenario << "name: bench\nduration_s: 1.0\ncontroller: {name: grip_slip}\n"
               "script:\n  - {at_s: 0.12, action: close}\n";
   scenario.close();
-  const CliResult replay = RunCli("run " + Path("bench.yaml") + " --backend replay --log " + Path("frames.csv") +
-                                  " --json --no-plots --out " + Path("frame_replay"));
+  const CliResult replay = RunCli("run " + Path("bench.yaml") + " --backend replay --log " +
+                                  Path("frames.csv") + " --json --no-plots --out " + Path("frame_replay"));
   ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
   const nlohmann::json summary = nlohmann::json::parse(replay.out);
   const nlohmann::json& bench = summary.at("bench");
@@ -167,17 +171,20 @@ TEST_F(ReplayCompareTest, AFrameLogReplaysFrameByFrameUnderTheScenariosIntentScr
 
 TEST_F(ReplayCompareTest, BadRecordingsAreRefusedByName) {
   RunSimulation();
-  CliResult missing = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("nothing.csv"));
+  CliResult missing =
+      RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("nothing.csv"));
   EXPECT_EQ(missing.exit_code, 2);
-  EXPECT_NE(missing.err.find(Path("nothing.csv") + ": cannot read the recording"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find(Path("nothing.csv") + ": cannot read the recording"), std::string::npos)
+      << missing.err;
 
   CliResult no_log = RunCli("run " + Path("sim") + "/config.yaml --backend replay");
   EXPECT_EQ(no_log.exit_code, 2);
   EXPECT_NE(no_log.err.find("replay needs the recording to replay"), std::string::npos) << no_log.err;
 
   // The 9-unit layout cannot replay a 20-unit recording.
-  CliResult units = RunCli("run " + Path("sim") + "/config.yaml --set sensor.layout=paper_3x3 --backend replay --log " +
-                           Path("sim") + "/signals.csv");
+  CliResult units =
+      RunCli("run " + Path("sim") + "/config.yaml --set sensor.layout=paper_3x3 --backend replay --log " +
+             Path("sim") + "/signals.csv");
   EXPECT_EQ(units.exit_code, 2);
   EXPECT_NE(units.err.find("the recording has 20 units (columns r1_ohm_K) but the scenario's layout has 9"),
             std::string::npos)
@@ -187,7 +194,8 @@ TEST_F(ReplayCompareTest, BadRecordingsAreRefusedByName) {
   bad << ReadText(Path("sim") + "/signals.csv").substr(0, 20000);
   bad << "\n0.5,close,holding,oops\n";
   bad.close();
-  CliResult malformed = RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("bad.csv"));
+  CliResult malformed =
+      RunCli("run " + Path("sim") + "/config.yaml --backend replay --log " + Path("bad.csv"));
   EXPECT_EQ(malformed.exit_code, 2);
   EXPECT_NE(malformed.err.find(Path("bad.csv") + ":"), std::string::npos) << malformed.err;
   EXPECT_NE(malformed.err.find("cells, the header has"), std::string::npos) << malformed.err;
@@ -207,7 +215,8 @@ TEST_F(ReplayCompareTest, ARunComparedWithItselfHasZeroResidualsAndTheSameTimes)
   EXPECT_EQ(c.at("units").size(), static_cast<size_t>(kUnits));
   EXPECT_EQ(c.at("unmatched_events").get<int>(), 0);
   ASSERT_GE(c.at("events").size(), 3u) << "close and the controller's phases";
-  for (const auto& event : c.at("events")) EXPECT_EQ(event.at("difference_s").get<double>(), 0.0) << event.dump();
+  for (const auto& event : c.at("events"))
+    EXPECT_EQ(event.at("difference_s").get<double>(), 0.0) << event.dump();
   EXPECT_TRUE(ReadText(Path("compare") + "/compare.png").rfind("\x89PNG", 0) == 0);
   EXPECT_EQ(nlohmann::json::parse(ReadText(Path("compare") + "/compare.json")), c);
 

@@ -45,9 +45,9 @@ using testing::Signals;
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
 constexpr int kExitBadInput = 2;
-constexpr double kStepS = 0.0005;      // default physics.timestep_s
-constexpr double kTimeTolS = 1e-9;     // sums of timesteps
-constexpr double kInjectAtS = 0.3;     // mid-run: the object is held and being lifted
+constexpr double kStepS = 0.0005;   // default physics.timestep_s
+constexpr double kTimeTolS = 1e-9;  // sums of timesteps
+constexpr double kInjectAtS = 0.3;  // mid-run: the object is held and being lifted
 // A run that ends at its fault takes a fraction of a second; without the fix it spun forever. The
 // bound only has to tell the two apart on a loaded 2-core machine.
 constexpr double kPromptWallS = 20.0;
@@ -77,7 +77,8 @@ nlohmann::json ReadJson(const std::string& path) {
 // ---- the clock at a fault ----------------------------------------------------------------------------
 
 TEST(RunEndsTest, AfterAFaultTheClockAdvancesEveryStepAndThePhysicsStaysFrozen) {
-  sim::Simulation simulation(sensor::LoadLayout(SourcePath("sensor/layouts/default_20.yaml")), sim::SceneConfig{});
+  sim::Simulation simulation(sensor::LoadLayout(SourcePath("sensor/layouts/default_20.yaml")),
+                             sim::SceneConfig{});
   simulation.StepUntil(0.05);
   ASSERT_FALSE(simulation.fault().occurred);
   const double fault_time_s = simulation.time_s();
@@ -128,7 +129,8 @@ TEST(RunEndsTest, ANanInjectedMidRunEndsTheRunAtOnceWithTheFaultNamedAndTheOutpu
   EXPECT_FALSE(result.passed);
   const Metrics& m = result.metrics;
   ASSERT_TRUE(m.physics_fault);
-  EXPECT_NE(m.physics_fault_cause.find("Nan, Inf or huge value in QVEL"), std::string::npos) << m.physics_fault_cause;
+  EXPECT_NE(m.physics_fault_cause.find("Nan, Inf or huge value in QVEL"), std::string::npos)
+      << m.physics_fault_cause;
   EXPECT_NEAR(m.physics_fault_time_s, kInjectAtS, kStepS + kTimeTolS);
   EXPECT_LE(m.sim_s, m.physics_fault_time_s + kStepS + kTimeTolS);
   EXPECT_TRUE(m.grasped) << "the fault came mid-run, with the object held";
@@ -198,7 +200,8 @@ TEST_F(RunEndsCliTest, AnUnstableRunExitsOneAtItsFaultAndASuiteRunsTheOthers) {
   EXPECT_TRUE(fs::exists(suite_out + "/held/summary.json"));
 }
 
-// ---- bodies that start inside each other -------------------------------------------------------------------
+// ---- bodies that start inside each other
+// -------------------------------------------------------------------
 
 TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheKeys) {
   const std::string shipped = SourcePath("scenarios/default.yaml");
@@ -224,7 +227,8 @@ TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheK
     const CliResult result = RunCli("run " + shipped + " --no-plots --out " + out + " --set " + c.set);
     EXPECT_EQ(result.exit_code, kExitBadInput) << result.out << result.err;
     EXPECT_NE(result.err.find(shipped + ": scene: "), std::string::npos) << result.err;
-    for (const std::string& part : c.message) EXPECT_NE(result.err.find(part), std::string::npos) << result.err;
+    for (const std::string& part : c.message)
+      EXPECT_NE(result.err.find(part), std::string::npos) << result.err;
     EXPECT_EQ(result.out, "");
     EXPECT_FALSE(fs::exists(out)) << "a refused scene must not create the output directory";
   }
@@ -255,7 +259,8 @@ TEST(RunEndsTest, LatencyAddedMidRunBeyondTheDefaultRingRunsToTheEnd) {
   EXPECT_GT(run.result.stale_ticks, 0u) << "0.5 s without a fresh frame must leave the state stale";
 }
 
-// ---- values no real scene has ---------------------------------------------------------------------------------
+// ---- values no real scene has
+// ---------------------------------------------------------------------------------
 
 TEST(RunEndsTest, ValuesNoRealSceneHasAreRefusedWithFileLineAndKey) {
   const struct {
@@ -264,19 +269,25 @@ TEST(RunEndsTest, ValuesNoRealSceneHasAreRefusedWithFileLineAndKey) {
   } cases[] = {
       {"object: {mass_kg: 1.0e+308}", "x.yaml:2: object.mass_kg = 1.0e+308: must be <= 10"},
       {"object: {size_m: [0.05, 1.0e+3, 0.08]}", "x.yaml:2: object.size_m[1] = 1.0e+3: must be <= 0.3"},
-      {"hand: {motor: {stall_force_n: 1.0e+9}}", "x.yaml:2: hand.motor.stall_force_n = 1.0e+9: must be <= 500"},
-      {"hand: {wrist_stiffness_n_m: 1.0e+300}", "x.yaml:2: hand.wrist_stiffness_n_m = 1.0e+300: must be <= 1e+06"},
+      {"hand: {motor: {stall_force_n: 1.0e+9}}",
+       "x.yaml:2: hand.motor.stall_force_n = 1.0e+9: must be <= 500"},
+      {"hand: {wrist_stiffness_n_m: 1.0e+300}",
+       "x.yaml:2: hand.wrist_stiffness_n_m = 1.0e+300: must be <= 1e+06"},
       {"physics: {gravity_m_s2: 1.0e+10}", "x.yaml:2: physics.gravity_m_s2 = 1.0e+10: must be <= 100"},
-      {"physics: {solver_iterations: 100000}", "x.yaml:2: physics.solver_iterations = 100000: must be <= 1000"},
-      {"controller: {stale_timeout_s: 1.0e+300}", "x.yaml:2: controller.stale_timeout_s = 1.0e+300: must be <= 1"},
+      {"physics: {solver_iterations: 100000}",
+       "x.yaml:2: physics.solver_iterations = 100000: must be <= 1000"},
+      {"controller: {stale_timeout_s: 1.0e+300}",
+       "x.yaml:2: controller.stale_timeout_s = 1.0e+300: must be <= 1"},
       {"controller: {rate_hz: 1.0e+5}", "x.yaml:2: controller.rate_hz = 1.0e+5: must be <= 10000"},
       {"sensor: {sample_rate_hz: 1.0e+5}", "x.yaml:2: sensor.sample_rate_hz = 1.0e+5: must be <= 10000"},
-      {"metrics: {stable_window_s: 1.0e+300}", "x.yaml:2: metrics.stable_window_s = 1.0e+300: must be <= 3600"},
+      {"metrics: {stable_window_s: 1.0e+300}",
+       "x.yaml:2: metrics.stable_window_s = 1.0e+300: must be <= 3600"},
       {"script:\n  - {at_s: 0.1, action: move, offset_m: [0, 0, 1.0e+300]}",
        "x.yaml:3: script[0].offset_m[2] = 1.0e+300: must be <= 1"},
       {"script:\n  - {at_s: 0.1, action: pull, force_n: [0, 0, 1], ramp_s: 1.0e+300}",
        "x.yaml:3: script[0].ramp_s = 1.0e+300: must be <= 3600"},
-      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 50}", "x.yaml:3: script[0].mass_kg = 50: must be <= 10"},
+      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 50}",
+       "x.yaml:3: script[0].mass_kg = 50: must be <= 10"},
       {"script:\n  - {at_s: 0.1, action: add_latency, latency_s: 0.7}\n  - {at_s: 0.2, action: add_latency, "
        "latency_s: 0.7}",
        "x.yaml:4: add_latency at_s = 0.2: sensor.latency_s plus the add_latency actions up to here = 1.4 s: "

@@ -46,7 +46,8 @@ TEST(ScenarioConfigTest, ShippedDefaultScenarioLoads) {
 
 TEST(ScenarioConfigTest, EveryShippedScenarioLoadsWithExpectations) {
   int count = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(GRASPBED_SOURCE_DIR) + "/scenarios")) {
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::string(GRASPBED_SOURCE_DIR) + "/scenarios")) {
     if (entry.path().extension() != ".yaml") continue;
     SCOPED_TRACE(entry.path().string());
     const ScenarioConfig config = LoadScenario(entry.path().string());
@@ -91,30 +92,35 @@ TEST(ScenarioConfigTest, UnknownTopLevelKeyNamesLineAndValidKeys) {
 }
 
 TEST(ScenarioConfigTest, WrongTypeAndOutOfRangeNameKeyAndValue) {
-  EXPECT_NE(ErrorOf("object:\n  mass_kg: heavy\n").find("test.yaml:2: object.mass_kg = heavy: expected a number"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf("object:\n  mass_kg: heavy\n").find("test.yaml:2: object.mass_kg = heavy: expected a number"),
+      std::string::npos);
   EXPECT_NE(ErrorOf("object:\n  shape: box\n  mass_kg: -0.1\n")
                 .find("test.yaml:3: object.mass_kg = -0.1: must be >= 0.001"),
             std::string::npos);
   EXPECT_NE(ErrorOf("duration_s: 0\n").find("test.yaml:1: duration_s = 0: must be > 0"), std::string::npos);
-  EXPECT_NE(ErrorOf("seed: 1.5\n").find("test.yaml:1: seed = 1.5: expected a whole number"), std::string::npos);
+  EXPECT_NE(ErrorOf("seed: 1.5\n").find("test.yaml:1: seed = 1.5: expected a whole number"),
+            std::string::npos);
   EXPECT_NE(ErrorOf("sensor:\n  strain_model:\n    noise_ohm: -2\n")
                 .find("test.yaml:3: sensor.strain_model.noise_ohm = -2: must be >= 0"),
             std::string::npos);
 }
 
 TEST(ScenarioConfigTest, UnknownActionListsValidActions) {
-  const std::string error = ErrorOf("duration_s: 2\nscript:\n  - {at_s: 0.1, action: close}\n  - {at_s: 0.5, action: jump}\n");
-  EXPECT_NE(error.find("test.yaml:4: script[1].action = jump: unknown name; valid names: close, open, idle, move, "
-                       "lift, shake, add_mass, pull, set_friction, dead_unit"),
-            std::string::npos)
+  const std::string error =
+      ErrorOf("duration_s: 2\nscript:\n  - {at_s: 0.1, action: close}\n  - {at_s: 0.5, action: jump}\n");
+  EXPECT_NE(
+      error.find("test.yaml:4: script[1].action = jump: unknown name; valid names: close, open, idle, move, "
+                 "lift, shake, add_mass, pull, set_friction, dead_unit"),
+      std::string::npos)
       << error;
 }
 
 TEST(ScenarioConfigTest, ActionParametersAreCheckedPerAction) {
   // A key that belongs to another action.
   std::string error = ErrorOf("script:\n  - at_s: 0.1\n    action: close\n    height_m: 0.1\n");
-  EXPECT_NE(error.find("test.yaml:4: script[0].height_m: unknown key; valid keys: action, at_s"), std::string::npos)
+  EXPECT_NE(error.find("test.yaml:4: script[0].height_m: unknown key; valid keys: action, at_s"),
+            std::string::npos)
       << error;
   // Missing required parameter.
   error = ErrorOf("script:\n  - {at_s: 0.1, action: lift}\n");
@@ -127,7 +133,8 @@ TEST(ScenarioConfigTest, ActionParametersAreCheckedPerAction) {
   EXPECT_NE(error.find("test.yaml:3: script[0].at_s = 1.5: must be <= 1"), std::string::npos) << error;
   // move needs exactly one of position_m / offset_m.
   error = ErrorOf("script:\n  - {at_s: 0.1, action: move, position_m: [0, 0, 0.1], offset_m: [0, 0, 0.1]}\n");
-  EXPECT_NE(error.find("test.yaml:2: script[0]: move needs exactly one of position_m"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:2: script[0]: move needs exactly one of position_m"), std::string::npos)
+      << error;
   // Vector of the wrong length.
   error = ErrorOf("script:\n  - {at_s: 0.1, action: pull, force_n: [0, 1]}\n");
   EXPECT_NE(error.find("script[0].force_n = [...]: expected 3 numbers, got 2"), std::string::npos) << error;
@@ -138,40 +145,50 @@ TEST(ScenarioConfigTest, ActionParametersAreCheckedPerAction) {
 
 TEST(ScenarioConfigTest, ControllerNameAndParametersAreValidated) {
   std::string error = ErrorOf("controller:\n  name: pid\n");
-  EXPECT_NE(error.find("test.yaml:2: controller.name = pid: unknown name; valid names: "), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:2: controller.name = pid: unknown name; valid names: "), std::string::npos)
+      << error;
   EXPECT_NE(error.find("open_loop"), std::string::npos) << error;
   error = ErrorOf("controller:\n  name: open_loop\n  params:\n    gain: 3\n");
-  EXPECT_NE(error.find("test.yaml:4: controller.params.gain = 3: controller 'open_loop' has no such parameter; "
-                       "valid parameters: close_effort"),
-            std::string::npos)
+  EXPECT_NE(
+      error.find("test.yaml:4: controller.params.gain = 3: controller 'open_loop' has no such parameter; "
+                 "valid parameters: close_effort"),
+      std::string::npos)
       << error;
   error = ErrorOf("controller:\n  params:\n    close_effort: 2\n");
-  EXPECT_NE(error.find("test.yaml:3: controller.params.close_effort = 2: must be <= 1"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:3: controller.params.close_effort = 2: must be <= 1"), std::string::npos)
+      << error;
 }
 
 TEST(ScenarioConfigTest, ExpectationsAreValidated) {
   std::string error = ErrorOf("expectations:\n  max_slip: 2\n");
-  EXPECT_NE(error.find("test.yaml:2: expectations.max_slip: unknown key; valid keys: "), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:2: expectations.max_slip: unknown key; valid keys: "), std::string::npos)
+      << error;
   EXPECT_NE(error.find("max_slip_mm"), std::string::npos) << error;
   error = ErrorOf("expectations:\n  not_crushed: true\n");
   EXPECT_NE(error.find("test.yaml:2: expectations.not_crushed = true: needs object.crush_limit_n > 0"),
             std::string::npos)
       << error;
   error = ErrorOf("expectations:\n  not_dropped: maybe\n");
-  EXPECT_NE(error.find("expectations.not_dropped = maybe: expected true or false"), std::string::npos) << error;
+  EXPECT_NE(error.find("expectations.not_dropped = maybe: expected true or false"), std::string::npos)
+      << error;
 }
 
 TEST(ScenarioConfigTest, UnknownLayoutIsRefused) {
   const std::string error = ErrorOf("sensor:\n  layout: no_such_layout\n");
-  EXPECT_NE(error.find("test.yaml:2: sensor.layout = no_such_layout: no such layout"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:2: sensor.layout = no_such_layout: no such layout"), std::string::npos)
+      << error;
 }
 
 TEST(ScenarioConfigTest, OverridesUseDottedKeysAndAreValidatedLikeTheFile) {
-  const std::string text = "duration_s: 2\nobject:\n  mass_kg: 0.1\nscript:\n  - {at_s: 0.2, action: close}\n";
-  const ScenarioConfig config = LoadScenarioFromString(
-      text, "t.yaml",
-      {{"object.mass_kg", "0.3"}, {"object.friction", "0.4"}, {"script[0].at_s", "0.5"}, {"seed", "7"},
-       {"sensor.strain_model.noise_ohm", "2"}, {"object.size_m", "[0.04, 0.04, 0.06]"}});
+  const std::string text =
+      "duration_s: 2\nobject:\n  mass_kg: 0.1\nscript:\n  - {at_s: 0.2, action: close}\n";
+  const ScenarioConfig config = LoadScenarioFromString(text, "t.yaml",
+                                                       {{"object.mass_kg", "0.3"},
+                                                        {"object.friction", "0.4"},
+                                                        {"script[0].at_s", "0.5"},
+                                                        {"seed", "7"},
+                                                        {"sensor.strain_model.noise_ohm", "2"},
+                                                        {"object.size_m", "[0.04, 0.04, 0.06]"}});
   EXPECT_DOUBLE_EQ(config.scene.object.mass_kg, 0.3);
   EXPECT_DOUBLE_EQ(config.scene.object.friction, 0.4);
   EXPECT_DOUBLE_EQ(config.script[0].at_s, 0.5);
@@ -266,12 +283,15 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
       {"script: close\n", "test.yaml:1: script"},
       {"script:\n  - {at_s: 0.1, action: lift, height_m: 0.1, profile: smooth}\n",
        "test.yaml:2: script[0].profile = smooth: unknown name; valid names: minimum_jerk, linear"},
-      {"script:\n  - {at_s: 0.1, action: lift, height_m: 2}\n", "test.yaml:2: script[0].height_m = 2: must be <= 1"},
-      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, axis: [0, 0, 0]}\n",
+      {"script:\n  - {at_s: 0.1, action: lift, height_m: 2}\n",
+       "test.yaml:2: script[0].height_m = 2: must be <= 1"},
+      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, axis: [0, "
+       "0, 0]}\n",
        "test.yaml:2: script[0].axis = [...]: must not be the zero vector"},
       {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 0, amplitude_m: 0.01, duration_s: 1}\n",
        "test.yaml:2: script[0].frequency_hz = 0: must be > 0"},
-      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0}\n", "test.yaml:2: script[0].mass_kg = 0: must not be 0"},
+      {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0}\n",
+       "test.yaml:2: script[0].mass_kg = 0: must not be 0"},
       {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0.1, ramp_s: -1}\n",
        "test.yaml:2: script[0].ramp_s = -1: must be >= 0"},
       {"script:\n  - {at_s: 0.1, action: pull, force_n: [0, 0, 2000]}\n",
@@ -284,7 +304,8 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
        "test.yaml:2: script[0].probability = 1.5: must be <= 1"},
       {"script:\n  - {at_s: 0.1, action: add_latency, latency_s: 2}\n",
        "test.yaml:2: script[0].latency_s = 2: must be <= 1"},
-      {"script:\n  - {at_s: 0.1, action: dead_unit, unit: 1.5}\n", "test.yaml:2: script[0].unit = 1.5: expected a whole number"},
+      {"script:\n  - {at_s: 0.1, action: dead_unit, unit: 1.5}\n",
+       "test.yaml:2: script[0].unit = 1.5: expected a whole number"},
       {"sensor: {layout: paper_3x3}\nscript:\n  - {at_s: 0.1, action: dead_unit, unit: 9}\n",
        "test.yaml:3: script[0].unit = 9: must be <= 8"},
       {"sensor:\n  sample_rate_hz: 0\n", "test.yaml:2: sensor.sample_rate_hz = 0: must be >= 1"},
@@ -311,7 +332,8 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
 }
 
 TEST(ScenarioConfigTest, ControllerCrossFieldChecksNameTheParameterAndLine) {
-  const std::string error = ErrorOf("controller:\n  name: grip_slip\n  params:\n    safety_margin: 2\n    min_grip_n: 12\n");
+  const std::string error =
+      ErrorOf("controller:\n  name: grip_slip\n  params:\n    safety_margin: 2\n    min_grip_n: 12\n");
   EXPECT_NE(error.find("test.yaml:5: controller.params.min_grip_n = 12"), std::string::npos) << error;
   EXPECT_NE(error.find("must not exceed max_grip_n"), std::string::npos) << error;
   EXPECT_EQ(ErrorOf("controller:\n  name: grip_slip\n  params: {min_grip_n: 12, max_grip_n: 20}\n"), "");

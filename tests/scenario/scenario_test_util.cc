@@ -22,7 +22,8 @@ controller: {name: open_loop}
 script:
   - {at_s: 0.04, action: close}
   - {at_s: 0.15, action: lift, height_m: 0.05, duration_s: 0.2}
-)" + extra_script + extra;
+)" + extra_script +
+         extra;
 }
 
 Signals::Signals(const std::string& csv_path) {
@@ -39,7 +40,8 @@ Signals::Signals(const std::string& csv_path) {
   std::vector<std::vector<double>*> numeric(header_.size(), nullptr);
   std::vector<std::vector<std::string>*> text(header_.size(), nullptr);
   for (size_t c = 0; c < header_.size(); ++c) {
-    if (header_[c] == "intent" || header_[c] == "phase" || header_[c] == "slip_cues" || header_[c] == "recorded_phase") {
+    if (header_[c] == "intent" || header_[c] == "phase" || header_[c] == "slip_cues" ||
+        header_[c] == "recorded_phase") {
       text[c] = &text_[header_[c]];
     } else {
       numeric[c] = &numeric_[header_[c]];
@@ -76,7 +78,8 @@ size_t Signals::RowAt(double time_s) const {
   return time_.empty() ? 0 : time_.size() - 1;
 }
 
-ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name, const std::string& yaml) {
+ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name,
+                            const std::string& yaml) {
   const std::string file = dir.Write(name + ".yaml", yaml);
   const ScenarioConfig config = LoadScenario(file);
   RunOptions options;

@@ -13,9 +13,10 @@ namespace graspbed::scenario::testing {
 
 /// A box of 100 g (friction 0.7) between the fingers of a hand pre-shaped 5 mm wider than it, under the
 /// open-loop controller at its default effort: closed at 0.04 s, touched after the readout's tare
-/// (0.1 s), held (about 10 N squeeze) from about 0.13 s, lifted 50 mm from 0.15 s to 0.35 s. Followed by `extra_script` (YAML list items, indented
-/// two spaces) and `extra` top-level YAML. The open-loop controller is blind to the sensor, so sensor
-/// faults leave the physics untouched and runs can be compared tick by tick.
+/// (0.1 s), held (about 10 N squeeze) from about 0.13 s, lifted 50 mm from 0.15 s to 0.35 s. Followed by
+/// `extra_script` (YAML list items, indented two spaces) and `extra` top-level YAML. The open-loop controller
+/// is blind to the sensor, so sensor faults leave the physics untouched and runs can be compared tick by
+/// tick.
 std::string HeldBoxScenario(double duration_s, const std::string& extra_script = "",
                             const std::string& extra = "");
 /// Time by which HeldBoxScenario's object hangs still in the hand, 50 mm above the table [s].
@@ -50,6 +51,7 @@ struct ScenarioRun {
   RunResult result;
   Signals signals;
 };
-ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name, const std::string& yaml);
+ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name,
+                            const std::string& yaml);
 
 }  // namespace graspbed::scenario::testing

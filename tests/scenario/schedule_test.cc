@@ -35,7 +35,8 @@ TEST(Schedule, SuiteStartsTheLongestRunFirstAndReportsInFileOrder) {
   std::vector<ScenarioConfig> configs;
   const double durations_s[] = {0.2, 0.35, 0.25};
   for (int i = 0; i < 3; ++i) {
-    configs.push_back(LoadScenarioFromString(HeldBoxScenario(durations_s[i]), "run" + std::to_string(i) + ".yaml"));
+    configs.push_back(
+        LoadScenarioFromString(HeldBoxScenario(durations_s[i]), "run" + std::to_string(i) + ".yaml"));
   }
   std::vector<std::string> finished;
   SuiteOptions options;

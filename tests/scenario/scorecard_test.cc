@@ -36,7 +36,8 @@ constexpr int kExitBadInput = 2;
 const std::string kShippedSet = std::string(GRASPBED_SOURCE_DIR) + "/scenarios/scorecard/set.yaml";
 const std::string kScenarios = std::string(GRASPBED_SOURCE_DIR) + "/scenarios";
 
-RunResult FinishedRun(int events, int missed, std::vector<double> latencies_ms, int false_flags, double held_s) {
+RunResult FinishedRun(int events, int missed, std::vector<double> latencies_ms, int false_flags,
+                      double held_s) {
   RunResult result;
   result.completed = true;
   result.passed = missed == 0;
@@ -144,26 +145,38 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
 TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
   TempDir dir;
   const std::string no_version = dir.Write("a.yaml", "name: s\nbases:\n  - {scenario: x.yaml}\n");
-  EXPECT_NE(graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(no_version); }).find("version"), std::string::npos);
-  const std::string missing = dir.Write("b.yaml", "name: s\nversion: 1\nbases:\n  - {scenario: nowhere.yaml}\n");
-  const std::string message = graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(missing); });
-  EXPECT_NE(message.find("b.yaml:4: bases[0].scenario = nowhere.yaml: no such file"), std::string::npos) << message;
+  EXPECT_NE(
+      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(no_version); }).find("version"),
+      std::string::npos);
+  const std::string missing =
+      dir.Write("b.yaml", "name: s\nversion: 1\nbases:\n  - {scenario: nowhere.yaml}\n");
+  const std::string message =
+      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(missing); });
+  EXPECT_NE(message.find("b.yaml:4: bases[0].scenario = nowhere.yaml: no such file"), std::string::npos)
+      << message;
   const std::string bad_range = dir.Write(
       "c.yaml", "name: s\nversion: 1\nbases:\n  - scenario: " + kScenarios +
                     "/default.yaml\n    vary:\n      - {key: object.mass_kg, min: 0.4, max: 0.1}\n");
-  const std::string range_message = graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
-  EXPECT_NE(range_message.find("bases[0].vary[0].max = 0.1: must be >= min"), std::string::npos) << range_message;
+  const std::string range_message =
+      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
+  EXPECT_NE(range_message.find("bases[0].vary[0].max = 0.1: must be >= min"), std::string::npos)
+      << range_message;
 }
 
 // A small set through the real CLI: two bases with a slip event each (a pull ramp and an added mass
 // step), one seeded variation of each, both controllers.
 TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMoreSlip) {
   TempDir dir;
-  dir.Write("set/set.yaml", "name: small\nversion: 1\nseed: 3\nbases:\n"
-                            "  - {scenario: " + kScenarios + "/pull_ramp.yaml, variations: 1,\n"
-                            "     vary: [{key: object.mass_kg, min: 0.08, max: 0.15}]}\n"
-                            "  - {scenario: " + kScenarios + "/added_mass_step.yaml, variations: 1,\n"
-                            "     vary: [{key: \"script[2].mass_kg\", min: 0.2, max: 0.4}]}\n");
+  dir.Write("set/set.yaml",
+            "name: small\nversion: 1\nseed: 3\nbases:\n"
+            "  - {scenario: " +
+                kScenarios +
+                "/pull_ramp.yaml, variations: 1,\n"
+                "     vary: [{key: object.mass_kg, min: 0.08, max: 0.15}]}\n"
+                "  - {scenario: " +
+                kScenarios +
+                "/added_mass_step.yaml, variations: 1,\n"
+                "     vary: [{key: \"script[2].mass_kg\", min: 0.2, max: 0.4}]}\n");
   const std::string out = dir.Path("out");
   const CliResult result = RunCli("score --set-dir " + dir.Path("set") + " -j 2 --out " + out);
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
@@ -174,7 +187,8 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   std::string line;
   bool header = false;
   while (std::getline(lines, line)) {
-    if (line.find("grip_slip") != std::string::npos && line.find("open_loop") != std::string::npos) header = true;
+    if (line.find("grip_slip") != std::string::npos && line.find("open_loop") != std::string::npos)
+      header = true;
   }
   EXPECT_TRUE(header) << result.out;
   for (const char* label : {"slip events detected", "detection latency p50", "detection latency p95",
@@ -186,9 +200,9 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   EXPECT_EQ(ReadText(out + "/scorecard.png").substr(1, 3), "PNG");
   const std::string csv = ReadText(out + "/scorecard.csv");
   const std::string csv_header = csv.substr(0, csv.find('\n'));
-  for (const char* column : {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms",
-                             "false_flags_per_min", "drops", "crushes", "grip_ratio_median", "grip_ratio_p95",
-                             "fn_rmse_n", "passed", "runs"}) {
+  for (const char* column :
+       {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms", "false_flags_per_min", "drops",
+        "crushes", "grip_ratio_median", "grip_ratio_p95", "fn_rmse_n", "passed", "runs"}) {
     EXPECT_NE(csv_header.find(column), std::string::npos) << column;
   }
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
@@ -216,9 +230,10 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
 
 TEST(ScorecardCliTest, LimitTakesTheFirstRunsOfTheShippedSetForOneController) {
   TempDir dir;
-  const CliResult result =
-      RunCli("score --set-dir " + std::string(GRASPBED_SOURCE_DIR) + "/scenarios/scorecard --limit 2 "
-             "--controller open_loop --out " + dir.Path("out"));
+  const CliResult result = RunCli("score --set-dir " + std::string(GRASPBED_SOURCE_DIR) +
+                                  "/scenarios/scorecard --limit 2 "
+                                  "--controller open_loop --out " +
+                                  dir.Path("out"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
   EXPECT_NE(result.out.find("2 runs per controller"), std::string::npos) << result.out;
   const nlohmann::json json = nlohmann::json::parse(ReadText(dir.Path("out") + "/scorecard.json"));

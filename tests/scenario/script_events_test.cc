@@ -27,10 +27,10 @@
 namespace graspbed::scenario {
 namespace {
 
+using graspbed::testing::TempDir;
 using testing::RunScenarioText;
 using testing::ScenarioRun;
 using testing::Signals;
-using graspbed::testing::TempDir;
 
 constexpr double kControlTickS = 0.001;   // default controller.rate_hz
 constexpr double kPhysicsStepS = 0.0005;  // default physics.timestep_s
@@ -58,7 +58,8 @@ double FirstGraspedTime(const Signals& s, double from_s) {
     const bool in_grasp = s.At("stale", r) == 0.0 && s.At("contact_units", r) >= 1.0 &&
                           s.At("est_total_fn_n", r) >= kGraspForceN;
     since = in_grasp ? (since < 0.0 ? t : since) : -1.0;
-    if (t >= from_s - 1e-9 && s.Text("intent")[r] == "close" && since >= 0.0 && t - since >= kEventConfirmS - 1e-9) {
+    if (t >= from_s - 1e-9 && s.Text("intent")[r] == "close" && since >= 0.0 &&
+        t - since >= kEventConfirmS - 1e-9) {
       return t;
     }
   }
@@ -110,21 +111,26 @@ TEST(ScriptEventSchemaTest, BadEventActionsAreRefusedAtLoadWithFileLineAndKey) {
     const char* message;
   } cases[] = {
       {"{after: grabbed, timeout_s: 1, action: open}",
-       "test.yaml:3: script[0].after = grabbed: unknown name; valid names: grasped, stable, slip_flagged, released"},
+       "test.yaml:3: script[0].after = grabbed: unknown name; valid names: grasped, stable, slip_flagged, "
+       "released"},
       {"{after: grasped, delay_s: -0.1, timeout_s: 1, action: open}",
        "test.yaml:3: script[0].delay_s = -0.1: must be >= 0"},
       {"{after: grasped, action: open}",
-       "test.yaml:3: script[0].timeout_s = null: missing required key: an action after an event needs timeout_s > 0"},
+       "test.yaml:3: script[0].timeout_s = null: missing required key: an action after an event needs "
+       "timeout_s > 0"},
       {"{after: grasped, timeout_s: 0, action: open}", "test.yaml:3: script[0].timeout_s = 0: must be > 0"},
       {"{after: grasped, timeout_s: -2, action: open}", "test.yaml:3: script[0].timeout_s = -2: must be > 0"},
       {"{at_s: 0.5, after: grasped, timeout_s: 1, action: open}",
-       "test.yaml:3: script[0].after = grasped: give either at_s (a fixed time) or after (an event), not both"},
+       "test.yaml:3: script[0].after = grasped: give either at_s (a fixed time) or after (an event), not "
+       "both"},
       {"{at_s: 0.5, delay_s: 0.1, action: open}",
        "test.yaml:3: script[0].delay_s = 0.1: only with after: <event>; a fixed-time action fires at at_s"},
       {"{at_s: 0.5, timeout_s: 1, action: open}",
        "test.yaml:3: script[0].timeout_s = 1: only with after: <event>"},
-      {"{action: open}", "test.yaml:3: script[0].at_s = null: missing required key: give at_s [s] or after: <event>"},
-      {"{after: grasped, delay_s: 5, timeout_s: 1, action: open}", "test.yaml:3: script[0].delay_s = 5: must be <= 2"},
+      {"{action: open}",
+       "test.yaml:3: script[0].at_s = null: missing required key: give at_s [s] or after: <event>"},
+      {"{after: grasped, delay_s: 5, timeout_s: 1, action: open}",
+       "test.yaml:3: script[0].delay_s = 5: must be <= 2"},
   };
   for (const auto& c : cases) {
     const std::string error = LoadError(std::string("duration_s: 2\nscript:\n  - ") + c.action + "\n");
@@ -155,9 +161,12 @@ TEST(ScriptEventRunTest, LiftAfterGraspedHoldsOnASlowedMotorWhereTheSameLiftAtAF
   const std::string lift = "action: lift, height_m: 0.05, duration_s: 0.3}\n";
   const std::string fixed_lift = "  - {at_s: 0.45, " + lift;
   const std::string gated_lift = "  - {after: grasped, delay_s: 0.1, timeout_s: 1.0, " + lift;
-  const ScenarioRun normal_fixed = RunScenarioText(dir, "normal_fixed", WidePreShapeScenario(kNormalSpeedRadS, fixed_lift));
-  const ScenarioRun slowed_fixed = RunScenarioText(dir, "slowed_fixed", WidePreShapeScenario(kSlowedSpeedRadS, fixed_lift));
-  const ScenarioRun slowed_gated = RunScenarioText(dir, "slowed_gated", WidePreShapeScenario(kSlowedSpeedRadS, gated_lift));
+  const ScenarioRun normal_fixed =
+      RunScenarioText(dir, "normal_fixed", WidePreShapeScenario(kNormalSpeedRadS, fixed_lift));
+  const ScenarioRun slowed_fixed =
+      RunScenarioText(dir, "slowed_fixed", WidePreShapeScenario(kSlowedSpeedRadS, fixed_lift));
+  const ScenarioRun slowed_gated =
+      RunScenarioText(dir, "slowed_gated", WidePreShapeScenario(kSlowedSpeedRadS, gated_lift));
 
   // The fixed time suits the hand's own motor: grasped before it, the box goes up.
   const double normal_grasp_s = FirstGraspedTime(normal_fixed.signals, 0.0);
@@ -263,7 +272,9 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
   const TempDir dir("script_events_test");
   // The open-loop controller never flags slip: the lift waits 0.3 s and is given up, the action
   // chained behind it never runs, the fixed open later in the file still fires.
-  const ScenarioRun run = RunScenarioText(dir, "timeout", testing::HeldBoxScenario(0.8, R"(  - {after: slip_flagged, timeout_s: 0.3, action: lift, height_m: 0.02}
+  const ScenarioRun run = RunScenarioText(
+      dir, "timeout",
+      testing::HeldBoxScenario(0.8, R"(  - {after: slip_flagged, timeout_s: 0.3, action: lift, height_m: 0.02}
   - {after: grasped, timeout_s: 0.3, action: add_mass, mass_kg: 0.05}
   - {at_s: 0.6, action: open}
 )"));
@@ -273,7 +284,8 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
   ASSERT_NE(lift, nullptr) << SummaryTable(run.result);
   EXPECT_FALSE(lift->passed);
   EXPECT_EQ(lift->limit, "slip_flagged within 0.300 s");
-  EXPECT_NE(lift->note.find("timed out: no slip_flagged within 0.300 s of arming at 0.150 s; the action did not run"),
+  EXPECT_NE(lift->note.find(
+                "timed out: no slip_flagged within 0.300 s of arming at 0.150 s; the action did not run"),
             std::string::npos)
       << lift->note;
   const ExpectationOutcome* chained = FindOutcome(run.result, "script: add_mass after grasped");
@@ -294,14 +306,16 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
 TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
   // The runner's loop without its logging: a script with fixed and event actions of every kind of
   // wait, on a rig built as RunScenario builds it.
-  const ScenarioConfig config = LoadScenarioFromString(testing::HeldBoxScenario(0.8, R"(  - {after: grasped, timeout_s: 0.5, action: add_mass, mass_kg: 0.01, ramp_s: 0.1}
+  const ScenarioConfig config = LoadScenarioFromString(
+      testing::HeldBoxScenario(
+          0.8, R"(  - {after: grasped, timeout_s: 0.5, action: add_mass, mass_kg: 0.01, ramp_s: 0.1}
   - {after: stable, delay_s: 0.05, timeout_s: 0.5, action: shake, frequency_hz: 5, amplitude_m: 0.001, duration_s: 0.1}
   - {after: slip_flagged, timeout_s: 0.1, action: pull, force_n: [0, 0, -1]}
   - {at_s: 0.6, action: open}
   - {after: released, timeout_s: 0.15, action: idle}
   - {at_s: 0.5, action: drop_frames, duration_s: 0.05, probability: 0.5}
 )"),
-                                                       "alloc.yaml");
+      "alloc.yaml");
   const sensor::Layout layout = sensor::LoadLayout(ResolveLayoutPath(config));
   sim::SimRigConfig rig_config;
   rig_config.scene = config.scene;
@@ -313,7 +327,8 @@ TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
   const long before = graspbed::testing::AllocationCount();
   while (rig.time_s() < config.duration_s - 1e-9) {
     player.Update(rig.time_s(), rig);
-    if (rig.Step()) player.Observe(rig.time_s(), rig.loop().state(), rig.controller().telemetry().slip_detected);
+    if (rig.Step())
+      player.Observe(rig.time_s(), rig.loop().state(), rig.controller().telemetry().slip_detected);
   }
   EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
   // The waits were exercised: grasped, stable and released fired, slip_flagged timed out.

@@ -26,7 +26,8 @@ constexpr double kPaperKt = 4.1e-4;
 constexpr double kLinearTol = 1e-9;
 
 std::string ErrorOf(const std::string& text) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>([&] { LoadScenarioFromString(text, "test.yaml"); });
+  return graspbed::testing::ErrorOf<std::invalid_argument>(
+      [&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 
 /// The shipped FEA config with `from` replaced by `to`; "" when `from` is not in it.
@@ -46,7 +47,8 @@ TEST(SensitivitiesTest, PaperIsTheDefault) {
 
 TEST(SensitivitiesTest, FeaTakesKnAndKtFromTheAnalysisOfTheShippedUnit) {
   const ScenarioConfig config = LoadScenarioFromString("sensor: {sensitivities: fea}\n", "t.yaml");
-  const fea::Sensitivities analysed = fea::ComputeSensitivities(fea::LoadFeaConfig(fea::DefaultFeaConfigPath()));
+  const fea::Sensitivities analysed =
+      fea::ComputeSensitivities(fea::LoadFeaConfig(fea::DefaultFeaConfigPath()));
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.nominal.kn_per_n, analysed.kn_per_n);
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.nominal.kt_per_n, analysed.kt_per_n);
   EXPECT_NE(analysed.kn_per_n, kPaperKn);
@@ -67,12 +69,13 @@ TEST(SensitivitiesTest, AStifferSteelInTheFeaConfigHalvesTheSensitivities) {
 
   const ScenarioConfig stiff = LoadScenario((dir / "scenario.yaml").string());
   const ScenarioConfig shipped_unit = LoadScenarioFromString("sensor: {sensitivities: fea}\n", "t.yaml");
-  EXPECT_NEAR(stiff.sensor.strain_model.nominal.kn_per_n / shipped_unit.sensor.strain_model.nominal.kn_per_n, 0.5,
-              kLinearTol);
-  EXPECT_NEAR(stiff.sensor.strain_model.nominal.kt_per_n / shipped_unit.sensor.strain_model.nominal.kt_per_n, 0.5,
-              kLinearTol);
+  EXPECT_NEAR(stiff.sensor.strain_model.nominal.kn_per_n / shipped_unit.sensor.strain_model.nominal.kn_per_n,
+              0.5, kLinearTol);
+  EXPECT_NEAR(stiff.sensor.strain_model.nominal.kt_per_n / shipped_unit.sensor.strain_model.nominal.kt_per_n,
+              0.5, kLinearTol);
   // The resolved configuration names the file absolutely and loads back to the same constants.
-  const ScenarioConfig again = LoadScenarioFromString(EmitScenarioYaml(stiff), (dir / "resolved.yaml").string());
+  const ScenarioConfig again =
+      LoadScenarioFromString(EmitScenarioYaml(stiff), (dir / "resolved.yaml").string());
   EXPECT_EQ(again.sensor.fea_config, (dir / "stiff.yaml").lexically_normal().string());
   EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kn_per_n, stiff.sensor.strain_model.nominal.kn_per_n);
 }
@@ -98,8 +101,8 @@ TEST(SensitivitiesTest, AUnitWhoseGaugeDoesNotSenseShearIsRefusedAtTheSensitivit
   const std::string text = ShippedFeaConfigWith("beam_thickness_mm: 0.2", "beam_thickness_mm: 0.3");
   ASSERT_FALSE(text.empty());
   std::ofstream(dir / "thick.yaml") << text;
-  const std::string error = ErrorOf("duration_s: 1\nsensor:\n  sensitivities: fea\n  fea_config: " +
-                                    (dir / "thick.yaml").string() + "\n");
+  const std::string error = ErrorOf(
+      "duration_s: 1\nsensor:\n  sensitivities: fea\n  fea_config: " + (dir / "thick.yaml").string() + "\n");
   EXPECT_NE(error.find("test.yaml:3"), std::string::npos) << error;
   EXPECT_NE(error.find("sensor.sensitivities"), std::string::npos) << error;
   EXPECT_NE(error.find("kt_per_n"), std::string::npos) << error;

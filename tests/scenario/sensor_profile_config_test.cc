@@ -13,7 +13,8 @@ namespace graspbed::scenario {
 namespace {
 
 std::string ErrorOf(const std::string& text) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>([&] { LoadScenarioFromString(text, "test.yaml"); });
+  return graspbed::testing::ErrorOf<std::invalid_argument>(
+      [&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 
 TEST(SensorProfileConfigTest, IdealIsTheDefaultAndChangesNothing) {
@@ -31,7 +32,8 @@ TEST(SensorProfileConfigTest, AProfileSetsTheStrainModelAndTheReadoutWindow) {
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.noise_ohm, expected.noise_ohm);
   EXPECT_EQ(config.sensor.strain_model.adc_bits, 16);
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.r0_spread_fraction, expected.r0_spread_fraction);
-  EXPECT_DOUBLE_EQ(config.sensor.strain_model.temperature_coefficient_per_k, expected.temperature_coefficient_per_k);
+  EXPECT_DOUBLE_EQ(config.sensor.strain_model.temperature_coefficient_per_k,
+                   expected.temperature_coefficient_per_k);
   EXPECT_DOUBLE_EQ(config.sensor.readout.adc_full_scale_ohm, expected.adc_full_scale_ohm);
   EXPECT_DOUBLE_EQ(config.sensor.readout.adc_min_ohm, expected.adc_min_ohm);
   EXPECT_EQ(config.sensor.readout.baseline_frames, sensor::ReadoutConfig{}.baseline_frames);
@@ -39,7 +41,8 @@ TEST(SensorProfileConfigTest, AProfileSetsTheStrainModelAndTheReadoutWindow) {
 
 TEST(SensorProfileConfigTest, TheProfileIsResolvedAgainstTheFeaSensitivities) {
   const ScenarioConfig paper = LoadScenarioFromString("sensor: {profile: inamp_16bit}\n", "t.yaml");
-  const ScenarioConfig fea = LoadScenarioFromString("sensor: {profile: inamp_16bit, sensitivities: fea}\n", "t.yaml");
+  const ScenarioConfig fea =
+      LoadScenarioFromString("sensor: {profile: inamp_16bit, sensitivities: fea}\n", "t.yaml");
   // A board designed for the FEA's 16-65x smaller signal has more gain: a narrower window.
   EXPECT_LT(fea.sensor.strain_model.adc_full_scale_ohm - fea.sensor.strain_model.adc_min_ohm,
             0.2 * (paper.sensor.strain_model.adc_full_scale_ohm - paper.sensor.strain_model.adc_min_ohm));
@@ -53,7 +56,7 @@ TEST(SensorProfileConfigTest, ExplicitKeysOverrideTheProfile) {
       "t.yaml");
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.noise_ohm, 0.5);
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.cross_talk_shear_fraction, 0.0);
-  EXPECT_EQ(config.sensor.strain_model.adc_bits, 12);           // still the profile's
+  EXPECT_EQ(config.sensor.strain_model.adc_bits, 12);  // still the profile's
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.sensitivity_spread_fraction, 0.05);
   EXPECT_EQ(config.sensor.readout.baseline_frames, 50);
   EXPECT_DOUBLE_EQ(config.sensor.readout.adc_full_scale_ohm, config.sensor.strain_model.adc_full_scale_ohm);

@@ -57,7 +57,8 @@ TEST(StateLogTest, ReplayedStatePutsTheObjectWhereTheSignalsSay) {
 
   const CsvTable signals = ReadCsvTable(run.out_dir + "/signals.csv");
   const size_t c_time = signals.Column("time_s");
-  const size_t c_object[3] = {signals.Column("object_x_m"), signals.Column("object_y_m"), signals.Column("object_z_m")};
+  const size_t c_object[3] = {signals.Column("object_x_m"), signals.Column("object_y_m"),
+                              signals.Column("object_z_m")};
   const int object = mj_name2id(m, mjOBJ_BODY, "object");
   ASSERT_GE(object, 0);
   int compared = 0;
@@ -74,8 +75,9 @@ TEST(StateLogTest, ReplayedStatePutsTheObjectWhereTheSignalsSay) {
     // integrated (the start of the tick's last physics step); the log holds the integrated state, one
     // step of travel on.
     const double* velocity = d->qvel + m->jnt_dofadr[m->body_jntadr[object]];
-    const double step_travel_m = std::sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] +
-                                           velocity[2] * velocity[2]) * m->opt.timestep;
+    const double step_travel_m =
+        std::sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2]) *
+        m->opt.timestep;
     for (int k = 0; k < 3; ++k) {
       EXPECT_NEAR(d->xipos[3 * object + k], signals.Number(s, c_object[k]), step_travel_m + kPositionTolM)
           << "t = " << t << ", axis " << k;
@@ -92,15 +94,18 @@ TEST(StateLogTest, RefusesAnotherModelsLogAndMalformedRows) {
     return dir.Path(name);
   };
   const std::string other = write("other.csv", "time_s,qpos_0,qvel_0\n0.001,1,2\n");
-  EXPECT_EQ(MessageOf([&] { LoadStateLog(other, 2, 1, 0); }),
-            other + ":1: column 3 is 'qvel_0', expected 'qpos_1': not a state log of this model (nq 2, nv 1, nu 0)");
+  EXPECT_EQ(
+      MessageOf([&] { LoadStateLog(other, 2, 1, 0); }),
+      other +
+          ":1: column 3 is 'qvel_0', expected 'qpos_1': not a state log of this model (nq 2, nv 1, nu 0)");
   const std::string text = write("text.csv", "time_s,qpos_0,ctrl_0\n0.001,1,2\n0.006,x,2\n");
   EXPECT_EQ(MessageOf([&] { LoadStateLog(text, 1, 0, 1); }), text + ":3: column 2: not a number");
   const std::string backwards = write("back.csv", "time_s,qpos_0\n0.006,1\n0.001,1\n");
   EXPECT_EQ(MessageOf([&] { LoadStateLog(backwards, 1, 0, 0); }),
             backwards + ":3: time_s 0.001000 does not follow 0.006000");
-  EXPECT_NE(MessageOf([&] { LoadStateLog(dir.Path("missing.csv"), 1, 0, 0); }).find("missing.csv: cannot read"),
-            std::string::npos);
+  EXPECT_NE(
+      MessageOf([&] { LoadStateLog(dir.Path("missing.csv"), 1, 0, 0); }).find("missing.csv: cannot read"),
+      std::string::npos);
   const std::string ragged = write("ragged.csv", "time_s,phase\n0.001\n");
   EXPECT_EQ(MessageOf([&] { ReadCsvTable(ragged); }), ragged + ":2: 1 cells, the header has 2");
 }

@@ -18,16 +18,16 @@
 namespace graspbed::scenario {
 namespace {
 
+using graspbed::testing::TempDir;
 using testing::HeldBoxScenario;
 using testing::kHeldInAirS;
 using testing::Signals;
-using graspbed::testing::TempDir;
 
 constexpr int kTaxelWidthPx = 1000;  // plot::Heatmap defaults, used by the runner
 constexpr int kTaxelHeightPx = 600;
-constexpr int kUnits = 20;           // default_20 layout
-constexpr double kLoadedN = 1.0;     // clearly loaded
-constexpr int kWhiteTol = 8;         // an unloaded cell is white within this, per channel [0..255]
+constexpr int kUnits = 20;        // default_20 layout
+constexpr double kLoadedN = 1.0;  // clearly loaded
+constexpr int kWhiteTol = 8;      // an unloaded cell is white within this, per channel [0..255]
 
 class Png {
  public:
@@ -42,8 +42,8 @@ class Png {
   std::array<int, 3> At(double x, double y) const {
     const unsigned char* data = cairo_image_surface_get_data(surface_);
     const int stride = cairo_image_surface_get_stride(surface_);
-    const uint32_t pixel = *reinterpret_cast<const uint32_t*>(data + static_cast<int>(y) * stride +
-                                                               4 * static_cast<int>(x));
+    const uint32_t pixel =
+        *reinterpret_cast<const uint32_t*>(data + static_cast<int>(y) * stride + 4 * static_cast<int>(x));
     return {static_cast<int>((pixel >> 16) & 0xff), static_cast<int>((pixel >> 8) & 0xff),
             static_cast<int>(pixel & 0xff)};
   }
@@ -103,7 +103,8 @@ TEST(TaxelPlotsTest, RunWritesFnAndFtMapsWhereALoadedUnitsRowDiffersFromAnUnload
     const Png png(options.out_dir + "/taxels_ft.png");
     const auto [x_px, y_px] = plot::HeatmapCellCenterPx(geometry, loaded, kHeldInAirS);
     const std::array<int, 3> rgb = png.At(x_px, y_px);
-    EXPECT_EQ(ft > 0.0, rgb[0] > rgb[2]) << "Ft " << ft << " drawn as " << rgb[0] << "," << rgb[1] << "," << rgb[2];
+    EXPECT_EQ(ft > 0.0, rgb[0] > rgb[2])
+        << "Ft " << ft << " drawn as " << rgb[0] << "," << rgb[1] << "," << rgb[2];
   }
 }
 

@@ -17,8 +17,8 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::ErrorOf;
+using ::testing::HasSubstr;
 using testing::TempDir;
 
 TEST(CalibrationTest, SaveLoadRoundTripLeavesNoTemporaryFile) {
@@ -54,12 +54,14 @@ TEST(CalibrationTest, BadFilesNameFileLineAndKey) {
   const std::string file = dir.Path("c.yaml");
   const std::string unit = "  - {gauge_factor: 100, kn_per_n: 5.5e-4, kt_per_n: 4.1e-4}\n";
   EXPECT_NO_THROW(error("units:\n" + unit + unit));
-  EXPECT_EQ(error("units:\n" + unit + unit, 20), file + ":2: units = [...]: file has 2 units, the layout has 20");
+  EXPECT_EQ(error("units:\n" + unit + unit, 20),
+            file + ":2: units = [...]: file has 2 units, the layout has 20");
   EXPECT_EQ(error("units:\n" + unit + "  - {gauge_factor: 100, kt_per_n: 4.1e-4}\n"),
             file + ":3: units[1].kn_per_n = null: missing required key");
   EXPECT_EQ(error("units:\n" + unit + "  - {gauge_factor: 100, kn_per_n: -5.5e-4, kt_per_n: 4.1e-4}\n"),
             file + ":3: units[1].kn_per_n = -5.5e-4: must be > 0");
-  EXPECT_THAT(error("units:\n" + unit + "  - {gauge_factor: 100, kn_per_n: 5.5e-4, kt_per_n: 4.1e-4, kt_ofset_n: 1}\n"),
+  EXPECT_THAT(error("units:\n" + unit +
+                    "  - {gauge_factor: 100, kn_per_n: 5.5e-4, kt_per_n: 4.1e-4, kt_ofset_n: 1}\n"),
               HasSubstr(file + ":3: units[1].kt_ofset_n: unknown key"));
   EXPECT_THAT(error("units:\n  - {gauge_factor: 100\n"), HasSubstr(file + ":"));
   EXPECT_THAT(error("unit:\n" + unit), HasSubstr("units = null: missing required list"));
@@ -88,7 +90,8 @@ TEST(CalibrationTest, FitRecoversKnownSensitivitiesAndOffsetsFromNoisyData) {
     for (auto& load : loads) load = {fn_dist(rng), ft_dist(rng), 0, 0};
     model.Sample(loads, i * 1e-3, &frame);
     readout.Process(frame, &out);
-    for (int u = 0; u < 20; ++u) samples.push_back({u, loads[u].fn_n, loads[u].ft_n, out.dr1_rel[u], out.dr2_rel[u], 0});
+    for (int u = 0; u < 20; ++u)
+      samples.push_back({u, loads[u].fn_n, loads[u].ft_n, out.dr1_rel[u], out.dr2_rel[u], 0});
   }
   const CalibrationFit fit = FitCalibration(samples, 20);
   constexpr double kSensitivityRelTol = 2e-3;
@@ -98,12 +101,13 @@ TEST(CalibrationTest, FitRecoversKnownSensitivitiesAndOffsetsFromNoisyData) {
     EXPECT_NEAR(c.kn_per_n / model.kn_per_n()[u], 1.0, kSensitivityRelTol) << "unit " << u;
     EXPECT_NEAR(c.kt_per_n / model.kt_per_n()[u], 1.0, kSensitivityRelTol) << "unit " << u;
     // Bias b on both channels: dR/R = b / R0 each, so s = b / R0 -> offset = s / (G kn).
-    const double expected_fn_offset = 0.5 * (20.0 / model.r0_ohm_r1()[u] + 20.0 / model.r0_ohm_r2()[u]) /
-                                      (100 * model.kn_per_n()[u]);
+    const double expected_fn_offset =
+        0.5 * (20.0 / model.r0_ohm_r1()[u] + 20.0 / model.r0_ohm_r2()[u]) / (100 * model.kn_per_n()[u]);
     EXPECT_NEAR(c.fn_offset_n, expected_fn_offset, kOffsetTolN);
-    EXPECT_NEAR(c.ft_offset_n, 0.5 * (20.0 / model.r0_ohm_r1()[u] - 20.0 / model.r0_ohm_r2()[u]) /
-                                   (100 * model.kt_per_n()[u]),
-                kOffsetTolN);
+    EXPECT_NEAR(
+        c.ft_offset_n,
+        0.5 * (20.0 / model.r0_ohm_r1()[u] - 20.0 / model.r0_ohm_r2()[u]) / (100 * model.kt_per_n()[u]),
+        kOffsetTolN);
     EXPECT_LT(fit.reports[u].rms_fn_residual_n, 0.05);
     EXPECT_LT(std::abs(fit.reports[u].fn_from_ft_coupling), 0.01);
   }
@@ -140,15 +144,17 @@ TEST(CalibrationTest, FitReportsCrossCoupling) {
   EXPECT_NEAR(fit.reports[0].fn_from_ft_coupling, 0.02, 1e-9);
   EXPECT_NEAR(fit.reports[0].ft_from_fn_coupling, 0.0, 1e-9);
   // Fn never varied independently of Ft: the fit refuses.
-  std::vector<CalibrationSample> degenerate = {{0, 1, 1, 0.1, 0.0, 0}, {0, 2, 2, 0.2, 0.0, 0}, {0, 3, 3, 0.3, 0.0, 0}};
-  EXPECT_THAT(ErrorOf([&] { FitCalibration(degenerate, 1); }), HasSubstr("unit 0 has 3 samples without independent"));
+  std::vector<CalibrationSample> degenerate = {
+      {0, 1, 1, 0.1, 0.0, 0}, {0, 2, 2, 0.2, 0.0, 0}, {0, 3, 3, 0.3, 0.0, 0}};
+  EXPECT_THAT(ErrorOf([&] { FitCalibration(degenerate, 1); }),
+              HasSubstr("unit 0 has 3 samples without independent"));
   EXPECT_THAT(ErrorOf([&] { FitCalibration(samples, 2); }), HasSubstr("unit 1 has 0 samples"));
 }
 
 TEST(CalibrationLogTest, ReadsRelativeAndOhmColumns) {
   TempDir dir;
-  const std::string relative = dir.Write("rel.csv",
-                                         "# bench log\nunit,fn_n,ft_n,dr1_rel,dr2_rel\n0,0,0,0,0\n0,10,10,0.96,0.14\n");
+  const std::string relative =
+      dir.Write("rel.csv", "# bench log\nunit,fn_n,ft_n,dr1_rel,dr2_rel\n0,0,0,0,0\n0,10,10,0.96,0.14\n");
   const std::vector<CalibrationSample> a = LoadCalibrationLog(relative, 1);
   ASSERT_EQ(a.size(), 2u);
   EXPECT_EQ(a[1].line, 4);
@@ -170,16 +176,20 @@ TEST(CalibrationLogTest, BadLogsNameFileLineAndColumn) {
     return ErrorOf([&] { LoadCalibrationLog(path, 2); });
   };
   const std::string file = dir.Path("log.csv");
-  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n0,1,x,0.1,0.1\n"), file + ":2: ft_n = x: expected a number");
+  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n0,1,x,0.1,0.1\n"),
+            file + ":2: ft_n = x: expected a number");
   EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n0,1,1,0.1\n"), file + ":2: expected 5 columns, got 4");
-  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n2,1,1,0.1,0.1\n"), file + ":2: unit = 2: must be a unit index 0..1");
-  EXPECT_THAT(error("unit,fn_n,ft_n,dr1_rel,dr2_rl\n"), HasSubstr(file + ":1: header column 'dr2_rl': unknown column"));
+  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n2,1,1,0.1,0.1\n"),
+            file + ":2: unit = 2: must be a unit index 0..1");
+  EXPECT_THAT(error("unit,fn_n,ft_n,dr1_rel,dr2_rl\n"),
+              HasSubstr(file + ":1: header column 'dr2_rl': unknown column"));
   EXPECT_THAT(error("unit,fn_n,dr1_rel,dr2_rel\n"), HasSubstr(file + ":1: header: missing column 'ft_n'"));
   EXPECT_EQ(error("unit,fn_n,ft_n,r1_ohm,r2_ohm\n0,0,0,3400,3400\n1,5,0,-3,3400\n"),
             file + ":3: r1_ohm = -3: must be > 0");
   EXPECT_EQ(error("unit,fn_n,ft_n,r1_ohm,r2_ohm\n0,0,0,3400,3400\n1,5,0,3500,3400\n"),
             file + ":3: unit = 1: no zero-load row (fn_n = ft_n = 0) to refer r1_ohm, r2_ohm to");
-  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n0,nan,1,0.1,0.1\n"), file + ":2: fn_n = nan: must be finite");
+  EXPECT_EQ(error("unit,fn_n,ft_n,dr1_rel,dr2_rel\n0,nan,1,0.1,0.1\n"),
+            file + ":2: fn_n = nan: must be finite");
   EXPECT_THAT(ErrorOf([] { LoadCalibrationLog("/nonexistent/log.csv", 2); }), HasSubstr("cannot open file"));
 }
 

@@ -14,9 +14,9 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::CliBinary;
 using testing::CliResult;
+using ::testing::HasSubstr;
 using testing::RunCli;
 using testing::SourcePath;
 using testing::TempDir;
@@ -66,7 +66,8 @@ TEST_F(SensorCliTest, ForwardTakesShearEitherWay) {
   EXPECT_NEAR(parsed.at("r2").get<double>(), r2(3.7, -2.2), 1e-9);  // 4398.6 Ohm
   EXPECT_LT(parsed.at("r1").get<double>(), parsed.at("r2").get<double>());
   // Reversing the shear swaps R1 and R2.
-  const nlohmann::json mirrored = nlohmann::json::parse(RunCli("sensor forward --fn 3.7 --ft 2.2 --json").out);
+  const nlohmann::json mirrored =
+      nlohmann::json::parse(RunCli("sensor forward --fn 3.7 --ft 2.2 --json").out);
   EXPECT_NEAR(mirrored.at("r1").get<double>(), parsed.at("r2").get<double>(), 1e-9);
   EXPECT_NEAR(mirrored.at("r2").get<double>(), parsed.at("r1").get<double>(), 1e-9);
   // And the inversion gives the force back, sign included.
@@ -111,8 +112,9 @@ TEST_F(SensorCliTest, BadInputExitsTwoWithAMessage) {
       {"sensor forward --fn abc", "--fn = abc: expected a number"},
       {"sensor forward --fn -1", "--fn = -1: must be >= 0"},
       {"sensor forward --fn=-0.5 --ft 2", "--fn = -0.5: must be >= 0"},
-      {"sensor forward --ft=-30", "--ft = -30: the gauge model gives R1 = -782 Ohm, R2 = 7582 Ohm (<= 0: far beyond "
-                                  "the rated 10 N)"},
+      {"sensor forward --ft=-30",
+       "--ft = -30: the gauge model gives R1 = -782 Ohm, R2 = 7582 Ohm (<= 0: far beyond "
+       "the rated 10 N)"},
       {"sensor forward --fn nan", "--fn = nan: must be a finite number"},
       {"sensor forward --fn inf", "--fn = inf: must be a finite number"},
       {"sensor forward --fn 1e999", "--fn = 1e999: must be a finite number"},
@@ -134,7 +136,8 @@ TEST_F(SensorCliTest, BadInputExitsTwoWithAMessage) {
 }
 
 TEST_F(SensorCliTest, HelpOnEachSubcommand) {
-  for (const char* command : {"sensor", "sensor forward", "sensor invert", "sensor layout", "sensor calibrate"}) {
+  for (const char* command :
+       {"sensor", "sensor forward", "sensor invert", "sensor layout", "sensor calibrate"}) {
     const CliResult result = RunCli(std::string(command) + " --help");
     EXPECT_EQ(result.exit_code, 0) << command;
     EXPECT_THAT(result.out, HasSubstr("Usage")) << command;
@@ -147,7 +150,8 @@ TEST_F(SensorCliTest, LayoutPrintsPoses) {
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_THAT(text.out, HasSubstr("layout default_20"));
   EXPECT_THAT(text.out, HasSubstr("20 units"));
-  const CliResult json = RunCli("sensor layout --json --layout " + SourcePath("sensor/layouts/paper_3x3.yaml"));
+  const CliResult json =
+      RunCli("sensor layout --json --layout " + SourcePath("sensor/layouts/paper_3x3.yaml"));
   ASSERT_EQ(json.exit_code, 0) << json.err;
   const nlohmann::json parsed = nlohmann::json::parse(json.out);
   ASSERT_EQ(parsed.at("units").size(), 9u);
@@ -172,8 +176,8 @@ TEST_F(SensorCliTest, CalibrateFitsALogAndWritesAFile) {
     }
   }
   const std::string log_path = dir.Write("log.csv", log);
-  const std::string layout_path =
-      dir.Write("one.yaml", "name: one\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n");
+  const std::string layout_path = dir.Write(
+      "one.yaml", "name: one\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n");
   const std::string out_path = dir.Path("cal.yaml");
   const CliResult result =
       RunCli("sensor calibrate --json --log " + log_path + " --out " + out_path + " --layout " + layout_path);
@@ -184,8 +188,8 @@ TEST_F(SensorCliTest, CalibrateFitsALogAndWritesAFile) {
   std::FILE* written = std::fopen(out_path.c_str(), "r");
   ASSERT_NE(written, nullptr);
   std::fclose(written);
-  const CliResult missing =
-      RunCli("sensor calibrate --log " + dir.Path("none.csv") + " --out " + out_path + " --layout " + layout_path);
+  const CliResult missing = RunCli("sensor calibrate --log " + dir.Path("none.csv") + " --out " + out_path +
+                                   " --layout " + layout_path);
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_THAT(missing.err, HasSubstr("none.csv: cannot open file"));
 }

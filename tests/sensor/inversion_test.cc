@@ -13,8 +13,8 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::ErrorOf;
+using ::testing::HasSubstr;
 using testing::SourcePath;
 using testing::TempDir;
 

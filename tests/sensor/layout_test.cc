@@ -13,8 +13,8 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::ErrorOf;
+using ::testing::HasSubstr;
 using testing::SourcePath;
 using testing::TempDir;
 
@@ -73,20 +73,24 @@ TEST(LayoutTest, ArcPitchIsFiveMillimetresByArcLength) {
     for (int column = 0; column < 4; ++column) {
       const UnitPose& pose = layout.units[row * 4 + column];
       const double t = AngleOf(layout.holder, pose.position_m);
-      EXPECT_NEAR(std::copysign(PolylineArcM(layout.holder, 0.0, std::abs(t)), t), pose.arc_position_m, kArcTolM);
+      EXPECT_NEAR(std::copysign(PolylineArcM(layout.holder, 0.0, std::abs(t)), t), pose.arc_position_m,
+                  kArcTolM);
     }
     for (int column = 0; column + 1 < 4; ++column) {
       const double t0 = AngleOf(layout.holder, layout.units[row * 4 + column].position_m);
       const double t1 = AngleOf(layout.holder, layout.units[row * 4 + column + 1].position_m);
-      EXPECT_NEAR(PolylineArcM(layout.holder, t0, t1), kPitchM, kArcTolM) << "row " << row << " col " << column;
+      EXPECT_NEAR(PolylineArcM(layout.holder, t0, t1), kPitchM, kArcTolM)
+          << "row " << row << " col " << column;
       // The chord is shorter than the arc: placing by arc length matters on this curvature.
-      const double chord = (layout.units[row * 4 + column + 1].position_m - layout.units[row * 4 + column].position_m).norm();
+      const double chord =
+          (layout.units[row * 4 + column + 1].position_m - layout.units[row * 4 + column].position_m).norm();
       EXPECT_LT(chord, kPitchM - 1e-5);
     }
   }
   // Rows: 5 mm along the axis.
   for (int row = 0; row + 1 < 5; ++row) {
-    EXPECT_NEAR(layout.units[(row + 1) * 4].position_m.x() - layout.units[row * 4].position_m.x(), kPitchM, 1e-15);
+    EXPECT_NEAR(layout.units[(row + 1) * 4].position_m.x() - layout.units[row * 4].position_m.x(), kPitchM,
+                1e-15);
   }
   EXPECT_GT(a, 0.0);
 }
@@ -128,7 +132,8 @@ TEST(LayoutTest, PaperLayoutSplitsFiveAxialFourCircumferential) {
   int axial = 0;
   for (const UnitPose& pose : layout.units) {
     const bool corner_or_centre = (pose.row != 1 && pose.column != 1) || (pose.row == 1 && pose.column == 1);
-    EXPECT_EQ(pose.orientation == BeamOrientation::kAxial, corner_or_centre) << pose.row << "," << pose.column;
+    EXPECT_EQ(pose.orientation == BeamOrientation::kAxial, corner_or_centre)
+        << pose.row << "," << pose.column;
     axial += pose.orientation == BeamOrientation::kAxial;
   }
   EXPECT_EQ(axial, 5);
@@ -183,11 +188,13 @@ TEST_F(LayoutErrorTest, MalformedYamlNamesFileAndLine) {
 
 TEST_F(LayoutErrorTest, UnknownKeyNamesFileLineAndKey) {
   const std::string error = Error(
-      "name: x\ngrid:\n  axial_positions_mm: [0]\n  arc_positions_mm: [0]\n  orientaton: axial\n  orientation: axial\n");
+      "name: x\ngrid:\n  axial_positions_mm: [0]\n  arc_positions_mm: [0]\n  orientaton: axial\n  "
+      "orientation: axial\n");
   EXPECT_THAT(error, HasSubstr(File() + ":5: grid.orientaton: unknown key"));
-  EXPECT_THAT(Error("name: x\nholder: {major_axis: 14}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
-                    "orientation: axial}\n"),
-              HasSubstr(File() + ":2: holder.major_axis: unknown key"));
+  EXPECT_THAT(
+      Error("name: x\nholder: {major_axis: 14}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
+            "orientation: axial}\n"),
+      HasSubstr(File() + ":2: holder.major_axis: unknown key"));
 }
 
 TEST_F(LayoutErrorTest, MissingKeysNameFileLineAndKey) {
@@ -202,21 +209,26 @@ TEST_F(LayoutErrorTest, MissingKeysNameFileLineAndKey) {
 
 TEST_F(LayoutErrorTest, GeometryChecksNameTheKey) {
   // 8.5 mm of arc with a 2 mm wide mesa leaves the 8.8 mm palmar half.
-  EXPECT_THAT(Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 8.5, orientation: axial}\n"),
-              HasSubstr(File() + ":3: units[0].arc_mm = 8.5: unit 0 (row 0, column 0, axial): mesa at arc 8.5 mm"));
-  EXPECT_THAT(Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 15, arc_mm: 0, orientation: axial}\n"),
-              HasSubstr("units[0].axial_mm = 15: unit 0"));
-  EXPECT_THAT(Error("name: x\nholder: {major_axis_mm: -14}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
-                    "orientation: axial}\n"),
-              HasSubstr(File() + ":2: holder.major_axis_mm = -14: must be > 0"));
-  EXPECT_THAT(Error("name: x\nunit: {beam_length_mm: 0}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
-                    "orientation: axial}\n"),
-              HasSubstr("unit.beam_length_mm = 0: must be > 0"));
+  EXPECT_THAT(
+      Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 8.5, orientation: axial}\n"),
+      HasSubstr(File() + ":3: units[0].arc_mm = 8.5: unit 0 (row 0, column 0, axial): mesa at arc 8.5 mm"));
+  EXPECT_THAT(
+      Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 15, arc_mm: 0, orientation: axial}\n"),
+      HasSubstr("units[0].axial_mm = 15: unit 0"));
+  EXPECT_THAT(
+      Error("name: x\nholder: {major_axis_mm: -14}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
+            "orientation: axial}\n"),
+      HasSubstr(File() + ":2: holder.major_axis_mm = -14: must be > 0"));
+  EXPECT_THAT(
+      Error("name: x\nunit: {beam_length_mm: 0}\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, "
+            "orientation: axial}\n"),
+      HasSubstr("unit.beam_length_mm = 0: must be > 0"));
   EXPECT_THAT(Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n"
                     "  - {row: 0, column: 1, axial_mm: 0.5, arc_mm: 0.5, orientation: axial}\n"),
               HasSubstr("units[1].arc_mm = 0.5: unit 1 (row 0, column 1, axial): mesa overlaps unit 0"));
-  EXPECT_THAT(Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: diagonal}\n"),
-              HasSubstr("units[0].orientation = diagonal: unknown name; valid names: axial, circumferential"));
+  EXPECT_THAT(
+      Error("name: x\nunits:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: diagonal}\n"),
+      HasSubstr("units[0].orientation = diagonal: unknown name; valid names: axial, circumferential"));
 }
 
 TEST_F(LayoutErrorTest, UnitCountLimits) {
@@ -225,9 +237,10 @@ TEST_F(LayoutErrorTest, UnitCountLimits) {
                     "  arc_positions_mm: [-7, -5, -3, -1, 1, 3, 5, 7]\n  orientation: axial\n"),
               HasSubstr(File() + ":3: grid: grid of 9 x 8 = 72 units; at most 64"));
   EXPECT_THAT(Error("name: x\nunits: []\n"), HasSubstr("units = [...]: missing"));
-  EXPECT_THAT(Error("name: x\ngrid:\n  axial_positions_mm: [0]\n  arc_positions_mm: [0]\n  orientation: axial\n"
-                    "units:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n"),
-              HasSubstr("give either grid or units, not both"));
+  EXPECT_THAT(
+      Error("name: x\ngrid:\n  axial_positions_mm: [0]\n  arc_positions_mm: [0]\n  orientation: axial\n"
+            "units:\n  - {row: 0, column: 0, axial_mm: 0, arc_mm: 0, orientation: axial}\n"),
+      HasSubstr("give either grid or units, not both"));
   EXPECT_THAT(ErrorOf([] { LoadLayout("/nonexistent/layout.yaml"); }),
               HasSubstr("/nonexistent/layout.yaml: cannot open file"));
 }

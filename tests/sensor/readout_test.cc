@@ -20,8 +20,8 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::ErrorOf;
+using ::testing::HasSubstr;
 using testing::TempDir;
 
 constexpr double kRelTol = 1e-12;
@@ -85,7 +85,9 @@ TEST(ReadoutTest, StoredBaselineTaresAtOnce) {
   EXPECT_NEAR(out.dr2_rel[1], 3410.0 / 3395 - 1, kRelTol);
   EXPECT_THAT(ErrorOf([&] { readout.SetBaseline(std::vector<double>(3, 3400), r2); }),
               HasSubstr("baseline has 3/4 values for 4 units"));
-  EXPECT_THAT(ErrorOf([&] { readout.SetBaseline(std::vector<double>{3400, -1, 3400, 3400}, r2); }),
+  EXPECT_THAT(ErrorOf([&] {
+                readout.SetBaseline(std::vector<double>{3400, -1, 3400, 3400}, r2);
+              }),
               HasSubstr("baseline r1_ohm = -1: must be finite and > 0"));
 }
 
@@ -114,11 +116,11 @@ TEST_F(ReadoutValidityTest, OpenShortImplausibleOutOfRange) {
   EXPECT_EQ(Validity(kShortCircuitOhm, 3400), UnitValidity::kShort);
   EXPECT_EQ(Validity(3400, 0.5), UnitValidity::kShort);
   EXPECT_EQ(Validity(kShortCircuitOhm, kOpenCircuitOhm), UnitValidity::kOpen);
-  EXPECT_EQ(Validity(100, 3400), UnitValidity::kImplausible);     // far below any strain
-  EXPECT_EQ(Validity(20000, 3400), UnitValidity::kImplausible);   // > 3 R0
+  EXPECT_EQ(Validity(100, 3400), UnitValidity::kImplausible);    // far below any strain
+  EXPECT_EQ(Validity(20000, 3400), UnitValidity::kImplausible);  // > 3 R0
   EXPECT_EQ(Validity(std::nan(""), 3400), UnitValidity::kImplausible);
   EXPECT_EQ(Validity(3400 * 0.75, 3400 * 0.75), UnitValidity::kImplausible);  // pulled: mean dR/R -0.25
-  EXPECT_EQ(Validity(3400 * 2.6, 3400), UnitValidity::kOutOfRange);  // dR/R 1.6 > 1.5
+  EXPECT_EQ(Validity(3400 * 2.6, 3400), UnitValidity::kOutOfRange);           // dR/R 1.6 > 1.5
   EXPECT_NEAR(out_.dr1_rel[2], 1.6, kRelTol);
   // Frame for another unit count: every unit implausible.
   RawFrame wrong = Frame(3400, 3400);
@@ -154,7 +156,8 @@ TEST(ReadoutTest, AdcFullScaleAndBadBaselines) {
 
 TEST(ReadoutConfigTest, LoadsAndRejectsBadInput) {
   TempDir dir;
-  const std::string good = dir.Write("r.yaml", "baseline_frames: 50\nadc_full_scale_ohm: 9000\nmax_abs_dr_rel: 1.2\n");
+  const std::string good =
+      dir.Write("r.yaml", "baseline_frames: 50\nadc_full_scale_ohm: 9000\nmax_abs_dr_rel: 1.2\n");
   const ReadoutConfig config = LoadReadoutConfig(common::YamlMap::LoadFile(good));
   EXPECT_EQ(config.baseline_frames, 50);
   EXPECT_EQ(config.adc_full_scale_ohm, 9000);
@@ -165,7 +168,8 @@ TEST(ReadoutConfigTest, LoadsAndRejectsBadInput) {
   const std::string zero = dir.Write("z.yaml", "baseline_frames: 0\n");
   EXPECT_EQ(ErrorOf([&] { LoadReadoutConfig(common::YamlMap::LoadFile(zero)); }),
             dir.Path("z.yaml") + ":1: baseline_frames = 0: must be >= 1");
-  EXPECT_THAT(ErrorOf([] { Readout readout(ReadoutConfig{}, 0, 3400); }), HasSubstr("unit count 0 outside 1..64"));
+  EXPECT_THAT(ErrorOf([] { Readout readout(ReadoutConfig{}, 0, 3400); }),
+              HasSubstr("unit count 0 outside 1..64"));
   EXPECT_THAT(ErrorOf([] { Readout readout(ReadoutConfig{}, 4, -3400); }),
               HasSubstr("nominal_r0_ohm = -3400: must be finite and > 0"));
 }
@@ -226,14 +230,17 @@ TEST(ReadoutNoiseTest, EstimateMatchesTheInjectedNoise) {
   EXPECT_NEAR(MedianOf(short_tare.ft_noise_n), ft_expected, kNoiseEstimateRelTol * ft_expected);
   const NoiseRun long_tare = EstimateNoise(model_config, 1000);
   for (double value : long_tare.r_noise_ohm) EXPECT_NEAR(value, 0.5, kNoiseEstimateRelTol * 0.5);
-  for (double value : long_tare.fn_noise_n) EXPECT_NEAR(value, fn_expected, kNoiseEstimateRelTol * fn_expected);
-  for (double value : long_tare.ft_noise_n) EXPECT_NEAR(value, ft_expected, kNoiseEstimateRelTol * ft_expected);
-  std::printf("noise estimate, 0.5 Ohm injected: 100-frame tare median %.4f Ohm (Fn %.3f mN, Ft %.3f mN; "
-              "expected %.3f, %.3f); 1000-frame tare range %.4f .. %.4f Ohm\n",
-              MedianOf(short_tare.r_noise_ohm), 1e3 * MedianOf(short_tare.fn_noise_n),
-              1e3 * MedianOf(short_tare.ft_noise_n), 1e3 * fn_expected, 1e3 * ft_expected,
-              *std::min_element(long_tare.r_noise_ohm.begin(), long_tare.r_noise_ohm.end()),
-              *std::max_element(long_tare.r_noise_ohm.begin(), long_tare.r_noise_ohm.end()));
+  for (double value : long_tare.fn_noise_n)
+    EXPECT_NEAR(value, fn_expected, kNoiseEstimateRelTol * fn_expected);
+  for (double value : long_tare.ft_noise_n)
+    EXPECT_NEAR(value, ft_expected, kNoiseEstimateRelTol * ft_expected);
+  std::printf(
+      "noise estimate, 0.5 Ohm injected: 100-frame tare median %.4f Ohm (Fn %.3f mN, Ft %.3f mN; "
+      "expected %.3f, %.3f); 1000-frame tare range %.4f .. %.4f Ohm\n",
+      MedianOf(short_tare.r_noise_ohm), 1e3 * MedianOf(short_tare.fn_noise_n),
+      1e3 * MedianOf(short_tare.ft_noise_n), 1e3 * fn_expected, 1e3 * ft_expected,
+      *std::min_element(long_tare.r_noise_ohm.begin(), long_tare.r_noise_ohm.end()),
+      *std::max_element(long_tare.r_noise_ohm.begin(), long_tare.r_noise_ohm.end()));
 }
 
 TEST(ReadoutNoiseTest, DriftDuringTheTareIsNotNoise) {

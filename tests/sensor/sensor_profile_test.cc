@@ -29,7 +29,9 @@ constexpr int kRestFrames = 4000;
 // samples x 40 channels put the statistical error well below it.
 constexpr double kNoiseRelTol = 0.10;
 
-Layout DefaultLayout() { return LoadLayout(std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/default_20.yaml"); }
+Layout DefaultLayout() {
+  return LoadLayout(std::string(GRASPBED_SOURCE_DIR) + "/sensor/layouts/default_20.yaml");
+}
 
 UnitConstants Constants(bool fea) {
   UnitConstants nominal;
@@ -147,8 +149,9 @@ TEST(SensorProfileTest, QuarterBridgeSlopeAndJohnsonNoiseOfA3k4Gauge) {
 }
 
 TEST(SensorProfileTest, EveryProfileProducesItsStatedNoiseForBothSensitivitySources) {
-  std::printf("| profile | kn, kt source | gain | ADC window [Ohm] | LSB at R0 [Ohm] | chain noise [Ohm] "
-              "| measured R noise [Ohm] | Fn noise [mN] | Ft noise [mN] | tare estimate R / Fn / Ft |\n");
+  std::printf(
+      "| profile | kn, kt source | gain | ADC window [Ohm] | LSB at R0 [Ohm] | chain noise [Ohm] "
+      "| measured R noise [Ohm] | Fn noise [mN] | Ft noise [mN] | tare estimate R / Fn / Ft |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   double previous_noise_ohm[2] = {1e9, 1e9};
   for (const std::string& name : SensorProfileNames()) {
@@ -186,18 +189,20 @@ TEST(SensorProfileTest, EveryProfileProducesItsStatedNoiseForBothSensitivitySour
       // Better parts, less noise.
       EXPECT_LT(d.noise_ohm, previous_noise_ohm[fea]);
       previous_noise_ohm[fea] = d.noise_ohm;
-      std::printf("| %s | %s | %g | %.1f .. %.1f | %.3g | %.3g | %.3g | %.3g | %.3g | %.3g Ohm / %.3g / %.3g mN |\n",
-                  name.c_str(), fea ? "fea" : "paper", d.gain, d.window_low_ohm, d.window_high_ohm, d.lsb_at_r0_ohm,
-                  d.noise_ohm, m.r_noise_ohm, 1e3 * m.fn_noise_n, 1e3 * m.ft_noise_n, m.estimated_r_noise_ohm,
-                  1e3 * m.estimated_fn_noise_n, 1e3 * m.estimated_ft_noise_n);
+      std::printf(
+          "| %s | %s | %g | %.1f .. %.1f | %.3g | %.3g | %.3g | %.3g | %.3g | %.3g Ohm / %.3g / %.3g mN |\n",
+          name.c_str(), fea ? "fea" : "paper", d.gain, d.window_low_ohm, d.window_high_ohm, d.lsb_at_r0_ohm,
+          d.noise_ohm, m.r_noise_ohm, 1e3 * m.fn_noise_n, 1e3 * m.ft_noise_n, m.estimated_r_noise_ohm,
+          1e3 * m.estimated_fn_noise_n, 1e3 * m.estimated_ft_noise_n);
     }
   }
 }
 
 TEST(SensorProfileTest, ChainNoiseBudgetPrinted) {
   // The parts of each chain's noise, referred to the gauge input (docs/sensor.md quotes these).
-  std::printf("| profile | kn, kt source | source R [Ohm] | Johnson [uV] | amplifier [uV] | ADC [uV] "
-              "| slope [uV/Ohm] | range needed [Ohm] |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| profile | kn, kt source | source R [Ohm] | Johnson [uV] | amplifier [uV] | ADC [uV] "
+      "| slope [uV/Ohm] | range needed [Ohm] |\n|---|---|---|---|---|---|---|---|\n");
   for (const std::string& name : SensorProfileNames()) {
     const SensorProfile& profile = FindSensorProfile(name);
     if (profile.ideal) continue;

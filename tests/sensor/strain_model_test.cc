@@ -15,8 +15,8 @@
 namespace graspbed::sensor {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::ErrorOf;
+using ::testing::HasSubstr;
 using testing::TempDir;
 
 constexpr double kOhmTol = 1e-6;      // exact model, rounding only
@@ -31,8 +31,8 @@ std::vector<UnitLoad> Uniform(const Layout& layout, double fn_n, double ft_n) {
 
 // Runs `model` through a readout tared on `tare_frames` unloaded frames, then inverts one frame of
 // `loads` at `time_s`.
-TactileState Estimate(const Layout& layout, StrainModel& model, const std::vector<UnitLoad>& loads, double time_s,
-                      int tare_frames = 100, ReadoutConfig readout_config = {}) {
+TactileState Estimate(const Layout& layout, StrainModel& model, const std::vector<UnitLoad>& loads,
+                      double time_s, int tare_frames = 100, ReadoutConfig readout_config = {}) {
   readout_config.baseline_frames = tare_frames;
   Readout readout(readout_config, layout.unit_count(), model.config().nominal.r0_ohm);
   const Inversion inversion(layout, PaperCalibration(layout.unit_count()), InversionConfig{});
@@ -95,8 +95,10 @@ TEST(StrainModelTest, SuperpositionOfNormalAndShear) {
       const GaugeResistances both = IdealGaugeResistances(paper, fn, ft);
       const GaugeResistances normal = IdealGaugeResistances(paper, fn, 0);
       const GaugeResistances shear = IdealGaugeResistances(paper, 0, ft);
-      EXPECT_NEAR(both.r1_ohm - paper.r0_ohm, (normal.r1_ohm - paper.r0_ohm) + (shear.r1_ohm - paper.r0_ohm), kOhmTol);
-      EXPECT_NEAR(both.r2_ohm - paper.r0_ohm, (normal.r2_ohm - paper.r0_ohm) + (shear.r2_ohm - paper.r0_ohm), kOhmTol);
+      EXPECT_NEAR(both.r1_ohm - paper.r0_ohm, (normal.r1_ohm - paper.r0_ohm) + (shear.r1_ohm - paper.r0_ohm),
+                  kOhmTol);
+      EXPECT_NEAR(both.r2_ohm - paper.r0_ohm, (normal.r2_ohm - paper.r0_ohm) + (shear.r2_ohm - paper.r0_ohm),
+                  kOhmTol);
     }
   }
 }
@@ -290,7 +292,7 @@ TEST(StrainModelTest, SaturationClipsTheGaugeAndTheInversionFlagsIt) {
 TEST(StrainModelTest, CrossTalkFromCrossShearAndOffCentreLoad) {
   const Layout layout = DefaultLayout();
   std::vector<UnitLoad> loads = Uniform(layout, 0, 0);
-  loads[0] = {4.0, 0.0, 5.0, 0.0};     // cross-axis shear only
+  loads[0] = {4.0, 0.0, 5.0, 0.0};      // cross-axis shear only
   loads[1] = {10.0, 0.0, 0.0, 0.5e-3};  // normal load 0.5 mm off centre along the beam
   {
     StrainModel ideal(layout, StrainModelConfig{}, 1);

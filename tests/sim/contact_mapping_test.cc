@@ -2,11 +2,11 @@
 // a known force, then sheared along the holder axis. Forces are read back through the simulated
 // backend, Readout and Inversion (not ground truth) and compared with the applied load.
 //
-// Setup: gravity off, no table, the prosthetic finger at its pre-shape held there by the grip brake. The holder is curved, so a
-// plate pressed along the palmar axis would meet tilted mesas (about 12 deg at 2.5 mm of arc) and
-// each would only see F cos(tilt); instead the plate is laid perpendicular to the inward normal of
-// column 1 (arc -2.5 mm, units 1, 5, 9, 13, 17), touching exactly that column's five mesa tops, and
-// pushed along that normal.
+// Setup: gravity off, no table, the prosthetic finger at its pre-shape held there by the grip brake. The
+// holder is curved, so a plate pressed along the palmar axis would meet tilted mesas (about 12 deg at 2.5 mm
+// of arc) and each would only see F cos(tilt); instead the plate is laid perpendicular to the inward normal
+// of column 1 (arc -2.5 mm, units 1, 5, 9, 13, 17), touching exactly that column's five mesa tops, and pushed
+// along that normal.
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 #include <mujoco/mujoco.h>
@@ -24,7 +24,8 @@
 namespace graspbed::sim {
 namespace {
 
-constexpr double kRelativeForceTol = 0.02;  // 2 % at equilibrium: the inversion is exact for an ideal sensor, so what is left is the contact model's force balance
+constexpr double kRelativeForceTol = 0.02;  // 2 % at equilibrium: the inversion is exact for an ideal sensor,
+                                            // so what is left is the contact model's force balance
 constexpr double kUnsensedShearTolN = 0.01;
 constexpr double kPressForceN = 5.0;
 constexpr double kShearForceN = 1.0;
@@ -72,7 +73,9 @@ class ContactMappingTest : public testing::MujocoTest {
     const Eigen::Vector3d axial = to_world_dir(Eigen::Vector3d::UnitX());
     inward_world_ = -outward;
     axial_world_ = axial;
-    const Eigen::Vector3d surface = to_world_dir(unit.position_m) + Eigen::Vector3d(d->xpos[3 * holder], d->xpos[3 * holder + 1], d->xpos[3 * holder + 2]);
+    const Eigen::Vector3d surface =
+        to_world_dir(unit.position_m) +
+        Eigen::Vector3d(d->xpos[3 * holder], d->xpos[3 * holder + 1], d->xpos[3 * holder + 2]);
     const Eigen::Vector3d center =
         surface + outward * (layout.unit.mesa_height_m + kPlateHalfThicknessM + kPlateGapM);
     Eigen::Matrix3d plate_rot;
@@ -108,7 +111,9 @@ class ContactMappingTest : public testing::MujocoTest {
   }
 
   static bool InColumn(int unit) { return unit % 4 == kColumn; }
-  static bool Axial(int unit) { return DefaultLayout().units[unit].orientation == sensor::BeamOrientation::kAxial; }
+  static bool Axial(int unit) {
+    return DefaultLayout().units[unit].orientation == sensor::BeamOrientation::kAxial;
+  }
 
   Simulation* simulation_ = nullptr;
   std::unique_ptr<SimBackend> backend_;
@@ -130,7 +135,8 @@ TEST_F(ContactMappingTest, PressedPlateInvertsToTheAppliedNormalForce) {
     if (state_.fn_n[i] > 0.05) {
       sensed_fn += state_.fn_n[i];
       ++loaded;
-      EXPECT_TRUE(InColumn(i)) << "unit " << i << " outside the pressed column reads " << state_.fn_n[i] << " N";
+      EXPECT_TRUE(InColumn(i)) << "unit " << i << " outside the pressed column reads " << state_.fn_n[i]
+                               << " N";
     }
   }
   EXPECT_EQ(loaded, 5);
@@ -155,15 +161,18 @@ TEST_F(ContactMappingTest, AxialShearShowsOnAxialUnitsOnly) {
     if (Axial(i)) {
       // Beam along +x of the holder: the shear shows with its sign and size.
       EXPECT_GT(state_.ft_n[i], 0.05) << "unit " << i;
-      EXPECT_NEAR(state_.ft_n[i], truth[i].ft_n, kRelativeForceTol * std::abs(truth[i].ft_n) + 1e-3) << "unit " << i;
+      EXPECT_NEAR(state_.ft_n[i], truth[i].ft_n, kRelativeForceTol * std::abs(truth[i].ft_n) + 1e-3)
+          << "unit " << i;
       axial_ft_truth += truth[i].ft_n;
       total_axial_shear_truth += truth[i].ft_n;
     } else {
       // Beam around the circumference: the axial shear is across the beam, carried but not sensed.
       EXPECT_NEAR(state_.ft_n[i], 0.0, kUnsensedShearTolN) << "unit " << i;
-      EXPECT_GT(std::abs(truth[i].cross_shear_n), 0.05) << "unit " << i << " should carry shear across its beam";
+      EXPECT_GT(std::abs(truth[i].cross_shear_n), 0.05)
+          << "unit " << i << " should carry shear across its beam";
       // normal x beam for a circumferential beam points along -x or +x of the holder.
-      const Eigen::Vector3d cross = DefaultLayout().units[i].inward_normal.cross(DefaultLayout().units[i].beam_axis);
+      const Eigen::Vector3d cross =
+          DefaultLayout().units[i].inward_normal.cross(DefaultLayout().units[i].beam_axis);
       total_axial_shear_truth += truth[i].cross_shear_n * cross.x();
     }
   }

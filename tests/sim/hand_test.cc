@@ -81,7 +81,8 @@ TEST_F(HandTest, TheNominalPinchMeetsTheObjectSquarelyAtHalfItsWidth) {
   EXPECT_NEAR(kin.ThumbTip(thumb).point_xz.y(), kin.IndexPad(mcp).point_xz.y(), 1e-9) << "contacts level";
   // The lever arm is the derivative of the pad's travel: a small MCP step moves the pad by arm x step.
   const double step = 1e-3;
-  EXPECT_NEAR(kin.IndexPad(mcp + step).point_xz.x() - kin.IndexPad(mcp).point_xz.x(), kin.PadLeverArmM(mcp) * step,
+  EXPECT_NEAR(kin.IndexPad(mcp + step).point_xz.x() - kin.IndexPad(mcp).point_xz.x(),
+              kin.PadLeverArmM(mcp) * step,
               1e-6 * step + 0.5 * std::abs(kin.PadLeverArmM(mcp + step) - kin.PadLeverArmM(mcp)) * step);
 }
 
@@ -163,7 +164,8 @@ class FrictionTest : public testing::MujocoTest {
   static double ObjectAlongPad(const Simulation& simulation) {
     const mjModel* m = simulation.model();
     const mjData* d = simulation.data();
-    return d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "object") + 2] - d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "holder") + 2];
+    return d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "object") + 2] -
+           d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "holder") + 2];
   }
   // Coulomb's limit of the pinch: friction x the normal force of both digits [N].
   static double CoulombLimitN(const Simulation& simulation) {

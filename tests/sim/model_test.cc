@@ -63,7 +63,8 @@ TEST_F(ModelTest, MesaGeomsFollowTheLayoutInOrder) {
     // surface point along its outward normal.
     const mjtNum* rot = d->geom_xmat + 9 * geom;  // geom axes as columns, row-major
     mjtNum top_world[3];
-    for (int k = 0; k < 3; ++k) top_world[k] = d->geom_xpos[3 * geom + k] + rot[3 * k + 2] * m->geom_size[3 * geom + 2];
+    for (int k = 0; k < 3; ++k)
+      top_world[k] = d->geom_xpos[3 * geom + k] + rot[3 * k + 2] * m->geom_size[3 * geom + 2];
     const mjtNum* holder_rot = d->xmat + 9 * holder;
     mjtNum rel[3];
     for (int k = 0; k < 3; ++k) rel[k] = top_world[k] - d->xpos[3 * holder + k];
@@ -83,7 +84,8 @@ TEST_F(ModelTest, MesaGeomsFollowTheLayoutInOrder) {
 
 TEST_F(ModelTest, EveryShippedLayoutAndShapeLoadsAndSettles) {
   for (const char* layout_file : {"default_20.yaml", "paper_3x3.yaml"}) {
-    const sensor::Layout layout = sensor::LoadLayout(SourcePath(std::string("sensor/layouts/") + layout_file));
+    const sensor::Layout layout =
+        sensor::LoadLayout(SourcePath(std::string("sensor/layouts/") + layout_file));
     for (ObjectShape shape : {ObjectShape::kBox, ObjectShape::kCylinder, ObjectShape::kSphere}) {
       SceneConfig scene;
       scene.object.shape = shape;
@@ -122,7 +124,8 @@ TEST_F(ModelTest, TheJawFixtureStillPinchesAtItsStallForce) {
   simulation.SetGripEffort(1.0);
   simulation.StepUntil(1.2);
   const GroundTruth truth = simulation.truth();
-  EXPECT_NEAR(truth.object_squeeze_n, scene.hand.motor.stall_force_n, kForceTolN * scene.hand.motor.stall_force_n);
+  EXPECT_NEAR(truth.object_squeeze_n, scene.hand.motor.stall_force_n,
+              kForceTolN * scene.hand.motor.stall_force_n);
   EXPECT_LT(truth.max_mesa_penetration_m, 0.05e-3);
 }
 

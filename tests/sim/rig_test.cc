@@ -148,8 +148,10 @@ TEST_F(RigTest, SameSeedGivesIdenticalFramesDifferentSeedDoesNot) {
     const sensor::RawFrame& fb = b.loop().frame();
     ASSERT_EQ(fa.sequence, fb.sequence);
     ASSERT_EQ(std::memcmp(&fa.time_s, &fb.time_s, sizeof(double)), 0);
-    ASSERT_EQ(std::memcmp(fa.r1_ohm.data(), fb.r1_ohm.data(), sizeof(double) * fa.unit_count), 0) << "t = " << a.time_s();
-    ASSERT_EQ(std::memcmp(fa.r2_ohm.data(), fb.r2_ohm.data(), sizeof(double) * fa.unit_count), 0) << "t = " << a.time_s();
+    ASSERT_EQ(std::memcmp(fa.r1_ohm.data(), fb.r1_ohm.data(), sizeof(double) * fa.unit_count), 0)
+        << "t = " << a.time_s();
+    ASSERT_EQ(std::memcmp(fa.r2_ohm.data(), fb.r2_ohm.data(), sizeof(double) * fa.unit_count), 0)
+        << "t = " << a.time_s();
     const GroundTruth ta = a.simulation().truth();
     const GroundTruth tb = b.simulation().truth();
     ASSERT_EQ(std::memcmp(ta.object_position_m.data(), tb.object_position_m.data(), sizeof(double) * 3), 0);

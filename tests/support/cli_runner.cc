@@ -42,7 +42,9 @@ CliResult Run(const std::string& prefix, const std::string& arguments) {
 
 CliResult RunCli(const std::string& arguments) { return Run("", arguments); }
 
-CliResult RunCliUnder(const std::string& prefix, const std::string& arguments) { return Run(prefix, arguments); }
+CliResult RunCliUnder(const std::string& prefix, const std::string& arguments) {
+  return Run(prefix, arguments);
+}
 
 CliResult RunCliWithin(const std::string& arguments, double limit_s) {
   // timeout exits 128 + 9 when it had to kill; the shell reports a child killed by signal N as 128 + N.

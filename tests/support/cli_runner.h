@@ -12,9 +12,9 @@ std::string CliBinary();
 
 /// Outcome of one CLI run.
 struct CliResult {
-  int exit_code = -1;  ///< -1 when it did not exit normally (or could not be started)
-  std::string out;     ///< everything written to stdout
-  std::string err;     ///< everything written to stderr
+  int exit_code = -1;      ///< -1 when it did not exit normally (or could not be started)
+  std::string out;         ///< everything written to stdout
+  std::string err;         ///< everything written to stderr
   bool timed_out = false;  ///< RunCliWithin only: killed at its time limit
 };
 

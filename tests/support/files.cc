@@ -13,6 +13,8 @@ std::string ReadText(const std::string& path) {
   return text.str();
 }
 
-std::string SourcePath(const std::string& relative) { return std::string(GRASPBED_SOURCE_DIR) + "/" + relative; }
+std::string SourcePath(const std::string& relative) {
+  return std::string(GRASPBED_SOURCE_DIR) + "/" + relative;
+}
 
 }  // namespace graspbed::testing
