@@ -12,7 +12,7 @@ using ::testing::HasSubstr;
 
 // The errors refused here are ConfigError; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  return graspbed::testing::ErrorOf<ConfigError>(action);
+  return graspbed::test_support::ErrorOf<ConfigError>(action);
 }
 
 TEST(YamlMapTest, ReadsTypedValuesWithDefaults) {

@@ -232,9 +232,9 @@ TEST_F(ControlLoopTest, TickAllocatesNothingWithTheReferenceController) {
   ControlLoop loop(backend_, grip_slip, actuator_, layout_, calibration_, config_);
   Tare(loop);
   for (int i = 0; i < 200; ++i) backend_.Queue(Frame(layout_, ++sequence_, 6, 0.01 * i, 0.0));
-  const long before = graspbed::testing::AllocationCount();
+  const long before = graspbed::test_support::AllocationCount();
   for (int i = 0; i < 300; ++i) loop.Tick(Now());  // frames, then 100 ticks going stale
-  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
+  EXPECT_EQ(graspbed::test_support::AllocationCount() - before, 0);
   EXPECT_GT(loop.counters().stale_ticks, 0u);
 }
 

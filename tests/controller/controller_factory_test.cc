@@ -21,7 +21,7 @@ using ::testing::HasSubstr;
 
 // The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(action);
 }
 
 TEST(ControllerFactoryTest, KnowsGripSlipAndOpenLoop) {
@@ -114,8 +114,8 @@ TEST(ControllerFactoryTest, InconsistentParametersAreRejected) {
 
 TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
   std::unique_ptr<GraspController> controller = MakeController("grip_slip", {});
-  testing::SyntheticTactile sensor({});
-  testing::HandPlant plant({});
+  test_support::SyntheticTactile sensor({});
+  test_support::HandPlant plant({});
   // Frames made up front: the generator itself may allocate, the controller may not.
   std::vector<sensor::TactileState> frames;
   std::vector<double> loads;
@@ -128,9 +128,9 @@ TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
     plant.Step(command, loads[static_cast<size_t>(i)], 1e-3);
     sensor::TactileState state = sensor.Frame(plant.Contact(), t);
     if (i >= 2500 && i < 2600) state.stale = true;
-    const long before = graspbed::testing::AllocationCount();
+    const long before = graspbed::test_support::AllocationCount();
     command = controller->Update(state, t);
-    allocations += graspbed::testing::AllocationCount() - before;
+    allocations += graspbed::test_support::AllocationCount() - before;
   }
   EXPECT_GT(controller->telemetry().slip_events, 0) << "the run should have exercised the slip path";
   EXPECT_EQ(allocations, 0);
@@ -138,8 +138,8 @@ TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
 
 TEST(OpenLoopControllerTest, FixedEffortsBlindToTheSensor) {
   std::unique_ptr<GraspController> controller = MakeController("open_loop", {{"close_effort", 0.4}});
-  testing::SyntheticTactile sensor({});
-  testing::SyntheticContact contact;
+  test_support::SyntheticTactile sensor({});
+  test_support::SyntheticContact contact;
   contact.grip_n = 5.0;
   contact.load_axial_n = 4.0;  // slipping by any measure; the baseline cannot tell
   EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.001), 0.001).grip_effort, 0.0);

@@ -16,10 +16,10 @@
 namespace graspbed::controller {
 namespace {
 
-using testing::HandPlant;
+using test_support::HandPlant;
+using test_support::SyntheticContact;
+using test_support::SyntheticTactile;
 using ::testing::HasSubstr;
-using testing::SyntheticContact;
-using testing::SyntheticTactile;
 
 constexpr double kPeriodS = 0.001;                 // 1 kHz control and sensor rate
 constexpr double kGravity = 9.81;                  // [m/s^2]
@@ -98,7 +98,7 @@ GripSlipConfig DefaultConfig() { return GripSlipConfig{}; }
 
 // The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(action);
 }
 
 TEST(GripSlipControllerTest, ClosesUntilContactThenLoadsToInitialGrip) {

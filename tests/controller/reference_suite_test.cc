@@ -17,10 +17,10 @@ namespace graspbed::controller {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 
 /// Open-loop effort of the baseline run: about 3 N of pinch, 4x what the 100 g boxes need.
 constexpr double kBaselineEffort = 0.15;

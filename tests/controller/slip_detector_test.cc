@@ -15,9 +15,9 @@
 namespace graspbed::controller {
 namespace {
 
+using test_support::SyntheticContact;
+using test_support::SyntheticTactile;
 using ::testing::HasSubstr;
-using testing::SyntheticContact;
-using testing::SyntheticTactile;
 
 constexpr double kPeriodS = 0.001;
 constexpr double kSlipLatencyLimitS = 0.030;

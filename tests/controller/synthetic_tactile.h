@@ -15,7 +15,7 @@
 #include "hand/hand_command.h"
 #include "sensor/tactile_state.h"
 
-namespace graspbed::controller::testing {
+namespace graspbed::controller::test_support {
 
 /// What touches the sensor at one instant.
 struct SyntheticContact {
@@ -225,4 +225,4 @@ class HandPlant {
   double centre_row_ = 2.0;
 };
 
-}  // namespace graspbed::controller::testing
+}  // namespace graspbed::controller::test_support

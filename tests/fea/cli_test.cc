@@ -16,11 +16,11 @@ namespace graspbed::fea {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 using ::testing::HasSubstr;
 
 class FeaCliTest : public ::testing::Test {

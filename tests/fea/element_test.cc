@@ -15,7 +15,7 @@
 namespace graspbed::fea {
 namespace {
 
-using graspbed::testing::ErrorOf;
+using graspbed::test_support::ErrorOf;
 using ::testing::HasSubstr;
 
 constexpr double kExactTol = 1e-10;  // "exact" up to rounding, for strains of order 1e-3

@@ -17,7 +17,7 @@ using ::testing::HasSubstr;
 
 // The errors refused here are std::invalid_argument; one of another type fails the test.
 std::string ErrorOf(const std::function<void()>& action) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(action);
 }
 
 std::string LoadError(const std::string& yaml) {

@@ -15,7 +15,7 @@ namespace graspbed::plot {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::TempDir;
+using graspbed::test_support::TempDir;
 
 class PlotTest : public ::testing::Test {
  protected:

@@ -31,12 +31,12 @@
 namespace graspbed::hardware {
 namespace {
 
-using graspbed::testing::ChildProcess;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::ChildProcess;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 
 // A shipped scenario whose script is an intent and a lift: close at 0.15 s, lift 60 mm at 0.8 s.
 // (Not scenarios/default.yaml: there the grip-slip controller's grasp turns on one millisecond of

@@ -27,10 +27,10 @@
 namespace graspbed::hardware {
 namespace {
 
-using graspbed::testing::CliBinary;
-using Child = graspbed::testing::ChildProcess;
-using graspbed::testing::ReadText;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliBinary;
+using Child = graspbed::test_support::ChildProcess;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::TempDir;
 
 constexpr char kScenario[] = "tests/hardware/data/e2e_lift.yaml";
 constexpr int kUnits = 20;                  // the scenario's layout (default_20)

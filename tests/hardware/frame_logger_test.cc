@@ -21,8 +21,8 @@
 namespace graspbed::hardware {
 namespace {
 
-using graspbed::testing::ReadText;
-using graspbed::testing::TempDir;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::TempDir;
 
 constexpr double kR0Ohm = 3400.0;
 // The paper's worked numbers: Fn = 10 N alone gives R1 = R2 = 5270 Ohm on every unit.
@@ -133,7 +133,7 @@ TEST_F(FrameLoggerTest, AnUnfinishedLogStaysPartial) {
 
 TEST_F(FrameLoggerTest, RefusesAPathItCannotWrite) {
   const std::string path = dir_.Path("no_such_dir/frames.csv");
-  const std::string error = graspbed::testing::ErrorOf<std::invalid_argument>([&] { MakeLogger(path); });
+  const std::string error = graspbed::test_support::ErrorOf<std::invalid_argument>([&] { MakeLogger(path); });
   EXPECT_NE(error.find("--log " + path + ": cannot write this file"), std::string::npos) << error;
 }
 

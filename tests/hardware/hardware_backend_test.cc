@@ -25,7 +25,7 @@
 namespace graspbed::hardware {
 namespace {
 
-using testing::WaitFor;
+using test_support::WaitFor;
 
 constexpr int kUnits = 20;
 constexpr double kResistanceTolOhm = 1e-3;  // wire resolution is 1 mOhm
@@ -63,7 +63,7 @@ class ScriptedDevice {
   /// Sends HELLOs numbered from `hello_seq` (a device repeats them; the host may flush the first
   /// while opening the port) until the host answers with STREAM_CONTROL start.
   bool Handshake(uint16_t hello_seq, int units) {
-    return testing::WaitFor(
+    return test_support::WaitFor(
         [&] {
           HelloPacket hello{.sequence = hello_seq++,
                             .firmware_version = 1,
@@ -71,9 +71,9 @@ class ScriptedDevice {
                             .nominal_rate_hz = 1000,
                             .nominal_r0_milliohm = 3'400'000};
           Send(hello);
-          return testing::WaitFor([&] { return ReadStreamStart(); }, 0.05);
+          return test_support::WaitFor([&] { return ReadStreamStart(); }, 0.05);
         },
-        testing::kWaitTimeoutS);
+        test_support::kWaitTimeoutS);
   }
   void Send(const auto& packet) {
     std::array<uint8_t, kMaxWirePacketSize> out;
@@ -126,10 +126,10 @@ class HardwareTest : public ::testing::Test {
  protected:
   void StartEmulator(int units = kUnits, double connect_delay_s = 0.02) {
     EmulatorConfig config;
-    config.link_path = testing::UniqueLinkPath("hw");
+    config.link_path = test_support::UniqueLinkPath("hw");
     config.unit_count = units;
     config.connect_delay_s = connect_delay_s;
-    emulator_ = std::make_unique<DeviceEmulator>(config, testing::TestFrameSource);
+    emulator_ = std::make_unique<DeviceEmulator>(config, test_support::TestFrameSource);
     emulator_->Start();
     hw_config_.port = config.link_path;
   }
@@ -393,7 +393,7 @@ TEST_F(HardwareTest, RebootStartsANewSession) {
 // long uptime (sequence wrapped, device time past 2^31 us, so neither steps back).
 TEST(HardwareRebootWhileAway, HelloNumbersStartingAgainIsANewSession) {
   HardwareConfig config;
-  config.port = testing::UniqueLinkPath("scripted");
+  config.port = test_support::UniqueLinkPath("scripted");
   config.reconnect_backoff_s = 0.01;
   config.reconnect_backoff_max_s = 0.05;
   ScriptedDevice device(config.port);
@@ -404,17 +404,17 @@ TEST(HardwareRebootWhileAway, HelloNumbersStartingAgainIsANewSession) {
   starter.join();
   constexpr uint32_t kLongUptimeUs = 3'000'000'000u;  // 50 min
   device.SendFrames(/*first_seq=*/65530, kLongUptimeUs, /*count=*/10, kUnits);
-  ASSERT_TRUE(testing::WaitFor([&] { return backend.counters().frames == 10; }));
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.counters().frames == 10; }));
   EXPECT_EQ(backend.session(), 1u);
 
   device.Vanish();
-  ASSERT_TRUE(testing::WaitFor([&] { return !backend.link()->connected(); }));
+  ASSERT_TRUE(test_support::WaitFor([&] { return !backend.link()->connected(); }));
   device.Appear();
   ASSERT_TRUE(device.Handshake(/*hello_seq=*/0, kUnits));
-  ASSERT_TRUE(testing::WaitFor([&] { return backend.link()->connected(); }));
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.link()->connected(); }));
   // Frames that look like a continuation of the old stream: only the HELLO tells.
   device.SendFrames(/*first_seq=*/4, kLongUptimeUs + 10'000, /*count=*/10, kUnits);  // 65540 wrapped
-  ASSERT_TRUE(testing::WaitFor([&] { return backend.counters().frames == 20; }));
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.counters().frames == 20; }));
   const auto counters = backend.counters();
   EXPECT_EQ(counters.reconnects, 1u);
   EXPECT_EQ(counters.sessions, 2u);
@@ -427,9 +427,9 @@ TEST(HardwareRebootWhileAway, HelloNumbersStartingAgainIsANewSession) {
 // exactly those units invalid (the hardware path never makes a force of them).
 TEST_F(HardwareTest, OpenShortAndImplausibleChannelsMakeTheirUnitsInvalid) {
   EmulatorConfig config;
-  config.link_path = testing::UniqueLinkPath("faulty");
+  config.link_path = test_support::UniqueLinkPath("faulty");
   emulator_ = std::make_unique<DeviceEmulator>(config, [](double t, bool, sensor::RawFrame* frame) {
-    testing::TestFrameSource(t, true, frame);
+    test_support::TestFrameSource(t, true, frame);
     frame->r1_ohm[0] = sensor::kOpenCircuitOhm;  // broken wire
     frame->r2_ohm[1] = 0.0;                      // shorted gauge
     frame->r1_ohm[2] = 50'000.0;                 // 15 x R0: no gauge reads that
@@ -544,9 +544,9 @@ TEST_F(HardwareTest, CleanShutdownStopsStreamMotorAndRestoresThePort) {
 TEST_F(HardwareTest, SeparateMotorPort) {
   StartEmulator();
   EmulatorConfig motor_config;
-  motor_config.link_path = testing::UniqueLinkPath("motor");
+  motor_config.link_path = test_support::UniqueLinkPath("motor");
   motor_config.unit_count = 1;  // the hand electronics' HELLO; its unit count is not checked
-  DeviceEmulator motor_device(motor_config, testing::TestFrameSource);
+  DeviceEmulator motor_device(motor_config, test_support::TestFrameSource);
   motor_device.Start();
   hw_config_.motor_port = motor_config.link_path;
   StartHost();

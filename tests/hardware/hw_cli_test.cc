@@ -13,9 +13,9 @@
 namespace graspbed::hardware {
 namespace {
 
-using graspbed::testing::CliResult;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 using ::testing::HasSubstr;
 
 constexpr int kExitBadInput = 2;
@@ -23,7 +23,8 @@ constexpr int kExitBadInput = 2;
 class HwCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (graspbed::testing::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
+    if (graspbed::test_support::CliBinary().empty())
+      GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
   }
   TempDir dir_{"hw_cli"};
 };

@@ -54,7 +54,7 @@ TEST(SerialPort, MissingPortSaysSo) {
 }
 
 TEST(SerialPort, DanglingEmulatorLinkIsMissing) {
-  const std::string link = testing::UniqueLinkPath("dangling");
+  const std::string link = test_support::UniqueLinkPath("dangling");
   ASSERT_EQ(symlink("/dev/pts/999999", link.c_str()), 0);
   const PortError error = OpenError(link);
   ::unlink(link.c_str());
@@ -74,7 +74,7 @@ TEST(SerialPort, SecondOpenIsBusy) {
 }
 
 TEST(SerialPort, NotATerminalAndBadBaud) {
-  const std::string file = testing::UniqueLinkPath("file");
+  const std::string file = test_support::UniqueLinkPath("file");
   std::ofstream(file) << "x";
   EXPECT_EQ(OpenError(file).kind(), PortErrorKind::kNotATty);
   ::unlink(file.c_str());

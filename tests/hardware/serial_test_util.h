@@ -12,7 +12,7 @@
 
 #include "sensor/raw_frame.h"
 
-namespace graspbed::hardware::testing {
+namespace graspbed::hardware::test_support {
 
 /// Generous: tests must pass on a machine with both cores busy.
 inline constexpr double kWaitTimeoutS = 10.0;
@@ -42,4 +42,4 @@ inline void TestFrameSource(double device_time_s, bool /*streaming*/, sensor::Ra
   }
 }
 
-}  // namespace graspbed::hardware::testing
+}  // namespace graspbed::hardware::test_support

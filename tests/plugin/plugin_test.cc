@@ -26,10 +26,10 @@
 namespace graspbed::controller {
 namespace {
 
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 using ::testing::HasSubstr;
 
 const std::string kPluginDir = GRASPBED_TEST_PLUGIN_DIR;
@@ -40,7 +40,7 @@ const std::string kNotAPlugin = kPluginDir + "/libnot_a_plugin.so";
 const std::string kMissing = kPluginDir + "/libno_such_plugin.so";
 
 std::string ErrorOf(const std::function<void()>& action) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(action);
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(action);
 }
 
 std::string Plugin(const std::string& library) { return "plugin:" + library; }
@@ -84,7 +84,7 @@ TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
   sensor::TactileState state;
   state.unit_count = 20;
   state.valid_count = 20;
-  const long before = graspbed::testing::AllocationCount();
+  const long before = graspbed::test_support::AllocationCount();
   EXPECT_DOUBLE_EQ(controller->Update(state, 0.0).grip_effort, 0.3);  // closing at the approach effort
   state.total_fn_n = 1.0;  // in contact, below the 3 N target: the effort rises
   double effort = 0.0;
@@ -96,7 +96,7 @@ TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
   EXPECT_TRUE(controller->telemetry().safe_hold);
   controller->SetIntent(GraspIntent::kOpen);
   EXPECT_LT(controller->Update(state, 0.3).grip_effort, 0.0);
-  EXPECT_EQ(graspbed::testing::AllocationCount(), before) << "Update allocated";
+  EXPECT_EQ(graspbed::test_support::AllocationCount(), before) << "Update allocated";
 }
 
 TEST(PluginLoaderTest, AMissingLibraryIsNamed) {
@@ -204,7 +204,7 @@ TEST(PluginScenarioTest, BadPluginSectionsNameFileLineAndKey) {
   for (const Case& c : cases) {
     const std::string file = dir.Write("bad.yaml", std::string(kScenarioHead) + c.controller);
     const std::string message =
-        graspbed::testing::ErrorOf<std::invalid_argument>([&] { scenario::LoadScenario(file); });
+        graspbed::test_support::ErrorOf<std::invalid_argument>([&] { scenario::LoadScenario(file); });
     EXPECT_THAT(message, HasSubstr(file + c.expected)) << c.controller;
   }
 }
@@ -288,7 +288,7 @@ expectations: {not_dropped: true}
   ASSERT_EQ(suite.exit_code, 0) << suite.err << suite.out;
   EXPECT_THAT(suite.out, HasSubstr("plugin:"));
   const nlohmann::json suite_json =
-      nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("suite/suite.json")));
+      nlohmann::json::parse(graspbed::test_support::ReadText(dir_.Path("suite/suite.json")));
   ASSERT_EQ(suite_json.at("runs").size(), 1u);
   EXPECT_EQ(suite_json.at("runs")[0].at("controller"), "plugin:" + kThreshold);
   EXPECT_TRUE(suite_json.at("runs")[0].at("passed").get<bool>());
@@ -298,7 +298,7 @@ expectations: {not_dropped: true}
       "sweep.yaml", "scenario: " + scenario + "\nparameters:\n  controller.params.target_grip_n: [2, 4]\n");
   const CliResult sweep = RunCli("sweep " + spec + " --out " + dir_.Path("sweep") + plugin);
   ASSERT_EQ(sweep.exit_code, 0) << sweep.err << sweep.out;
-  const std::string rows = graspbed::testing::ReadText(dir_.Path("sweep/results.jsonl"));
+  const std::string rows = graspbed::test_support::ReadText(dir_.Path("sweep/results.jsonl"));
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2) << rows;
   // A parameter only the plugin has: the sweep really ran the plugin (grip_slip would refuse it).
   EXPECT_THAT(rows, HasSubstr("\"controller.params.target_grip_n\":4"));
@@ -308,7 +308,7 @@ expectations: {not_dropped: true}
   ASSERT_EQ(score.exit_code, 0) << score.err << score.out;
   EXPECT_THAT(score.out, HasSubstr("plugin:" + kThreshold.substr(0, 10)));
   const nlohmann::json card =
-      nlohmann::json::parse(graspbed::testing::ReadText(dir_.Path("score/scorecard.json")));
+      nlohmann::json::parse(graspbed::test_support::ReadText(dir_.Path("score/scorecard.json")));
   ASSERT_EQ(card.at("controllers").size(), 2u);
   EXPECT_EQ(card.at("controllers")[1].at("controller"), "plugin:" + kThreshold);
 }

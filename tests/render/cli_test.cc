@@ -15,10 +15,10 @@ namespace graspbed {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::CliResult;
-using testing::RunCli;
-using testing::SourcePath;
-using testing::TempDir;
+using test_support::CliResult;
+using test_support::RunCli;
+using test_support::SourcePath;
+using test_support::TempDir;
 
 constexpr int kExitOk = 0;
 constexpr int kExitBadInput = 2;

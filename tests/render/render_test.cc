@@ -23,7 +23,7 @@
 namespace graspbed::sim {
 namespace {
 
-using graspbed::testing::SourcePath;
+using graspbed::test_support::SourcePath;
 
 // Instants of the default scenario: open hand around the box, then the pinch during the lift [s].
 constexpr double kBeforeContactS = 0.12;

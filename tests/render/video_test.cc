@@ -24,10 +24,10 @@ namespace graspbed {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::CliResult;
-using testing::RunCli;
-using testing::SourcePath;
-using testing::TempDir;
+using test_support::CliResult;
+using test_support::RunCli;
+using test_support::SourcePath;
+using test_support::TempDir;
 
 constexpr int kExitOk = 0;
 constexpr int kExitBadInput = 2;
@@ -166,8 +166,8 @@ TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
 TEST(VideoCliTest, WithoutFfmpegSaysSoBeforeSimulating) {
   TempDir dir("video_no_ffmpeg");
   const CliResult result =
-      testing::RunCliUnder("env PATH=/nonexistent ", "run " + SourcePath("scenarios/default.yaml") +
-                                                         " --out " + dir.Path("run") + " --video");
+      test_support::RunCliUnder("env PATH=/nonexistent ", "run " + SourcePath("scenarios/default.yaml") +
+                                                              " --out " + dir.Path("run") + " --video");
   EXPECT_EQ(result.exit_code, 1) << result.err;
   EXPECT_NE(
       result.err.find("video: the ffmpeg program ('ffmpeg') is not installed or not on PATH (on Debian: "

@@ -13,11 +13,11 @@
 namespace graspbed {
 namespace {
 
-using testing::CliResult;
-using testing::RunCli;
-using testing::RunCliUnder;
-using testing::SourcePath;
-using testing::TempDir;
+using test_support::CliResult;
+using test_support::RunCli;
+using test_support::RunCliUnder;
+using test_support::SourcePath;
+using test_support::TempDir;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;

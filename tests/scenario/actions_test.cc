@@ -17,12 +17,12 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::TempDir;
-using testing::HeldBoxScenario;
-using testing::kHeldInAirS;
-using testing::RunScenarioText;
-using testing::ScenarioRun;
-using testing::Signals;
+using graspbed::test_support::TempDir;
+using test_support::HeldBoxScenario;
+using test_support::kHeldInAirS;
+using test_support::RunScenarioText;
+using test_support::ScenarioRun;
+using test_support::Signals;
 
 constexpr double kPositionTolM = 1.5e-3;  // wrist servo tracking and object settling
 constexpr double kForceTolN = 1e-6;       // script force/mass columns are set exactly

@@ -33,12 +33,12 @@ namespace graspbed::scenario {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
-using testing::HeldBoxScenario;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
+using test_support::HeldBoxScenario;
 
 // Exit codes of the CLI (app/command_registry.h, app/cmd_run.cc).
 constexpr int kExitOk = 0;

@@ -24,7 +24,7 @@ constexpr double kCloseEffort = 0.3;
 class EmulatedHandTest : public ::testing::Test {
  protected:
   EmulatedHandTest()
-      : config_(LoadScenarioFromString(testing::HeldBoxScenario(2.0), "held_box.yaml")),
+      : config_(LoadScenarioFromString(test_support::HeldBoxScenario(2.0), "held_box.yaml")),
         layout_(sensor::LoadLayout(ResolveLayoutPath(config_))) {}
 
   sensor::RawFrame EmptyFrame() const {
@@ -86,7 +86,7 @@ TEST_F(EmulatedHandTest, TheHostsMotorGraspsAndItsStreamStopFreezesTheOutcome) {
 }
 
 TEST(RigConfigForTest, MapsTheScenarioOntoTheRig) {
-  ScenarioConfig config = LoadScenarioFromString(testing::HeldBoxScenario(1.0), "held_box.yaml");
+  ScenarioConfig config = LoadScenarioFromString(test_support::HeldBoxScenario(1.0), "held_box.yaml");
   config.sensor.drop_probability = 0.25;
   config.sensor.latency_s = 0.002;
   config.controller.rate_hz = 500.0;

@@ -17,10 +17,10 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::TempDir;
-using testing::HeldBoxScenario;
-using testing::RunScenarioText;
-using testing::ScenarioRun;
+using graspbed::test_support::TempDir;
+using test_support::HeldBoxScenario;
+using test_support::RunScenarioText;
+using test_support::ScenarioRun;
 
 constexpr double kTimeTolS = 1e-9;
 constexpr double kTickS = 0.001;  // control period of the synthetic ticks

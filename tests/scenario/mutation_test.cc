@@ -27,11 +27,11 @@ namespace graspbed::scenario {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::RunCliWithin;
-using graspbed::testing::SourcePath;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCliWithin;
+using graspbed::test_support::SourcePath;
+using graspbed::test_support::TempDir;
 
 constexpr uint64_t kDefaultSeed = 20261123;
 // Enough runs to reach every shipped file and many keys, few enough for about 20 s on 2 busy cores.

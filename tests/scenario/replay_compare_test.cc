@@ -20,12 +20,12 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
-using testing::Signals;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
+using test_support::Signals;
 
 // A shipped scenario with slip: the grip-slip controller's commands depend on every frame.
 constexpr char kScenario[] = "scenarios/pull_ramp.yaml";
@@ -127,7 +127,7 @@ TEST_F(ReplayCompareTest, AnotherControllerShowsItsCommandsBesideTheRecordedOnes
     EXPECT_TRUE(signals.Has(column)) << column;
   }
   EXPECT_FALSE(signals.Has("true_squeeze_n")) << "a replay has no ground truth: its columns are absent";
-  EXPECT_TRUE(graspbed::testing::ReadText(Path("open_loop") + "/grip.png").rfind("\x89PNG", 0) == 0);
+  EXPECT_TRUE(graspbed::test_support::ReadText(Path("open_loop") + "/grip.png").rfind("\x89PNG", 0) == 0);
 }
 
 TEST_F(ReplayCompareTest, AFrameLogReplaysFrameByFrameUnderTheScenariosIntentScript) {

@@ -32,15 +32,15 @@ namespace graspbed::scenario {
 namespace {
 
 namespace fs = std::filesystem;
-using graspbed::testing::CliBinary;
-using graspbed::testing::CliResult;
-using graspbed::testing::ErrorOf;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::SourcePath;
-using graspbed::testing::TempDir;
-using testing::HeldBoxScenario;
-using testing::Signals;
+using graspbed::test_support::CliBinary;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ErrorOf;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::SourcePath;
+using graspbed::test_support::TempDir;
+using test_support::HeldBoxScenario;
+using test_support::Signals;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
@@ -251,7 +251,7 @@ TEST(RunEndsTest, TheOverlapCheckPassesAHandPreShapedJustAroundTheObject) {
 // used to hold 0.1 s) delays the frames instead of ending the run with an error.
 TEST(RunEndsTest, LatencyAddedMidRunBeyondTheDefaultRingRunsToTheEnd) {
   const TempDir dir("run_ends_latency");
-  const testing::ScenarioRun run = testing::RunScenarioText(
+  const test_support::ScenarioRun run = test_support::RunScenarioText(
       dir, "late", HeldBoxScenario(0.8, "  - {at_s: 0.2, action: add_latency, latency_s: 0.5}\n"));
   EXPECT_TRUE(run.result.completed);
   EXPECT_FALSE(run.result.metrics.physics_fault);

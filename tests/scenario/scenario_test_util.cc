@@ -8,7 +8,7 @@
 
 #include "sim/scenario/scenario_config.h"
 
-namespace graspbed::scenario::testing {
+namespace graspbed::scenario::test_support {
 
 // The scenario-machinery tests (actions, faults, metrics, expectations) run on the slide-joint jaw
 // fixture: its pinch is symmetric and its closing slow and exact, so their timelines and figures
@@ -78,7 +78,7 @@ size_t Signals::RowAt(double time_s) const {
   return time_.empty() ? 0 : time_.size() - 1;
 }
 
-ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name,
+ScenarioRun RunScenarioText(const graspbed::test_support::TempDir& dir, const std::string& name,
                             const std::string& yaml) {
   const std::string file = dir.Write(name + ".yaml", yaml);
   const ScenarioConfig config = LoadScenario(file);
@@ -89,4 +89,4 @@ ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::st
   return {std::move(result), Signals(options.out_dir + "/signals.csv")};
 }
 
-}  // namespace graspbed::scenario::testing
+}  // namespace graspbed::scenario::test_support

@@ -9,7 +9,7 @@
 #include "sim/scenario/runner.h"
 #include "tests/support/temp_dir.h"
 
-namespace graspbed::scenario::testing {
+namespace graspbed::scenario::test_support {
 
 /// A box of 100 g (friction 0.7) between the fingers of a hand pre-shaped 5 mm wider than it, under the
 /// open-loop controller at its default effort: closed at 0.04 s, touched after the readout's tare
@@ -51,7 +51,7 @@ struct ScenarioRun {
   RunResult result;
   Signals signals;
 };
-ScenarioRun RunScenarioText(const graspbed::testing::TempDir& dir, const std::string& name,
+ScenarioRun RunScenarioText(const graspbed::test_support::TempDir& dir, const std::string& name,
                             const std::string& yaml);
 
-}  // namespace graspbed::scenario::testing
+}  // namespace graspbed::scenario::test_support

@@ -12,7 +12,7 @@
 namespace graspbed::scenario {
 namespace {
 
-using testing::HeldBoxScenario;
+using test_support::HeldBoxScenario;
 
 TEST(Schedule, LongestFirstKeepsTheOrderOfEqualCosts) {
   EXPECT_EQ(LongestFirst(std::vector<double>{2.8, 2.5, 20.0, 3.0, 2.8}),

@@ -24,10 +24,10 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::CliResult;
-using graspbed::testing::ReadText;
-using graspbed::testing::RunCli;
-using graspbed::testing::TempDir;
+using graspbed::test_support::CliResult;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
 
 constexpr double kTol = 1e-9;
 constexpr int kExitOk = 0;
@@ -145,20 +145,21 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
 TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
   TempDir dir;
   const std::string no_version = dir.Write("a.yaml", "name: s\nbases:\n  - {scenario: x.yaml}\n");
-  EXPECT_NE(
-      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(no_version); }).find("version"),
-      std::string::npos);
+  EXPECT_NE(graspbed::test_support::ErrorOf<common::ConfigError>([&] {
+              LoadScorecardSet(no_version);
+            }).find("version"),
+            std::string::npos);
   const std::string missing =
       dir.Write("b.yaml", "name: s\nversion: 1\nbases:\n  - {scenario: nowhere.yaml}\n");
   const std::string message =
-      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(missing); });
+      graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(missing); });
   EXPECT_NE(message.find("b.yaml:4: bases[0].scenario = nowhere.yaml: no such file"), std::string::npos)
       << message;
   const std::string bad_range = dir.Write(
       "c.yaml", "name: s\nversion: 1\nbases:\n  - scenario: " + kScenarios +
                     "/default.yaml\n    vary:\n      - {key: object.mass_kg, min: 0.4, max: 0.1}\n");
   const std::string range_message =
-      graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
+      graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
   EXPECT_NE(range_message.find("bases[0].vary[0].max = 0.1: must be >= min"), std::string::npos)
       << range_message;
 }

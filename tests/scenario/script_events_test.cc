@@ -27,10 +27,10 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::TempDir;
-using testing::RunScenarioText;
-using testing::ScenarioRun;
-using testing::Signals;
+using graspbed::test_support::TempDir;
+using test_support::RunScenarioText;
+using test_support::ScenarioRun;
+using test_support::Signals;
 
 constexpr double kControlTickS = 0.001;   // default controller.rate_hz
 constexpr double kPhysicsStepS = 0.0005;  // default physics.timestep_s
@@ -38,7 +38,8 @@ constexpr double kGraspForceN = 0.3;      // default metrics.grasp_force_n
 constexpr double kLiftHeightM = 0.05;
 
 std::string LoadError(const std::string& text) {
-  return graspbed::testing::ErrorOf<common::ConfigError>([&] { LoadScenarioFromString(text, "test.yaml"); });
+  return graspbed::test_support::ErrorOf<common::ConfigError>(
+      [&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 
 const ExpectationOutcome* FindOutcome(const RunResult& result, const std::string& prefix) {
@@ -272,9 +273,10 @@ TEST(ScriptEventRunTest, AMissingEventTimesOutFailsTheRunAndLaterFixedActionsSti
   const TempDir dir("script_events_test");
   // The open-loop controller never flags slip: the lift waits 0.3 s and is given up, the action
   // chained behind it never runs, the fixed open later in the file still fires.
-  const ScenarioRun run = RunScenarioText(
-      dir, "timeout",
-      testing::HeldBoxScenario(0.8, R"(  - {after: slip_flagged, timeout_s: 0.3, action: lift, height_m: 0.02}
+  const ScenarioRun run =
+      RunScenarioText(dir, "timeout",
+                      test_support::HeldBoxScenario(
+                          0.8, R"(  - {after: slip_flagged, timeout_s: 0.3, action: lift, height_m: 0.02}
   - {after: grasped, timeout_s: 0.3, action: add_mass, mass_kg: 0.05}
   - {at_s: 0.6, action: open}
 )"));
@@ -307,7 +309,7 @@ TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
   // The runner's loop without its logging: a script with fixed and event actions of every kind of
   // wait, on a rig built as RunScenario builds it.
   const ScenarioConfig config = LoadScenarioFromString(
-      testing::HeldBoxScenario(
+      test_support::HeldBoxScenario(
           0.8, R"(  - {after: grasped, timeout_s: 0.5, action: add_mass, mass_kg: 0.01, ramp_s: 0.1}
   - {after: stable, delay_s: 0.05, timeout_s: 0.5, action: shake, frequency_hz: 5, amplitude_m: 0.001, duration_s: 0.1}
   - {after: slip_flagged, timeout_s: 0.1, action: pull, force_n: [0, 0, -1]}
@@ -324,13 +326,13 @@ TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
                   rig_config, controller::MakeController(config.controller.name, config.controller.params));
   ScriptPlayer player(config);
   player.Start(rig);
-  const long before = graspbed::testing::AllocationCount();
+  const long before = graspbed::test_support::AllocationCount();
   while (rig.time_s() < config.duration_s - 1e-9) {
     player.Update(rig.time_s(), rig);
     if (rig.Step())
       player.Observe(rig.time_s(), rig.loop().state(), rig.controller().telemetry().slip_detected);
   }
-  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
+  EXPECT_EQ(graspbed::test_support::AllocationCount() - before, 0);
   // The waits were exercised: grasped, stable and released fired, slip_flagged timed out.
   const std::vector<ActionTiming>& t = player.timings();
   ASSERT_EQ(t.size(), 8u);
@@ -341,12 +343,13 @@ TEST(ScriptEventRunTest, PlayerUpdateAndObserveAllocateNothing) {
 }
 
 TEST(ScriptEventRunTest, TheCliExitsOneWhenAnEventTimesOutAndNamesActionEventAndTimeout) {
-  if (graspbed::testing::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
+  if (graspbed::test_support::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY must point at the CLI";
   const TempDir dir("script_events_test");
-  const std::string file = dir.Write(
-      "wait.yaml", testing::HeldBoxScenario(0.5, "  - {after: released, timeout_s: 0.2, action: open}\n"));
-  const graspbed::testing::CliResult result =
-      graspbed::testing::RunCli("run " + file + " --no-plots --out " + dir.Path("out"));
+  const std::string file =
+      dir.Write("wait.yaml",
+                test_support::HeldBoxScenario(0.5, "  - {after: released, timeout_s: 0.2, action: open}\n"));
+  const graspbed::test_support::CliResult result =
+      graspbed::test_support::RunCli("run " + file + " --no-plots --out " + dir.Path("out"));
   EXPECT_EQ(result.exit_code, 1) << result.out << result.err;
   EXPECT_NE(result.out.find("[FAIL] script: open after released (line 8)"), std::string::npos) << result.out;
   EXPECT_NE(result.out.find("released within 0.200 s"), std::string::npos) << result.out;

@@ -18,7 +18,7 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::TempDir;
+using graspbed::test_support::TempDir;
 
 constexpr double kPaperKn = 5.5e-4;
 constexpr double kPaperKt = 4.1e-4;
@@ -26,13 +26,13 @@ constexpr double kPaperKt = 4.1e-4;
 constexpr double kLinearTol = 1e-9;
 
 std::string ErrorOf(const std::string& text) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(
       [&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 
 /// The shipped FEA config with `from` replaced by `to`; "" when `from` is not in it.
 std::string ShippedFeaConfigWith(const std::string& from, const std::string& to) {
-  std::string text = graspbed::testing::ReadText(fea::DefaultFeaConfigPath());
+  std::string text = graspbed::test_support::ReadText(fea::DefaultFeaConfigPath());
   const size_t at = text.find(from);
   if (at == std::string::npos) return "";
   return text.replace(at, from.size(), to);

@@ -13,7 +13,7 @@ namespace graspbed::scenario {
 namespace {
 
 std::string ErrorOf(const std::string& text) {
-  return graspbed::testing::ErrorOf<std::invalid_argument>(
+  return graspbed::test_support::ErrorOf<std::invalid_argument>(
       [&] { LoadScenarioFromString(text, "test.yaml"); });
 }
 

@@ -19,8 +19,8 @@
 namespace graspbed::scenario {
 namespace {
 
-using testing::SourcePath;
-using testing::TempDir;
+using test_support::SourcePath;
+using test_support::TempDir;
 
 // signals.csv and states.csv print 9 significant digits: positions of ~0.1 m to ~1e-9 m, with room for
 // the rounding of the velocity used below.

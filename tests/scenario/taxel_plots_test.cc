@@ -18,10 +18,10 @@
 namespace graspbed::scenario {
 namespace {
 
-using graspbed::testing::TempDir;
-using testing::HeldBoxScenario;
-using testing::kHeldInAirS;
-using testing::Signals;
+using graspbed::test_support::TempDir;
+using test_support::HeldBoxScenario;
+using test_support::kHeldInAirS;
+using test_support::Signals;
 
 constexpr int kTaxelWidthPx = 1000;  // plot::Heatmap defaults, used by the runner
 constexpr int kTaxelHeightPx = 600;

@@ -39,19 +39,19 @@ TEST(AllocationTest, PerFramePathAllocatesNothing) {
   RawFrame frame;
   ReadoutFrame readout_frame;
   TactileState state;
-  const long before = graspbed::testing::AllocationCount();
+  const long before = graspbed::test_support::AllocationCount();
   for (int i = 0; i < 50; ++i) {  // spans taring and tared frames
     model.Sample(loads, i * 1e-3, &frame);
     readout.Process(frame, &readout_frame);
     inversion.Invert(readout_frame, &state);
   }
-  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
+  EXPECT_EQ(graspbed::test_support::AllocationCount() - before, 0);
   EXPECT_TRUE(readout.tared());
   EXPECT_EQ(state.validity[2], UnitValidity::kOpen);
   // The counter does count: a vector allocates.
   std::vector<int> probe(10);
   escaped = probe.data();
-  EXPECT_GT(graspbed::testing::AllocationCount() - before, 0);
+  EXPECT_GT(graspbed::test_support::AllocationCount() - before, 0);
 }
 
 }  // namespace

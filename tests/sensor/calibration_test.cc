@@ -17,9 +17,9 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::ErrorOf;
+using test_support::ErrorOf;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 TEST(CalibrationTest, SaveLoadRoundTripLeavesNoTemporaryFile) {
   TempDir dir;

@@ -14,12 +14,12 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::CliBinary;
-using testing::CliResult;
+using test_support::CliBinary;
+using test_support::CliResult;
+using test_support::RunCli;
+using test_support::SourcePath;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::RunCli;
-using testing::SourcePath;
-using testing::TempDir;
 
 constexpr double kOhmTol = 0.5;
 constexpr double kForceTolN = 1e-6;

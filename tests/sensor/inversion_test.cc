@@ -13,10 +13,10 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::ErrorOf;
+using test_support::ErrorOf;
+using test_support::SourcePath;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::SourcePath;
-using testing::TempDir;
 
 constexpr double kForceTolN = 1e-9;
 

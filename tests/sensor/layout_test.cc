@@ -13,10 +13,10 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::ErrorOf;
+using test_support::ErrorOf;
+using test_support::SourcePath;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::SourcePath;
-using testing::TempDir;
 
 constexpr double kArcTolM = 1e-7;        // required accuracy is 1 um; we check 0.1 um
 constexpr double kOnSurfaceTol = 1e-12;  // residual of y^2/a^2 + z^2/b^2 = 1

@@ -20,9 +20,9 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::ErrorOf;
+using test_support::ErrorOf;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 constexpr double kRelTol = 1e-12;
 constexpr int kUnits = 4;

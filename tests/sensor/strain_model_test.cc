@@ -15,9 +15,9 @@
 namespace graspbed::sensor {
 namespace {
 
-using testing::ErrorOf;
+using test_support::ErrorOf;
+using test_support::TempDir;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 constexpr double kOhmTol = 1e-6;      // exact model, rounding only
 constexpr double kPaperOhmTol = 0.5;  // the paper quotes whole ohms

@@ -33,7 +33,7 @@ constexpr int kColumn = 1;
 constexpr double kPlateHalfThicknessM = 1e-3;
 constexpr double kPlateGapM = 0.05e-3;  // initial air gap above the mesa tops
 
-class ContactMappingTest : public testing::MujocoTest {
+class ContactMappingTest : public test_support::MujocoTest {
  protected:
   void SetUp() override {
     SceneConfig scene;

@@ -12,7 +12,7 @@
 namespace graspbed::sim {
 namespace {
 
-class FaultTest : public testing::MujocoTest {};
+class FaultTest : public test_support::MujocoTest {};
 
 TEST_F(FaultTest, NanVelocityIsReportedWithTimeAndCause) {
   Simulation& simulation = MakeSimulation(DefaultLayout(), SceneConfig{});

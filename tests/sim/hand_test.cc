@@ -27,7 +27,7 @@ constexpr double kMinCoverage = 0.95;
 // (the array resolves 5 mm rows), or the flexing finger shows the array nothing new.
 constexpr double kMinCentroidShiftM = 2.5e-3;
 
-class HandTest : public testing::MujocoTest {
+class HandTest : public test_support::MujocoTest {
  protected:
   static ProstheticKinematics DefaultKinematics(const SceneConfig& scene) {
     const sensor::Layout& layout = DefaultLayout();
@@ -141,7 +141,7 @@ TEST_F(HandTest, TheLoadMovesAlongTheFingertipWithTheObjectsWidth) {
 
 // Physics stays honest on the flexing finger: a held object does not creep, and it slips where
 // Coulomb friction says it must (docs/simulation.md, "Contact and solver parameters").
-class FrictionTest : public testing::MujocoTest {
+class FrictionTest : public test_support::MujocoTest {
  protected:
   // A 100 g box pinched at half effort in zero gravity, no table: the only tangential load is the
   // external force a test applies.

@@ -14,15 +14,15 @@
 namespace graspbed::sim {
 namespace {
 
-using graspbed::testing::ReadText;
-using graspbed::testing::SourcePath;
+using graspbed::test_support::ReadText;
+using graspbed::test_support::SourcePath;
 
 constexpr double kPoseTolM = 1e-9;
 /// The MJCF carries 8 significant digits, so a unit axis comes back within a few 1e-9.
 constexpr double kAxisTol = 1e-7;
 constexpr double kForceTolN = 0.05;
 
-class ModelTest : public testing::MujocoTest {};
+class ModelTest : public test_support::MujocoTest {};
 
 TEST_F(ModelTest, CheckedInModelIsCurrent) {
   const std::string path = SourcePath("models/hand_default.xml");

@@ -26,7 +26,7 @@ constexpr double kMaxUnevenShare = 1.25;
 constexpr double kCloseAtS = 0.15;
 constexpr double kTwistNm = 0.02;  // about the vertical: a 0.4 N couple across the 50 mm box
 
-class RigTest : public testing::MujocoTest {
+class RigTest : public test_support::MujocoTest {
  protected:
   // Scripted lift: close from t = 0, lift the wrist by kLiftHeightM over 0.5 s from t = 1.5 s.
   static void CloseAndLift(SimRig& rig, double end_s) {
@@ -206,13 +206,13 @@ TEST_F(RigTest, StepSamplingAndControlAllocateNothing) {
   rig.controller().SetIntent(controller::GraspIntent::kClose);
   rig.AdvanceTo(0.9);  // in contact, tared
   std::vector<sensor::UnitLoad> loads(rig.simulation().unit_count());
-  const long before = graspbed::testing::AllocationCount();
+  const long before = graspbed::test_support::AllocationCount();
   for (int i = 0; i < 400; ++i) {
     rig.Step();
     rig.simulation().ComputeUnitLoads(loads);
     (void)rig.simulation().truth();
   }
-  EXPECT_EQ(graspbed::testing::AllocationCount() - before, 0);
+  EXPECT_EQ(graspbed::test_support::AllocationCount() - before, 0);
   EXPECT_GT(rig.loop().state().contact_count, 0);
 }
 

@@ -14,7 +14,7 @@
 #include "sim/sim_rig.h"
 #include "sim/simulation.h"
 
-namespace graspbed::sim::testing {
+namespace graspbed::sim::test_support {
 
 class MujocoTest : public ::testing::Test {
  protected:
@@ -57,4 +57,4 @@ class MujocoTest : public ::testing::Test {
   std::vector<const Simulation*> expected_faults_;
 };
 
-}  // namespace graspbed::sim::testing
+}  // namespace graspbed::sim::test_support

@@ -33,8 +33,8 @@ void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
 void operator delete(void* pointer, const std::nothrow_t&) noexcept { std::free(pointer); }
 void operator delete[](void* pointer, const std::nothrow_t&) noexcept { std::free(pointer); }
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 long AllocationCount() { return allocation_count.load(); }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -3,9 +3,9 @@
 // allocates nothing. Linking graspbed_allocation_counter replaces the global allocation functions of
 // that test executable (and only of the executables that link it).
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 /// Global operator new / new[] calls since the program started.
 long AllocationCount();
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -13,7 +13,7 @@
 
 extern char** environ;
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 ChildProcess::ChildProcess(const std::vector<std::string>& args, const std::string& out_path,
                            const std::string& err_path, int stdin_fd)
@@ -62,4 +62,4 @@ std::optional<int> ChildProcess::Wait(double timeout_s) {
 std::string ChildProcess::out() const { return ReadText(out_path_); }
 std::string ChildProcess::err() const { return ReadText(err_path_); }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 class ChildProcess {
  public:
@@ -34,4 +34,4 @@ class ChildProcess {
   std::string err_path_;
 };
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

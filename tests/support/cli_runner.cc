@@ -8,7 +8,7 @@
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 std::string CliBinary() {
   const char* binary = std::getenv("GRASPBED_BINARY");
@@ -53,4 +53,4 @@ CliResult RunCliWithin(const std::string& arguments, double limit_s) {
   return result;
 }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

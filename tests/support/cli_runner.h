@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 /// The CLI binary, or "" when GRASPBED_BINARY is not set (the test was not started by ctest). Each
 /// fixture decides whether that skips or fails its tests.
@@ -31,4 +31,4 @@ CliResult RunCliWithin(const std::string& arguments, double limit_s);
 /// RunCli with `prefix` (shell-safe words ending in a space) before the binary, e.g. "xvfb-run -a ".
 CliResult RunCliUnder(const std::string& prefix, const std::string& arguments);
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

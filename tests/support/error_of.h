@@ -5,7 +5,7 @@
 #include <functional>
 #include <string>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 /// what() of the `Error` that `action` throws, or "(no error)" when it throws none. An exception of
 /// any other type propagates and fails the test, so ErrorOf<std::invalid_argument> also checks the
@@ -20,4 +20,4 @@ std::string ErrorOf(const std::function<void()>& action) {
   return "(no error)";
 }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 std::string ReadText(const std::string& path) {
   std::ifstream stream(path, std::ios::binary);
@@ -17,4 +17,4 @@ std::string SourcePath(const std::string& relative) {
   return std::string(GRASPBED_SOURCE_DIR) + "/" + relative;
 }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

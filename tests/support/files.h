@@ -3,7 +3,7 @@
 
 #include <string>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 /// Whole file as a string, byte for byte ("" when it cannot be read).
 std::string ReadText(const std::string& path);
@@ -11,4 +11,4 @@ std::string ReadText(const std::string& path);
 /// Absolute path of `relative` (e.g. "sensor/layouts/paper_3x3.yaml") in the source tree.
 std::string SourcePath(const std::string& relative);
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <stdexcept>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 TempDir::TempDir(const std::string& tag) {
   // pid + counter: unique across the test executables ctest runs in parallel and within one of them.
@@ -32,4 +32,4 @@ std::string TempDir::Write(const std::string& name, const std::string& text) con
   return full.string();
 }
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <string>
 
-namespace graspbed::testing {
+namespace graspbed::test_support {
 
 /// A fresh, empty directory under the system temp dir (graspbed_<tag>_<pid>_<n>), removed with
 /// everything in it on destruction.
@@ -28,4 +28,4 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-}  // namespace graspbed::testing
+}  // namespace graspbed::test_support
