@@ -88,10 +88,9 @@ struct HwOptions {
 };
 
 controller::GraspIntent ParseIntent(const std::string& text) {
-  if (text == "close") return controller::GraspIntent::kClose;
-  if (text == "open") return controller::GraspIntent::kOpen;
-  if (text == "idle") return controller::GraspIntent::kIdle;
-  throw std::invalid_argument("--intent " + text + ": must be close, open or idle");
+  const std::optional<controller::GraspIntent> intent = controller::IntentFromName(text);
+  if (!intent) throw std::invalid_argument("--intent " + text + ": must be close, open or idle");
+  return *intent;
 }
 
 void RunHw(const HwOptions& options) {

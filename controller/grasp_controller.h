@@ -7,7 +7,9 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hand/hand_command.h"
@@ -22,6 +24,27 @@ using HandCommand = hand::HandCommand;
 
 /// What the user (EMG, a button, a scenario script) currently asks the hand to do.
 enum class GraspIntent { kIdle, kClose, kOpen };
+
+/// The intent's name in scripts, logs, the terminal and the Python API: "idle", "close" or "open".
+inline const char* ToString(GraspIntent intent) {
+  switch (intent) {
+    case GraspIntent::kClose:
+      return "close";
+    case GraspIntent::kOpen:
+      return "open";
+    case GraspIntent::kIdle:
+      break;
+  }
+  return "idle";
+}
+
+/// The intent named `name` ("idle", "close", "open"); nullopt for any other text.
+inline std::optional<GraspIntent> IntentFromName(std::string_view name) {
+  for (const GraspIntent intent : {GraspIntent::kIdle, GraspIntent::kClose, GraspIntent::kOpen}) {
+    if (name == ToString(intent)) return intent;
+  }
+  return std::nullopt;
+}
 
 /// Controller state exposed for logging and plots; fixed size, filled every update.
 struct ControllerTelemetry {

@@ -21,18 +21,6 @@ py::object ReadOnlyView(const T* data, int count, const std::shared_ptr<sensor::
   return array;
 }
 
-const char* IntentName(controller::GraspIntent intent) {
-  switch (intent) {
-    case controller::GraspIntent::kClose:
-      return "close";
-    case controller::GraspIntent::kOpen:
-      return "open";
-    case controller::GraspIntent::kIdle:
-      break;
-  }
-  return "idle";
-}
-
 }  // namespace
 
 void TactileStateView::Refresh() {
@@ -91,7 +79,7 @@ void PythonController::Reset() {
 void PythonController::SetIntent(controller::GraspIntent intent) {
   py::gil_scoped_acquire gil;
   try {
-    controller_.attr("set_intent")(IntentName(intent));
+    controller_.attr("set_intent")(controller::ToString(intent));
   } catch (py::error_already_set& error) {
     Fail("set_intent()", error.what());
   }

@@ -53,13 +53,6 @@ controller::GraspIntent IntentOf(ActionKind kind) {
                                      : controller::GraspIntent::kIdle;
 }
 
-std::optional<controller::GraspIntent> IntentFromText(const std::string& text) {
-  if (text == "close") return controller::GraspIntent::kClose;
-  if (text == "open") return controller::GraspIntent::kOpen;
-  if (text == "idle") return controller::GraspIntent::kIdle;
-  return std::nullopt;
-}
-
 std::string Where(const ScenarioConfig& config, const Action& action) {
   return (config.source_file.empty() ? std::string("scenario") : config.source_file) +
          (action.line > 0 ? ":" + std::to_string(action.line) : std::string()) + ": ";
@@ -296,7 +289,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     grasp->SetIntent(intent);
     if (intent == controller::GraspIntent::kClose && first_close_s < 0.0) first_close_s = applied_s;
     if (intents.size() < intents.capacity())
-      intents.push_back({IntentName(intent), source, received_s, applied_s});
+      intents.push_back({controller::ToString(intent), source, received_s, applied_s});
   };
   // Due script actions at loop time `t` (fixed times, in order).
   const auto fire_script = [&](double t) {
@@ -333,7 +326,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     const char** text = nullptr;
     double* row = log.AppendRow(&text);
     if (row == nullptr) return;
-    text[0] = IntentName(intent);
+    text[0] = controller::ToString(intent);
     text[1] = telemetry.phase;
     text[2] = telemetry.slip_cues;
     WriteLoopCells(row, time_s, loop, telemetry);
@@ -381,7 +374,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
       fire_script(t);
       if (intent_from_recording && session.intent[k] != recorded_intent) {
         recorded_intent = session.intent[k];
-        const auto next = IntentFromText(recorded_intent);
+        const auto next = controller::IntentFromName(recorded_intent);
         if (next && *next != intent) set_intent(*next, "recording", t, t);
       }
       replay_backend->Seek(k);

@@ -78,18 +78,6 @@ void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& l
   row[kSession] = static_cast<double>(loop.session());
 }
 
-const char* IntentName(controller::GraspIntent intent) {
-  switch (intent) {
-    case controller::GraspIntent::kClose:
-      return "close";
-    case controller::GraspIntent::kOpen:
-      return "open";
-    case controller::GraspIntent::kIdle:
-      return "idle";
-  }
-  return "idle";
-}
-
 void WriteCsvAtomic(const SignalLog& log, const std::string& path) {
   const std::string temp = TempPath(path);
   std::FILE* file = std::fopen(temp.c_str(), "w");

@@ -19,9 +19,6 @@ namespace graspbed::scenario::internal {
 /// Name of the file that marks a run in progress or interrupted.
 inline constexpr const char* kIncompleteMarker = "INCOMPLETE";
 
-/// "close", "open", "idle".
-const char* IntentName(controller::GraspIntent intent);
-
 /// Creates `dir` (std::invalid_argument naming --out when it cannot), removes the files an earlier
 /// run left there, and marks it INCOMPLETE.
 void PrepareOutputDir(const std::string& dir);

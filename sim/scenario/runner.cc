@@ -31,7 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 
 using internal::HorizontalLine;
-using internal::IntentName;
 using internal::kIncompleteMarker;
 using internal::kLoopColumnCount;
 using internal::Line;
@@ -338,7 +337,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     const char** text = nullptr;
     double* row = log.AppendRow(&text);
     if (row != nullptr) {
-      text[0] = IntentName(player.intent());
+      text[0] = controller::ToString(player.intent());
       text[1] = telemetry.phase;
       text[2] = telemetry.slip_cues;
       internal::WriteLoopCells(row, t, rig->loop(), telemetry);
