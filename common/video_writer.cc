@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,7 +17,7 @@
 #include <stdexcept>
 #include <vector>
 
-extern char** environ;
+#include "common/process.h"
 
 namespace graspbed::image {
 namespace {
@@ -44,28 +43,6 @@ std::string ReadTail(const std::string& path) {
   std::string all = text.str();
   while (!all.empty() && (all.back() == '\n' || all.back() == ' ')) all.pop_back();
   return all.size() > kErrorTailBytes ? "..." + all.substr(all.size() - kErrorTailBytes) : all;
-}
-
-/// Runs `argv` with stdin from `stdin_fd` (-1: /dev/null) and stderr to `log_path`; returns the pid.
-int Spawn(const std::vector<std::string>& argv, int stdin_fd, const std::string& log_path) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (stdin_fd >= 0) {
-    posix_spawn_file_actions_adddup2(&actions, stdin_fd, STDIN_FILENO);
-  } else {
-    posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  }
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  std::vector<char*> args;
-  for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = -1;
-  const int error = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
-  return pid;
 }
 
 /// Waits for `pid`; true when it exited with status 0.
@@ -134,7 +111,7 @@ VideoWriter::VideoWriter(const Options& options) : options_(options) {
       "-f",         "mp4",       temp_path_};
   // -nostdin only stops ffmpeg reading keys from stdin; the frames still come in as pipe:0.
   try {
-    pid_ = Spawn(argv, fds[0], log_path_);
+    pid_ = common::SpawnProcess(argv, fds[0], "", log_path_);
   } catch (...) {
     ::close(fds[0]);
     ::close(fds[1]);
@@ -255,7 +232,7 @@ void WriteVideoStrip(const std::string& video_path, int video_frames, int count,
                                          "-c:v",
                                          "png",
                                          temp};
-  const int pid = Spawn(argv, -1, log);
+  const int pid = common::SpawnProcess(argv, -1, "", log);
   const bool succeeded = WaitSucceeded(pid);
   const std::string message = ReadTail(log);
   std::remove(log.c_str());
