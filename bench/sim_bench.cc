@@ -11,15 +11,18 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <memory>
+#include <vector>
 
+#include "common/process.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
 #include "sim/sim_rig.h"
+#include "sim/physics_checks.h"
 #include "sim/simulation.h"
+#include "sim/step_profile.h"
 
 namespace graspbed::sim {
 namespace {
@@ -74,13 +77,6 @@ double WallSeconds(const std::chrono::steady_clock::time_point& start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// CPU time of this thread [s]: robust against other processes sharing the cores.
-double ThreadCpuSeconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
-
 void PrintRatio(const char* label, const SceneConfig& scene) {
   constexpr int kRounds = 6;
   constexpr double kRoundS = 1.0;
@@ -92,15 +88,15 @@ void PrintRatio(const char* label, const SceneConfig& scene) {
   double pipeline_cpu = 0.0;
   for (int round = 0; round < kRounds; ++round) {
     auto start = std::chrono::steady_clock::now();
-    double cpu_start = ThreadCpuSeconds();
+    double cpu_start = common::ThreadCpuSeconds();
     physics->StepUntil(physics->time_s() + kRoundS);
     physics_wall += WallSeconds(start);
-    physics_cpu += ThreadCpuSeconds() - cpu_start;
+    physics_cpu += common::ThreadCpuSeconds() - cpu_start;
     start = std::chrono::steady_clock::now();
-    cpu_start = ThreadCpuSeconds();
+    cpu_start = common::ThreadCpuSeconds();
     rig->AdvanceTo(rig->time_s() + kRoundS);
     pipeline_wall += WallSeconds(start);
-    pipeline_cpu += ThreadCpuSeconds() - cpu_start;
+    pipeline_cpu += common::ThreadCpuSeconds() - cpu_start;
   }
   const double simulated = kRounds * kRoundS;
   std::printf("\nPipeline cost, %s, 10 N pinch hold, %.0f s simulated each, interleaved:\n", label,
@@ -147,6 +143,37 @@ void PrintCoverage() {
   }
 }
 
+// One physics option against its speed and its fidelity: the held 10 N pinch profiled stage by
+// stage (CPU time per step; the stages are wall-timed shares of it), and the contact model's
+// promises measured with it: creep under half Coulomb's load (bound 5 um/s), pull / Coulomb at the
+// onset of slip (bound 1 +- 0.05) and the sensed share of the pinch (bound 0.95).
+struct PhysicsOption {
+  const char* name;
+  SceneConfig scene;
+};
+
+void PrintPhysicsOptions(const std::vector<PhysicsOption>& options) {
+  std::printf(
+      "\nPhysics options, held 10 N pinch of the default box (per step [us]; per simulated second [ms "
+      "CPU]):\n");
+  std::printf("  %-34s %6s %6s %6s %6s %6s %7s %5s %5s %5s %8s %7s %6s %5s\n", "option", "cpu", "coll",
+              "make", "proj", "solve", "ms/s", "con", "rows", "iter", "creep", "slip/C", "cover", "fault");
+  for (const PhysicsOption& option : options) {
+    auto simulation = HeldPhysics(option.scene);
+    const StepProfile p = ProfileSteps(*simulation, 1.0);
+    const double share = p.step_cpu_us / p.step_us;  // wall-timed stages scaled to CPU time
+    const CreepCheck creep = MeasureCreep(Layout(), option.scene);
+    const double onset = MeasureSlipOnsetRatio(Layout(), option.scene);
+    const PinchCheck pinch = MeasurePinch(Layout(), option.scene, 0.8, 0.2);
+    const bool fault = simulation->fault().occurred || creep.fault || pinch.fault;
+    std::printf("  %-34s %6.1f %6.1f %6.1f %6.1f %6.1f %7.1f %5.1f %5.1f %5.1f %6.2fum %7.4f %6.3f %5s\n",
+                option.name, p.step_cpu_us, share * p.collision_us, share * p.make_constraint_us,
+                share * p.project_constraint_us, share * p.solver_us,
+                p.step_cpu_us * 1e-3 / option.scene.physics.timestep_s, p.contacts, p.constraint_rows,
+                p.solver_iterations, creep.drift_m_s * 1e6, onset, pinch.sensed_share, fault ? "yes" : "-");
+  }
+}
+
 }  // namespace
 }  // namespace graspbed::sim
 
@@ -155,6 +182,43 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  {
+    using graspbed::sim::SceneConfig;
+    std::vector<graspbed::sim::PhysicsOption> options;
+    auto add = [&](const char* name, auto edit) {
+      SceneConfig scene;
+      edit(scene);
+      options.push_back({name, scene});
+    };
+    add("default", [](SceneConfig&) {});
+    add("timestep 0.5 ms", [](SceneConfig& s) { s.physics.timestep_s = 0.0005; });
+    add("tolerance 1e-8", [](SceneConfig& s) { s.physics.tolerance = 1e-8; });
+    add("noslip 0", [](SceneConfig& s) { s.physics.noslip_iterations = 0; });
+    add("noslip 1", [](SceneConfig& s) { s.physics.noslip_iterations = 1; });
+    add("noslip 2", [](SceneConfig& s) { s.physics.noslip_iterations = 2; });
+    add("noslip 0, impratio 100", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 100;
+    });
+    add("noslip 0, impratio 300", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 300;
+    });
+    add("noslip 0, impratio 1000", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 1000;
+    });
+    add("noslip 0, solimp dmax 0.999", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.object.solimp[1] = 0.999;
+    });
+    add("noslip 0, solimp 0.99 0.9999", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.object.solimp[0] = 0.99;
+      s.object.solimp[1] = 0.9999;
+    });
+    graspbed::sim::PrintPhysicsOptions(options);
+  }
   graspbed::sim::PrintRatio("prosthetic hand (default scene)", graspbed::sim::SceneConfig{});
   // The slide-joint jaw fixture: the default hand before the prosthetic one, for comparison.
   graspbed::sim::SceneConfig jaw;

@@ -45,7 +45,7 @@ using test_support::Signals;
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
 constexpr int kExitBadInput = 2;
-constexpr double kStepS = 0.0005;   // default physics.timestep_s
+const double kStepS = sim::PhysicsConfig{}.timestep_s;  // the default physics step [s]
 constexpr double kTimeTolS = 1e-9;  // sums of timesteps
 constexpr double kInjectAtS = 0.3;  // mid-run: the object is held and being lifted
 // A run that ends at its fault takes a fraction of a second; without the fix it spun forever. The
