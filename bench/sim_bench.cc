@@ -9,18 +9,27 @@
 // coverage (sensed share of the finger's contact force) for a 10 N pinch of each object shape.
 // Run: build/bench/sim_bench   (docs/simulation.md)
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <string>
 #include <memory>
 #include <vector>
 
+#include "common/data_dir.h"
 #include "common/process.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
 #include "sim/sim_rig.h"
 #include "sim/physics_checks.h"
+#include "sim/scenario/runner.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/scenario/suite.h"
 #include "sim/simulation.h"
 #include "sim/step_profile.h"
 
@@ -72,6 +81,15 @@ void BM_FullPipeline(benchmark::State& bench) {
   bench.counters["sim_s_per_wall_s"] = benchmark::Counter(rig->time_s() - start, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_FullPipeline)->Unit(benchmark::kMicrosecond);
+
+// A scenario run's fixed cost before its first step: generate the MJCF, compile it, allocate mjData.
+void BM_BuildSimulation(benchmark::State& bench) {
+  for (auto _ : bench) {
+    Simulation simulation(Layout(), SceneConfig{});
+    benchmark::DoNotOptimize(simulation.time_s());
+  }
+}
+BENCHMARK(BM_BuildSimulation)->Unit(benchmark::kMillisecond);
 
 double WallSeconds(const std::chrono::steady_clock::time_point& start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -174,6 +192,125 @@ void PrintPhysicsOptions(const std::vector<PhysicsOption>& options) {
   }
 }
 
+// The physics settings before the speed work (issue 16): 0.5 ms steps, 3 noslip iterations, impratio 10.
+PhysicsConfig PhysicsBefore() {
+  PhysicsConfig physics;
+  physics.timestep_s = 0.0005;
+  physics.noslip_iterations = 3;
+  physics.impratio = 10.0;
+  return physics;
+}
+
+std::vector<scenario::Override> PhysicsOverrides(const PhysicsConfig& physics) {
+  return {{"physics.timestep_s", std::to_string(physics.timestep_s)},
+          {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
+          {"physics.impratio", std::to_string(physics.impratio)}};
+}
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// `graspbed run scenarios/default.yaml --no-plots` as a user starts it, whole process: the median of
+// `repeats` runs' wall and CPU (user + system) time [s].
+struct ProcessTime {
+  double wall_s = 0.0;
+  double cpu_s = 0.0;
+  bool ok = false;
+};
+ProcessTime TimeProcess(const std::vector<std::string>& argv, int repeats) {
+  std::vector<double> walls;
+  std::vector<double> cpus;
+  bool ok = true;
+  for (int i = 0; i < repeats; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    const int pid = common::SpawnProcess(argv, -1, "", "");
+    int status = 0;
+    rusage usage{};
+    if (::wait4(pid, &status, 0, &usage) != pid) return {};
+    walls.push_back(WallSeconds(start));
+    cpus.push_back(static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                   1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec));
+    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  }
+  return {Median(walls), Median(cpus), ok};
+}
+
+// Real-time factors of the default scenario and the shipped suite's runs per minute, with the
+// contact model's figures beside them, for one set of physics settings.
+void PrintScenarioSpeed(const char* label, const PhysicsConfig& physics, const std::string& cli) {
+  const std::string out = (std::filesystem::temp_directory_path() / "graspbed_sim_bench").string();
+  const std::string default_yaml = common::DataPath("scenarios/default.yaml");
+  const std::vector<scenario::Override> overrides = PhysicsOverrides(physics);
+  const scenario::ScenarioConfig config = scenario::LoadScenario(default_yaml, overrides);
+
+  // In this process: the run as a suite or sweep makes it (outputs written, no plots).
+  constexpr int kRepeats = 5;
+  std::vector<double> walls;
+  std::vector<double> cpus;
+  bool passed = true;
+  for (int i = 0; i < kRepeats; ++i) {
+    scenario::RunOptions options;
+    options.out_dir = out + "/default";
+    options.write_plots = false;
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = common::ThreadCpuSeconds();
+    const scenario::RunResult result = scenario::RunScenario(config, options);
+    cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
+    walls.push_back(WallSeconds(start));
+    passed = passed && result.passed;
+  }
+  // The whole process, as a user starts it.
+  ProcessTime process{};
+  if (!cli.empty()) {
+    std::vector<std::string> argv = {cli, "run", default_yaml, "--no-plots", "--out", out + "/process"};
+    for (const scenario::Override& o : overrides) {
+      argv.push_back("--set");
+      argv.push_back(o.key + "=" + o.value);
+    }
+    process = TimeProcess(argv, kRepeats);
+  }
+  // The suite on 1 and 2 worker threads.
+  const std::vector<scenario::ScenarioConfig> suite =
+      scenario::LoadScenarios(scenario::ListScenarioFiles(common::DataPath("scenarios")), overrides);
+  double runs_per_min[2] = {0.0, 0.0};
+  int suite_passed = 0;
+  for (int jobs = 1; jobs <= 2; ++jobs) {
+    scenario::SuiteOptions options;
+    options.jobs = jobs;
+    options.out_dir = out + "/suite";
+    options.write_plots = false;
+    const scenario::SuiteResult result = scenario::RunSuite(suite, options);
+    runs_per_min[jobs - 1] = 60.0 * static_cast<double>(suite.size()) / result.wall_s;
+    suite_passed = result.passed;
+  }
+  SceneConfig scene;
+  scene.physics = physics;
+  const CreepCheck creep = MeasureCreep(Layout(), scene);
+  const double onset = MeasureSlipOnsetRatio(Layout(), scene);
+  const PinchCheck pinch = MeasurePinch(Layout(), scene, 0.8, 0.2);
+  const double duration = config.duration_s;
+  std::printf("  %-40s %7.1fx %7.1fx %7.1fx %7.1fx %9.1f %9.1f %4d/%-3zu %6.2fum %7.4f %6.3f %s\n", label,
+              duration / Median(walls), duration / Median(cpus),
+              process.wall_s > 0.0 ? duration / process.wall_s : 0.0,
+              process.cpu_s > 0.0 ? duration / process.cpu_s : 0.0, runs_per_min[0], runs_per_min[1],
+              suite_passed, suite.size(), creep.drift_m_s * 1e6, onset, pinch.sensed_share,
+              passed && (cli.empty() || process.ok) ? "" : " (default scenario FAILED)");
+}
+
+void PrintScenarioSpeeds(const std::string& cli) {
+  std::printf(
+      "\nScenario speed: the default scenario's real-time factor (outputs written, no plots; median of 5) "
+      "in\n"
+      "this process and as a whole `graspbed run` process, wall and CPU; the shipped suite's runs per\n"
+      "minute on 1 and 2 worker threads and how many passed; the contact model's figures beside them:\n");
+  std::printf("  %-40s %8s %8s %8s %8s %9s %9s %8s %8s %7s %6s\n", "physics", "run wall", "run CPU",
+              "proc wall", "proc CPU", "suite/min", "2 cores", "passed", "creep", "slip/C", "cover");
+  PrintScenarioSpeed("before: 0.5 ms, noslip 3, impratio 10", PhysicsBefore(), cli);
+  PrintScenarioSpeed("now: the defaults", PhysicsConfig{}, cli);
+}
+
 }  // namespace
 }  // namespace graspbed::sim
 
@@ -226,5 +363,10 @@ int main(int argc, char** argv) {
   jaw.hand.open_gap_m = 0.065;
   graspbed::sim::PrintRatio("jaw fixture (the previous default hand)", jaw);
   graspbed::sim::PrintCoverage();
+#ifdef GRASPBED_CLI
+  graspbed::sim::PrintScenarioSpeeds(GRASPBED_CLI);
+#else
+  graspbed::sim::PrintScenarioSpeeds("");
+#endif
   return 0;
 }
