@@ -183,6 +183,13 @@ const std::vector<Binding>& Bindings() {
           "centroid_grip_band", slip.centroid_grip_band, 0.0, 10.0, "",
           "the centroid drift reference is taken afresh when the grip moved by more than this fraction "
           "(the pad rolls with the grip); 0 = off"),
+      GRASPBED_BIND("centroid_load_fraction", slip.centroid_load_fraction, 0.0, 10.0, "",
+                    "with a shear estimate, the centroid cue fires only while the load ratio is at least "
+                    "this fraction of the ratio threshold (the pad's centroid moves with load and "
+                    "squeeze); 0 = off"),
+      GRASPBED_BIND("centroid_rolling_preload_n", slip.centroid_rolling_preload_n, 0.0, 100.0, "N",
+                    "centroid_load_fraction applies to contacts that seated with at least this much "
+                    "locked-in shear (a pad that met the object obliquely and rolls)"),
       GRASPBED_BIND("detector_settle_s", slip.settle_s, 0.0, 1.0, "s",
                     "slip cues stay silent at least this long after contact onset or after stale data"),
       GRASPBED_BIND(

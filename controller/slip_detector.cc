@@ -72,6 +72,9 @@ void SlipDetectorConfig::Validate() const {
   Require(centroid_noise_sigmas >= 0.0, "centroid_noise_sigmas", centroid_noise_sigmas, "must be >= 0");
   Require(centroid_min_weight_n > 0.0, "centroid_min_weight_n", centroid_min_weight_n, "must be > 0");
   Require(centroid_grip_band >= 0.0, "centroid_grip_band", centroid_grip_band, "must be >= 0");
+  Require(centroid_load_fraction >= 0.0, "centroid_load_fraction", centroid_load_fraction, "must be >= 0");
+  Require(centroid_rolling_preload_n >= 0.0, "centroid_rolling_preload_n", centroid_rolling_preload_n,
+          "must be >= 0");
   Require(settle_s >= 0.0, "settle_s", settle_s, "must be >= 0");
   Require(settle_max_s >= settle_s, "settle_max_s", settle_max_s, "must be >= settle_s");
 }
@@ -217,7 +220,15 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   vibration_frames_ = signals_.vibration_rms_n > signals_.vibration_threshold_n ? vibration_frames_ + 1 : 0;
   signals_.vibration_slip = live && config_.vibration_enabled && !signals_.shear_blind &&
                             vibration_frames_ >= config_.vibration_confirm_frames;
-  signals_.centroid_slip = live && config_.centroid_enabled &&
+  // The centroid moves with load and squeeze on a soft pad: with a shear estimate to check it
+  // against, the movement is slip only while the load is a good part of the way to the friction limit.
+  const bool rolling_pad =
+      have_preload_ && std::hypot(signals_.preload_shear_axial_n, signals_.preload_shear_circumferential_n) >=
+                           config_.centroid_rolling_preload_n;
+  const bool load_corroborates =
+      signals_.shear_blind || !config_.ratio_enabled || !rolling_pad ||
+      signals_.load_ratio >= config_.centroid_load_fraction * signals_.ratio_threshold;
+  signals_.centroid_slip = live && config_.centroid_enabled && load_corroborates &&
                            (signals_.centroid_shift_units > signals_.centroid_shift_threshold ||
                             signals_.centroid_drift_units > signals_.centroid_drift_threshold);
   if (signals_.centroid_slip) {
