@@ -19,13 +19,12 @@ constexpr double kMaxStepS = 0.01;
 /// Loading ends once the measured grip reaches this fraction of the target.
 constexpr double kLoadedFraction = 0.9;
 
-/// Static name of the cues that fired in `signals` (telemetry; no allocation).
-const char* CueNames(const SlipSignals& signals) {
+/// Static name of the cues that count as slip (telemetry; no allocation).
+const char* CueNames(bool ratio, bool vibration, bool centroid) {
   static constexpr const char* kNames[8] = {
       "",         "ratio",          "vibration",          "ratio+vibration",
       "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
-  return kNames[(signals.ratio_slip ? 1 : 0) | (signals.vibration_slip ? 2 : 0) |
-                (signals.centroid_slip ? 4 : 0)];
+  return kNames[(ratio ? 1 : 0) | (vibration ? 2 : 0) | (centroid ? 4 : 0)];
 }
 
 /// One declared parameter bound to its field of GripSlipConfig.
@@ -306,6 +305,10 @@ void GripSlipController::Reset() {
   target_n_ = 0.0;
   integrator_ = 0.0;
   refractory_until_s_ = 0.0;
+  ratio_was_up_ = false;
+  ratio_counts_ = false;
+  centroid_counts_ = false;
+  ratio_rise_s_ = 0.0;
   last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
@@ -498,7 +501,19 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
                             grip_n >= kLoadedFraction * std::min(config_.initial_grip_n, ceiling_n);
         if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
       }
-      slip_now = signals.any();
+      // The ratio cue held up with the target at its ceiling says the load is beyond what the
+      // ceiling allows by the friction estimate, not that the contact is sliding now (the grip can
+      // rise no further either way). Past its first slip_refractory_s it no longer counts as slip,
+      // nor does the centroid cue, whose check on a rolling pad is that same load ratio (the pad
+      // deforms under the load); the vibration cue still does. Held up, it hid every later slip
+      // (a flag already up when a slip begins detects nothing) and kept the flag up for seconds.
+      if (signals.ratio_slip && !ratio_was_up_) ratio_rise_s_ = time_s;
+      ratio_was_up_ = signals.ratio_slip;
+      const bool ratio_held =
+          signals.ratio_slip && target_n_ >= ceiling_n && time_s - ratio_rise_s_ > config_.slip_refractory_s;
+      ratio_counts_ = signals.ratio_slip && !ratio_held;
+      centroid_counts_ = signals.centroid_slip && !ratio_held;
+      slip_now = ratio_counts_ || signals.vibration_slip || centroid_counts_;
       // Slip persisting within the refractory time: the step did not cover the load; keep raising.
       if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
       if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
@@ -524,12 +539,18 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       break;
   }
 
+  // Outside the phases that watch for slip the cues are silent: a ratio cue up again later rose anew.
+  if (phase_ != Phase::kLoading && phase_ != Phase::kHolding && phase_ != Phase::kSlip) {
+    ratio_was_up_ = false;
+    ratio_counts_ = false;
+    centroid_counts_ = false;
+  }
   if (data_ok) last_good_command_ = command;
   telemetry_.phase = PhaseName(phase_);
   telemetry_.grip_target_n = target_n_;
   telemetry_.friction_estimate = friction_;
   telemetry_.slip_detected = slip_now;
-  telemetry_.slip_cues = slip_now ? CueNames(signals) : "";
+  telemetry_.slip_cues = slip_now ? CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_) : "";
   diagnostics_.effort = command.grip_effort;
   diagnostics_.integrator = integrator_;
   diagnostics_.ceiling_n = ceiling_n;

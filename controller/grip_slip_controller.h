@@ -149,6 +149,10 @@ class GripSlipController final : public GraspController {
   double target_n_ = 0.0;
   double integrator_ = 0.0;
   double refractory_until_s_ = 0.0;
+  bool ratio_was_up_ = false;     ///< the ratio cue was up in the last frame
+  bool ratio_counts_ = false;     ///< the ratio cue counts as slip now (not held at the ceiling)
+  bool centroid_counts_ = false;  ///< the centroid cue counts as slip now (likewise)
+  double ratio_rise_s_ = 0.0;     ///< when the ratio cue last rose [s]
   hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;
