@@ -96,7 +96,8 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("friction_learn_rate", friction_learn_rate, 0.0, 1.0, "",
                     "fraction of the way the estimate moves towards the ratio seen at slip"),
       GRASPBED_BIND("friction_learn_max_drop", friction_learn_max_drop, 0.0, 1.0, "",
-                    "one slip lowers the friction estimate by at most this fraction of it"),
+                    "one slip lowers the friction estimate by at most this fraction of it; a slip at a "
+                    "ratio further below the estimate (a jolt) teaches nothing"),
       GRASPBED_BIND("friction_learn_min_load_n", friction_learn_min_load_n, 0.0, 100.0, "N",
                     "the estimate is learned only from slips under at least this tangential load"),
       GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N",
@@ -382,13 +383,17 @@ void GripSlipController::RespondToSlip(double time_s) {
   // cues teach the estimate.
   if ((signals.vibration_slip || signals.centroid_slip) &&
       signals.tangential_load_n >= config_.friction_learn_min_load_n) {
-    // In the coordinates the ratio cue and the coupling use (the load's part, preload removed), and
-    // by at most friction_learn_max_drop of the estimate per event: a slip at a ratio far below the
-    // estimate is a jolt (an impact, the pad reseating), not the friction limit.
-    const double observed = std::clamp(std::max(signals.load_ratio, signals.instant_load_ratio),
-                                       (1.0 - config_.friction_learn_max_drop) * friction_, friction_);
-    friction_ =
-        std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+    // In the coordinates the ratio cue and the coupling use (the load's part, preload removed). A
+    // slip at a ratio more than friction_learn_max_drop below the estimate is a jolt (an impact,
+    // the pad reseating, a load step), not the friction limit, and teaches nothing: clamped to half
+    // the estimate instead, each such flag halved it, and the ratio and centroid cues then fired on
+    // ordinary loads (4 of the scorecard's false flags, the friction estimate down to 0.15).
+    const double seen = std::max(signals.load_ratio, signals.instant_load_ratio);
+    if (seen >= (1.0 - config_.friction_learn_max_drop) * friction_) {
+      const double observed = std::min(seen, friction_);
+      friction_ =
+          std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+    }
   }
   const double grip_n = diagnostics_.measured_grip_n;
   slip_floor_n_ = std::max(target_n_, grip_n) * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
