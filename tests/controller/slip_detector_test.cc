@@ -294,6 +294,50 @@ TEST(SlipDetectorTest, ShearLockedInAtTheGraspIsPreloadAndMoreGripAddsNoLoad) {
   EXPECT_LT(first_s - kOnsetS, kSlipLatencyLimitS);
 }
 
+/// A pad that seated with shear locked in rolls with load and squeeze (docs/controller.md): its
+/// pressure centroid moves without any slip. With a shear estimate to check it against, such a move
+/// is slip only while the load ratio is at the ratio cue's threshold (centroid_load_fraction); a
+/// square pinch (no preload) keeps the centroid as a cue of its own.
+TEST(SlipDetectorTest, CentroidMoveOnARollingPadIsSlipOnlyWithTheLoadAtTheFrictionLimit) {
+  constexpr double kPreloadRatio = 0.4;
+  constexpr double kRampS = 0.1;
+  constexpr double kMoveS = 0.6;
+  constexpr double kMovePitchPerS = 50.0;  // 1 pitch in 20 ms: well over centroid_shift_units
+  // Centroid moves counted after kMoveS, and whether the preload was there to gate them.
+  const auto centroid_flags = [&](const SlipDetectorConfig& config, double load_ratio) {
+    SlipDetectorConfig cues = config;
+    cues.vibration_enabled = false;  // the moving patch shakes each unit's shear; watch the centroid
+    SlipDetector detector(cues);
+    SyntheticTactile sensor({});
+    int flags = 0;
+    for (double t = 0.0; t < 1.0; t += kPeriodS) {
+      SyntheticContact contact;
+      contact.grip_n = 0.5 + (kGripN - 0.5) * std::min(t / kRampS, 1.0);
+      contact.load_axial_n = kPreloadRatio * contact.grip_n;
+      if (t >= kMoveS) {
+        contact.load_axial_n = kPreloadRatio * kGripN + load_ratio * kGripN;
+        contact.centre_row = 2.0 - kMovePitchPerS * std::min(t - kMoveS, 0.02);
+      }
+      const sensor::TactileState state = sensor.Frame(contact, t);
+      const SlipSignals& signals = detector.Update(state, state.total_fn_n, kFriction, true, true);
+      if (t >= kMoveS && signals.centroid_slip) ++flags;
+    }
+    EXPECT_GT(std::hypot(detector.signals().preload_shear_axial_n,
+                         detector.signals().preload_shear_circumferential_n),
+              cues.centroid_rolling_preload_n);
+    return flags;
+  };
+  const SlipDetectorConfig defaults;
+  // The pad rolls a pitch under a light load (ratio 0.1 against the cue's 0.45): no slip.
+  EXPECT_EQ(centroid_flags(defaults, 0.1), 0);
+  // The same move with the check off is read as slip, so the check is what silences it.
+  SlipDetectorConfig unchecked = defaults;
+  unchecked.centroid_load_fraction = 0.0;
+  EXPECT_GT(centroid_flags(unchecked, 0.1), 0);
+  // With the load at the friction limit the move is slip, and the centroid says so.
+  EXPECT_GT(centroid_flags(defaults, kFriction), 0);
+}
+
 TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
   SlipDetectorConfig config;
   config.vibration_highpass_hz = 600.0;
