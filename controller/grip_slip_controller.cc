@@ -1,6 +1,7 @@
 #include "controller/grip_slip_controller.h"
 
 #include <algorithm>
+#include <cstdio>  // DEBUG-ONLY
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -164,6 +165,10 @@ const std::vector<Binding>& Bindings() {
                     "grip target as a fraction of the ceiling when the sensor cannot resolve shear"),
       GRASPBED_BIND("noise_floor_time_s", slip.noise_floor_time_s, 0.01, 100.0, "s",
                     "time constant of the learned noise floor"),
+      GRASPBED_BIND("vibration_noise_reference", slip.vibration_noise_reference, 0, 1, "",
+                    "1: the vibration threshold is at least vibration_factor x the high-passed shear RMS "
+                    "of the units off the contact (a live noise reference: a noise burst raises it, a "
+                    "slip does not)"),
       GRASPBED_BIND("centroid_detector", slip.centroid_enabled, 0, 1, "",
                     "1: use the contact-centroid movement cue"),
       GRASPBED_BIND("centroid_filter_s", slip.centroid_filter_s, 0.0, 0.1, "s",

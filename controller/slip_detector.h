@@ -53,6 +53,11 @@ struct SlipDetectorConfig {
   /// bound stays either way: the contact's own mechanical vibration is not in the readout's figure.
   double vibration_noise_sigmas = 3.0;
   double noise_floor_time_s = 0.5;  ///< time constant of the noise-floor estimate [s]
+  /// The units off the contact (valid, normal force under half the contact threshold) carry noise
+  /// only: their high-passed shear, averaged like the vibration statistic, is a live noise reference,
+  /// and the threshold is at least vibration_factor x that reference. A noise burst raises it on
+  /// every unit at once; a slip's vibration is on the loaded ones. Needs kMinReferenceUnits units.
+  bool vibration_noise_reference = true;
   /// Per-unit shear noise the readout reports (RMS over valid units) above which the shear cues
   /// (ratio, vibration) and the tangential load are off: the sensor cannot resolve shear (the FEA's
   /// k_t behind a 12-bit divider: 0.9 N per unit), and only the centroid cue is left [N]; 0 = never.
@@ -98,6 +103,8 @@ struct SlipDetectorConfig {
 
   /// Longest centroid window the delay line holds [samples].
   static constexpr int kMaxWindowSamples = 512;
+  /// Fewest units off the contact that make a noise reference (vibration_noise_reference).
+  static constexpr int kMinReferenceUnits = 3;
 
   /// Throws std::invalid_argument naming the offending field and value.
   void Validate() const;
@@ -127,7 +134,9 @@ struct SlipSignals {
   /// RMS of the normal-force-weighted sum of high-passed unit shear, normalised to one unit [N]
   double vibration_rms_n = 0.0;
   double vibration_threshold_n = 0.0;  ///< current threshold of the vibration cue [N]
-  double noise_rms_n = 0.0;            ///< learned RMS of high-passed shear noise per unit [N]
+  /// RMS of the high-passed shear of the units off the contact, per unit (0 without enough of them) [N]
+  double vibration_reference_rms_n = 0.0;
+  double noise_rms_n = 0.0;  ///< learned RMS of high-passed shear noise per unit [N]
   /// Per-unit noise the readout measured at its tare, RMS over the valid units [N]; 0 when the
   /// state carries none (ideal sensor, stored baseline). With both figures the centroid's noise is
   /// the learned shear noise scaled by their normal/shear ratio (at least the normal figure)
@@ -215,8 +224,10 @@ class SlipDetector {
   double centroid_variance_reduction_ = 1.0;
   std::array<HighPassBiquad, sensor::kMaxUnits> shear_highpass_{};
   LowPassFilter vibration_energy_;
-  double noise_energy_ = 0.0;  ///< learned mean square of high-passed shear per unit [N^2]
-  long noise_samples_ = 0;     ///< samples in the noise floor so far (fast start)
+  LowPassFilter reference_energy_;   ///< mean square of the off-contact units' high-passed shear
+  double settle_threshold_n_ = 0.0;  ///< vibration threshold without the noise reference [N]
+  double noise_energy_ = 0.0;        ///< learned mean square of high-passed shear per unit [N^2]
+  long noise_samples_ = 0;           ///< samples in the noise floor so far (fast start)
 
   LowPassFilter centroid_row_filter_;
   LowPassFilter centroid_column_filter_;

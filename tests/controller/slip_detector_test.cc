@@ -338,6 +338,31 @@ TEST(SlipDetectorTest, CentroidMoveOnARollingPadIsSlipOnlyWithTheLoadAtTheFricti
   EXPECT_GT(centroid_flags(defaults, kFriction), 0);
 }
 
+/// A noise burst (three times the noise on every unit for 0.3 s, as degraded_sensor stages it) is
+/// not slip: the units off the contact show it too, and the vibration threshold follows them
+/// (vibration_noise_reference). Without that reference the same burst is flagged.
+TEST(SlipDetectorTest, NoiseBurstOnEveryUnitRaisesNoVibrationFlag) {
+  const auto vibration_flags = [](bool reference) {
+    SlipDetectorConfig config = SquarePinch();
+    config.vibration_noise_reference = reference;
+    Stream stream(config);
+    stream.Run(0.0, 2.0, Hold);
+    int flags = 0;
+    stream.sensor.SetNoiseScale(3.0);
+    for (double t = 2.0; t < 2.3; t += kPeriodS) {
+      const sensor::TactileState state = stream.sensor.Frame(Hold(t), t);
+      flags += stream.detector.Update(state, state.total_fn_n, kFriction, true, true).vibration_slip;
+    }
+    return flags;
+  };
+  const int with_reference = vibration_flags(true);
+  const int without_reference = vibration_flags(false);
+  std::printf("[ measure  ] 3x noise burst, 0.3 s: %d flagged frames with the noise reference, %d without\n",
+              with_reference, without_reference);
+  EXPECT_EQ(with_reference, 0);
+  EXPECT_GT(without_reference, 0) << "the burst was meant to reach the vibration cue";
+}
+
 TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
   SlipDetectorConfig config;
   config.vibration_highpass_hz = 600.0;
