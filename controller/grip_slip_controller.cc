@@ -1,7 +1,6 @@
 #include "controller/grip_slip_controller.h"
 
 #include <algorithm>
-#include <cstdio>  // DEBUG-ONLY
 #include <cmath>
 #include <limits>
 #include <sstream>
