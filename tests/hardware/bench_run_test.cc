@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -95,20 +96,6 @@ std::vector<std::string> PhaseSequence(const Csv& csv) {
   return phases;
 }
 
-/// Mean of `column` over the rows with time_s in the last `window_s`.
-double MeanAtEnd(const Csv& csv, const std::string& column, double window_s) {
-  const std::vector<double>& time = csv.numeric.at("time_s");
-  const std::vector<double>& values = csv.numeric.at(column);
-  double sum = 0.0;
-  int count = 0;
-  for (size_t i = 0; i < time.size(); ++i) {
-    if (time[i] < time.back() - window_s) continue;
-    sum += values[i];
-    ++count;
-  }
-  return count > 0 ? sum / count : 0.0;
-}
-
 /// Mean of `column` over the rows with time_s in [from_s, to_s).
 double MeanBetween(const Csv& csv, const std::string& column, double from_s, double to_s) {
   const std::vector<double>& time = csv.numeric.at("time_s");
@@ -121,6 +108,12 @@ double MeanBetween(const Csv& csv, const std::string& column, double from_s, dou
     ++count;
   }
   return count > 0 ? sum / count : 0.0;
+}
+
+/// Mean of `column` over the rows with time_s in the last `window_s`.
+double MeanAtEnd(const Csv& csv, const std::string& column, double window_s) {
+  return MeanBetween(csv, column, csv.numeric.at("time_s").back() - window_s,
+                     std::numeric_limits<double>::infinity());
 }
 
 std::string Join(const std::vector<std::string>& items) {
