@@ -55,7 +55,9 @@ void PointVelocity(const mjModel* m, const mjData* d, int body, const mjtNum p[3
   for (int k = 0; k < 3; ++k) v[k] = vel[3 + k] + w_cross_r[k];
 }
 
-// The object's friction in the MJCF a Simulation compiles; the scene's own is set on the model.
+// The object's mass [kg] and friction in the MJCF a Simulation compiles; the scene's own are set
+// on the compiled model.
+constexpr double kCompiledObjectMassKg = 1.0;
 constexpr double kCompiledObjectFriction = 1.0;
 
 struct ModelFree {
@@ -125,11 +127,11 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     : layout_(layout), scene_(scene) {
   InstallHandlers();
   mjcf_ = GenerateMjcf(layout_, scene_);
-  // The object's friction is set after loading, so runs that differ only in it (friction sweeps,
-  // a suite's repeated scenes) share one compiled model instead of parsing and compiling the same
-  // MJCF again. Not the mass: on MuJoCo 2.2.2, a body_mass changed on a compiled model reached
-  // gravity but not the mass matrix (qM kept the compiled mass), so the mass must be compiled in.
+  // The object's mass and friction are set after loading, so runs that differ only in them (mass
+  // and friction sweeps, a scorecard's variations, a suite's repeated scenes) share one compiled
+  // model instead of parsing and compiling the same MJCF again.
   SceneConfig canonical = scene_;
+  canonical.object.mass_kg = kCompiledObjectMassKg;
   canonical.object.friction = kCompiledObjectFriction;
   model_.reset(CompiledModels::Instance().Copy(GenerateMjcf(layout_, canonical)));
   data_.reset(mj_makeData(model_.get()));
@@ -203,6 +205,13 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
 
   object_mass_ = m->body_mass[object_body_];
   for (int k = 0; k < 3; ++k) object_inertia_[k] = m->body_inertia[3 * object_body_ + k];
+  object_dof_ = m->jnt_dofadr[m->body_jntadr[object_body_]];
+  for (int k = 0; k < 6; ++k) {
+    object_dof_m0_[k] = m->dof_M0[object_dof_ + k];
+    object_dof_invweight0_[k] = m->dof_invweight0[object_dof_ + k];
+  }
+  for (int k = 0; k < 2; ++k) object_body_invweight0_[k] = m->body_invweight0[2 * object_body_ + k];
+  SetObjectMass(scene_.object.mass_kg);
   SetObjectFriction(scene_.object.friction);
   hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
   for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
@@ -252,9 +261,26 @@ void Simulation::SetObjectMass(double mass_kg) {
   if (!(mass_kg > 0.0) || !std::isfinite(mass_kg)) {
     throw std::invalid_argument("object mass = " + std::to_string(mass_kg) + " kg: must be > 0");
   }
+  // Mass and inertia scale together (same shape and density distribution), so do the free joint's
+  // diagonal mass at qpos0 (dof_M0: MuJoCo fills the mass matrix of such "simple" dofs from it, not
+  // from body_mass) and, inversely, the inverse weights that scale the contacts' regularisation.
+  mjModel* m = model_.get();
   const double scale = mass_kg / object_mass_;
-  model_->body_mass[object_body_] = mass_kg;
-  for (int k = 0; k < 3; ++k) model_->body_inertia[3 * object_body_ + k] = object_inertia_[k] * scale;
+  const double added_kg = mass_kg - m->body_mass[object_body_];
+  double added_diagonal = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    const double m0 = object_dof_m0_[k] * scale;
+    added_diagonal += m0 - m->dof_M0[object_dof_ + k];
+    m->dof_M0[object_dof_ + k] = m0;
+    m->dof_invweight0[object_dof_ + k] = object_dof_invweight0_[k] / scale;
+  }
+  for (int k = 0; k < 2; ++k) m->body_invweight0[2 * object_body_ + k] = object_body_invweight0_[k] / scale;
+  for (int body = object_body_; body >= 0; body = body > 0 ? m->body_parentid[body] : -1)
+    m->body_subtreemass[body] += added_kg;
+  m->stat.meanmass += added_kg / (m->nbody - 1);
+  m->stat.meaninertia += added_diagonal / m->nv;  // mean diagonal of M at qpos0
+  m->body_mass[object_body_] = mass_kg;
+  for (int k = 0; k < 3; ++k) m->body_inertia[3 * object_body_ + k] = object_inertia_[k] * scale;
 }
 
 double Simulation::object_mass_kg() const { return model_->body_mass[object_body_]; }

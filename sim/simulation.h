@@ -121,7 +121,9 @@ class Simulation {
   const std::array<double, 3>& wrist_target() const { return wrist_target_; }
   /// External force on the object's centre of mass [N], world frame (pull, knock); stays until reset.
   void SetObjectExternalForce(const std::array<double, 3>& force_n);
-  /// Changes the object's mass [kg] (> 0), scaling its inertia with it (mass steps, pouring).
+  /// Changes the object's mass [kg] (> 0), scaling its inertia with it (mass steps, pouring), and
+  /// everything MuJoCo derived from them at compile time, so the model is the one compiled with
+  /// that mass (mass matrix, inverse weights, subtree masses, mean mass and inertia).
   void SetObjectMass(double mass_kg);
   double object_mass_kg() const;
   /// Changes the friction coefficient of every object contact (> 0).
@@ -195,8 +197,15 @@ class Simulation {
   std::vector<int> geom_side_;
   /// Unit frames in the holder body frame (inward normal, beam axis, cross axis, centre), per unit.
   std::vector<std::array<double, 12>> unit_frames_;
+  /// The object as compiled: mass [kg], principal inertia [kg m^2], and what MuJoCo derived from
+  /// them (the free joint's diagonal mass at qpos0 and inverse weights, the body's inverse weights);
+  /// SetObjectMass scales them all together.
   double object_mass_ = 0.0;
   std::array<double, 3> object_inertia_{};
+  int object_dof_ = -1;  ///< first of the free joint's 6 dofs
+  std::array<double, 6> object_dof_m0_{};
+  std::array<double, 6> object_dof_invweight0_{};
+  std::array<double, 2> object_body_invweight0_{};
   double hand_weight_n_ = 0.0;  ///< weight of everything the wrist servo carries [N]
 
   double grip_effort_ = 0.0;
