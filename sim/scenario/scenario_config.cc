@@ -261,39 +261,27 @@ Expectations LoadExpectations(const YamlMap& map, const ScenarioConfig& config) 
 
 MetricsConfig LoadMetricsConfig(const YamlMap& map) {
   MetricsConfig m;
-  m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, {0.0, kMaxSpeedMS, true});
-  m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, {0.0, kMaxSpeedMS, true});
+  MetricsConfigFields().Load(map, &m);
+  // The one cross-field rule, checked here rather than in the table: the message names the key the
+  // file actually set (an absent one would print its default).
   if (m.slip_speed_m_s < m.creep_speed_m_s) {
-    // Name the key the file actually set: an absent one would print as "= null".
-    char limit[64];
     if (map.Has("slip_speed_m_s")) {
-      std::snprintf(limit, sizeof(limit), "%g", m.creep_speed_m_s);
-      map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s (" + std::string(limit) + ")");
+      map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s (" + FormatDouble(m.creep_speed_m_s) + ")");
     }
-    std::snprintf(limit, sizeof(limit), "%g", m.slip_speed_m_s);
-    map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + std::string(limit) + ")");
+    map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + FormatDouble(m.slip_speed_m_s) + ")");
   }
-  m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, kDuration);
-  m.early_detection_window_s =
-      map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
-  m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, {0.0, sim::kMaxForceN, true});
-  m.seating_s = map.GetNumber("seating_s", m.seating_s, kDuration);
-  m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, {0.0, sim::kMaxPositionM, true});
-  m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, kPositiveDuration);
-  m.stable_force_band = map.GetNumber("stable_force_band", m.stable_force_band, NumberRule{0.0, 1.0, true});
-  map.RejectUnknownKeys();
   return m;
 }
 
-// Wraps a std::invalid_argument from a loader that only knows field names into a file:line message.
+// A check that runs after loading (ScenarioConfig::Validate) throws ConfigError with a key path
+// relative to `map`; this puts it at that key's line in the file.
 template <typename Fn>
 void AtMap(const YamlMap& map, Fn&& fn) {
   try {
     fn();
-  } catch (const ConfigError&) {
-    throw;
-  } catch (const std::invalid_argument& error) {
-    map.FailHere(error.what());
+  } catch (const ConfigError& error) {
+    if (!error.file().empty()) throw;
+    map.FailAt(error);
   }
 }
 
@@ -386,6 +374,37 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
 
 }  // namespace
 
+const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
+  using Table = common::FieldTable<MetricsConfig>;
+  using C = MetricsConfig;
+  static const Table table(
+      "metrics",
+      {
+          Table::Number("creep_speed_m_s", &C::creep_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
+                        "relative object/fingertip speed below which motion is soft-contact creep, not slip"),
+          Table::Number("slip_speed_m_s", &C::slip_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
+                        "relative speed above which a slip event starts")
+              .Note(">= `creep_speed_m_s`"),
+          Table::Number("slip_event_gap_s", &C::slip_event_gap_s, kDuration, "s",
+                        "a slip event ends after the speed stays below slip_speed_m_s this long"),
+          Table::Number("early_detection_window_s", &C::early_detection_window_s, kDuration, "s",
+                        "a controller slip flag up to this long before a ground-truth onset detects it"),
+          Table::Number("grasp_force_n", &C::grasp_force_n, {0.0, sim::kMaxForceN, true}, "N",
+                        "finger normal force above which the object counts as grasped"),
+          Table::Number("seating_s", &C::seating_s, kDuration, "s",
+                        "after a grasp is established the pads settle this long: motion opens no slip "
+                        "event, flags are not false"),
+          Table::Number("drop_distance_m", &C::drop_distance_m, {0.0, sim::kMaxPositionM, true}, "m",
+                        "object displacement relative to the wrist, from where it was grasped, that counts "
+                        "as dropped"),
+          Table::Number("stable_window_s", &C::stable_window_s, kPositiveDuration, "s",
+                        "stable grasp: no slip event and the squeeze within the band over this window"),
+          Table::Number("stable_force_band", &C::stable_force_band, {0.0, 1.0, true}, "-",
+                        "relative band for the stable squeeze"),
+      });
+  return table;
+}
+
 ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& default_name) {
   ControllerOptions c;
   // `plugin: LIBRARY` is `name: plugin:LIBRARY`; a relative library path is relative to this file.
@@ -426,9 +445,16 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
   c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, {0.0, kMaxStaleTimeoutS, true});
   map.RejectUnknownKeys();
   // Each value is in its range; what is left are the controller's cross-field checks (e.g. min_grip_n
-  // <= max_grip_n). Build it once and blame the parameter its message names.
+  // <= max_grip_n). Build it once and blame the parameter the error names: as data when the
+  // controller throws a ConfigError keyed by the parameter, else (controllers that throw a plain
+  // std::invalid_argument, as grip_slip does today) the parameter its message names.
   try {
     controller::MakeController(c.name, c.params);
+  } catch (const ConfigError& error) {
+    const auto params = map.GetMap("params");
+    if (params && !error.key().empty() && params->Has(error.key()))
+      params->Fail(error.key(), error.message());
+    map.Fail(params ? "params" : name_key, error.what());
   } catch (const std::invalid_argument& error) {
     const std::string message = error.what();
     if (auto params = map.GetMap("params")) {
@@ -617,86 +643,6 @@ void EmitVector(YAML::Emitter& out, const char* key, const std::array<double, N>
   out << YAML::EndSeq;
 }
 
-void EmitIntList(YAML::Emitter& out, const char* key, const std::vector<int>& values) {
-  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (int value : values) out << value;
-  out << YAML::EndSeq;
-}
-
-void EmitScene(YAML::Emitter& out, const sim::SceneConfig& scene) {
-  const sim::ObjectConfig& o = scene.object;
-  out << YAML::Key << "object" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "shape" << YAML::Value << sim::ToString(o.shape);
-  EmitVector(out, "size_m", o.size_m);
-  EmitNumber(out, "mass_kg", o.mass_kg);
-  EmitNumber(out, "friction", o.friction);
-  EmitNumber(out, "torsional_friction", o.torsional_friction);
-  EmitNumber(out, "solref_timeconst_s", o.solref_timeconst_s);
-  EmitNumber(out, "solref_dampratio", o.solref_dampratio);
-  EmitVector(out, "solimp", o.solimp);
-  EmitVector(out, "initial_position_m", o.initial_position_m);
-  EmitNumber(out, "initial_yaw_rad", o.initial_yaw_rad);
-  EmitNumber(out, "crush_limit_n", o.crush_limit_n);
-  out << YAML::EndMap;
-
-  const sim::HandConfig& h = scene.hand;
-  out << YAML::Key << "hand" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "model" << YAML::Value << sim::ToString(h.model);
-  out << YAML::Key << "grasp" << YAML::Value << sim::ToString(h.grasp);
-  // NaN means "follows the object"; left out so the loader derives it again.
-  if (!std::isnan(h.open_gap_m)) EmitNumber(out, "open_gap_m", h.open_gap_m);
-  EmitNumber(out, "preshape_clearance_m", h.preshape_clearance_m);
-  EmitNumber(out, "palm_mass_kg", h.palm_mass_kg);
-  EmitNumber(out, "digit_mass_kg", h.digit_mass_kg);
-  EmitNumber(out, "friction", h.friction);
-  // NaN entries mean "automatic pre-grasp pose"; they are left out so the loader picks them again.
-  if (std::none_of(h.initial_wrist_position_m.begin(), h.initial_wrist_position_m.end(),
-                   [](double v) { return std::isnan(v); })) {
-    EmitVector(out, "initial_wrist_position_m", h.initial_wrist_position_m);
-  }
-  EmitNumber(out, "wrist_stiffness_n_m", h.wrist_stiffness_n_m);
-  EmitNumber(out, "wrist_damping_n_s_m", h.wrist_damping_n_s_m);
-  out << YAML::Key << "motor" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "stall_force_n", h.motor.stall_force_n);
-  EmitNumber(out, "no_load_speed_m_s", h.motor.no_load_speed_m_s);
-  EmitNumber(out, "armature_kg", h.motor.armature_kg);
-  EmitNumber(out, "damping_n_s_m", h.motor.damping_n_s_m);
-  out << YAML::EndMap;
-  out << YAML::Key << "finger" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "proximal_length_m", h.finger.proximal_length_m);
-  EmitNumber(out, "middle_length_m", h.finger.middle_length_m);
-  EmitNumber(out, "pip_mcp_ratio", h.finger.pip_mcp_ratio);
-  EmitNumber(out, "dip_flexion_rad", h.finger.dip_flexion_rad);
-  EmitNumber(out, "mcp_rest_angle_rad", h.finger.mcp_rest_angle_rad);
-  out << YAML::EndMap;
-  out << YAML::Key << "thumb" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "proximal_length_m", h.thumb.proximal_length_m);
-  EmitNumber(out, "distal_length_m", h.thumb.distal_length_m);
-  EmitNumber(out, "tip_radius_m", h.thumb.tip_radius_m);
-  EmitNumber(out, "ip_flexion_rad", h.thumb.ip_flexion_rad);
-  if (!std::isnan(h.thumb.opposition_rad)) EmitNumber(out, "opposition_rad", h.thumb.opposition_rad);
-  out << YAML::EndMap;
-  out << YAML::Key << "digit_motor" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "stall_pinch_force_n", h.digit_motor.stall_pinch_force_n);
-  EmitNumber(out, "no_load_speed_rad_s", h.digit_motor.no_load_speed_rad_s);
-  EmitNumber(out, "armature_kg_m2", h.digit_motor.armature_kg_m2);
-  EmitNumber(out, "damping_n_m_s", h.digit_motor.damping_n_m_s);
-  out << YAML::EndMap << YAML::EndMap;
-
-  const sim::PhysicsConfig& p = scene.physics;
-  out << YAML::Key << "physics" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "timestep_s", p.timestep_s);
-  out << YAML::Key << "elliptic_cones" << YAML::Value << p.elliptic_cones;
-  EmitNumber(out, "impratio", p.impratio);
-  out << YAML::Key << "noslip_iterations" << YAML::Value << p.noslip_iterations;
-  out << YAML::Key << "solver_iterations" << YAML::Value << p.solver_iterations;
-  EmitNumber(out, "tolerance", p.tolerance);
-  out << YAML::Key << "condim" << YAML::Value << p.condim;
-  EmitNumber(out, "gravity_m_s2", p.gravity_m_s2);
-  out << YAML::Key << "table" << YAML::Value << p.table;
-  out << YAML::EndMap;
-}
-
 void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "layout" << YAML::Value << s.layout;
@@ -708,50 +654,20 @@ void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   if (!s.fea_config.empty()) out << YAML::Key << "fea_config" << YAML::Value << s.fea_config;
   const sensor::StrainModelConfig& m = s.strain_model;
   out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "r0_ohm", m.nominal.r0_ohm);
-  EmitNumber(out, "gauge_factor", m.nominal.gauge_factor);
   if (s.sensitivities == "fea") {
     // Derived, not set: reloading this file runs the analysis again (and refuses explicit values).
     out << YAML::Comment("kn_per_n " + FormatDouble(m.nominal.kn_per_n) + ", kt_per_n " +
                          FormatDouble(m.nominal.kt_per_n) + " /N from the FEA");
+    sensor::EmitStrainModelConfig(m, out, {"kn_per_n", "kt_per_n"});
   } else {
-    EmitNumber(out, "kn_per_n", m.nominal.kn_per_n);
-    EmitNumber(out, "kt_per_n", m.nominal.kt_per_n);
+    sensor::EmitStrainModelConfig(m, out);
   }
-  EmitNumber(out, "rated_force_n", m.nominal.rated_force_n);
-  EmitNumber(out, "r0_spread_fraction", m.r0_spread_fraction);
-  EmitNumber(out, "sensitivity_spread_fraction", m.sensitivity_spread_fraction);
-  EmitNumber(out, "noise_ohm", m.noise_ohm);
-  out << YAML::Key << "adc_bits" << YAML::Value << m.adc_bits;
-  EmitNumber(out, "adc_full_scale_ohm", m.adc_full_scale_ohm);
-  EmitNumber(out, "adc_min_ohm", m.adc_min_ohm);
-  EmitNumber(out, "temperature_coefficient_per_k", m.temperature_coefficient_per_k);
-  EmitNumber(out, "temperature_offset_k", m.temperature_offset_k);
-  EmitNumber(out, "temperature_ramp_k_per_s", m.temperature_ramp_k_per_s);
-  EmitNumber(out, "saturation_force_n", m.saturation_force_n);
-  EmitNumber(out, "cross_talk_shear_fraction", m.cross_talk_shear_fraction);
-  EmitNumber(out, "cross_talk_offset_per_mm", m.cross_talk_offset_per_mm);
-  EmitIntList(out, "dead_units", m.dead_units);
-  EmitIntList(out, "shorted_units", m.shorted_units);
   out << YAML::EndMap;
-  const sensor::ReadoutConfig& r = s.readout;
   out << YAML::Key << "readout" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "baseline_frames" << YAML::Value << r.baseline_frames;
-  EmitNumber(out, "short_circuit_ohm", r.short_circuit_ohm);
-  EmitNumber(out, "open_circuit_ohm", r.open_circuit_ohm);
-  EmitNumber(out, "min_plausible_fraction", r.min_plausible_fraction);
-  EmitNumber(out, "max_plausible_fraction", r.max_plausible_fraction);
-  EmitNumber(out, "max_baseline_deviation_fraction", r.max_baseline_deviation_fraction);
-  EmitNumber(out, "min_mean_dr_rel", r.min_mean_dr_rel);
-  EmitNumber(out, "max_abs_dr_rel", r.max_abs_dr_rel);
-  EmitNumber(out, "adc_full_scale_ohm", r.adc_full_scale_ohm);
-  EmitNumber(out, "adc_min_ohm", r.adc_min_ohm);
+  sensor::ReadoutConfigFields().Emit(s.readout, out);
   out << YAML::EndMap;
-  const sensor::InversionConfig& i = s.inversion;
   out << YAML::Key << "inversion" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "contact_threshold_n", i.contact_threshold_n);
-  EmitNumber(out, "rated_force_n", i.rated_force_n);
-  EmitNumber(out, "out_of_range_margin_fraction", i.out_of_range_margin_fraction);
+  sensor::InversionConfigFields().Emit(s.inversion, out);
   out << YAML::EndMap;
   out << YAML::EndMap;
 }
@@ -866,34 +782,46 @@ bool Expectations::empty() const {
 
 void ScenarioConfig::Validate() const {
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) {
-    throw std::invalid_argument("duration_s = " + FormatDouble(duration_s) + ": must be > 0");
+    throw ConfigError("", 0, "duration_s", FormatDouble(duration_s), "must be > 0");
   }
-  scene.Validate();
-  sensor.strain_model.Validate();
-  sensor.readout.Validate();
-  sensor.inversion.Validate();
+  // The sections' own checks name their keys relative to the section; here they get its path.
+  const auto in_section = [](const std::string& path, auto&& check) {
+    try {
+      check();
+    } catch (const ConfigError& error) {
+      // Validate() prefixed its table's name ("scene.", "strain_model."); the file path replaces it.
+      const std::string key = error.key();
+      const size_t dot = key.find('.');
+      throw ConfigError("", 0, path.empty() ? key.substr(dot + 1) : path + key.substr(dot), error.value(),
+                        error.message());
+    }
+  };
+  in_section("", [&] { scene.Validate(); });
+  in_section("sensor.strain_model", [&] { sensor.strain_model.Validate(); });
+  in_section("sensor.readout", [&] { sensor.readout.Validate(); });
+  in_section("sensor.inversion", [&] { sensor.inversion.Validate(); });
   if (controller.stale_timeout_s < 1.0 / sensor.sample_rate_hz) {
-    throw std::invalid_argument("controller.stale_timeout_s = " + FormatDouble(controller.stale_timeout_s) +
-                                ": must be >= one sensor period (1 / sensor.sample_rate_hz = " +
-                                FormatDouble(1.0 / sensor.sample_rate_hz) + " s)");
+    throw ConfigError("", 0, "controller.stale_timeout_s", FormatDouble(controller.stale_timeout_s),
+                      "must be >= one sensor period (1 / sensor.sample_rate_hz = " +
+                          FormatDouble(1.0 / sensor.sample_rate_hz) + " s)");
   }
   for (const Action& action : script) {
+    // The script is sorted by time, so an action is named by its kind and located by its own line.
+    const std::string key = "script action '" + std::string(ActionName(action.kind)) + "' ";
+    const auto fail = [&](const std::string& field, double value, const std::string& message) {
+      throw ConfigError(action.line > 0 ? source_file : "", action.line, key + field, FormatDouble(value),
+                        message);
+    };
     if (action.after != ScriptEvent::kNone) {
       // Built in code: the loader's checks again.
-      if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                    "' delay_s = " + FormatDouble(action.delay_s) + ": must be >= 0");
-      }
+      if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s))
+        fail("delay_s", action.delay_s, "must be >= 0");
       if (!(action.timeout_s > 0.0) || !std::isfinite(action.timeout_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                    "' timeout_s = " + FormatDouble(action.timeout_s) + ": must be > 0");
+        fail("timeout_s", action.timeout_s, "must be > 0");
       }
       continue;
     }
-    if (action.at_s > duration_s) {
-      throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                  "' at_s = " + FormatDouble(action.at_s) + ": after duration_s");
-    }
+    if (action.at_s > duration_s) fail("at_s", action.at_s, "after duration_s");
   }
 }
 
@@ -1021,22 +949,12 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   EmitNumber(out, "duration_s", config.duration_s);
   out << YAML::Key << "backend" << YAML::Value << BackendName(config.backend);
   if (config.backend == Backend::kSerial) {
-    const hardware::HardwareConfig& h = config.serial;
     out << YAML::Key << "serial" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "port" << YAML::Value << h.port;
-    out << YAML::Key << "motor_port" << YAML::Value << h.motor_port;
-    out << YAML::Key << "baud" << YAML::Value << h.baud;
-    EmitNumber(out, "hello_timeout_s", h.hello_timeout_s);
-    EmitNumber(out, "stale_timeout_s", h.stale_timeout_s);
-    EmitNumber(out, "disconnect_timeout_s", h.disconnect_timeout_s);
-    EmitNumber(out, "reconnect_backoff_s", h.reconnect_backoff_s);
-    EmitNumber(out, "reconnect_backoff_max_s", h.reconnect_backoff_max_s);
-    EmitNumber(out, "poll_interval_s", h.poll_interval_s);
-    EmitNumber(out, "write_timeout_s", h.write_timeout_s);
+    hardware::HardwareConfigFields().Emit(config.serial, out);
     out << YAML::EndMap;
   }
   if (!config.log.empty()) out << YAML::Key << "log" << YAML::Value << config.log;
-  EmitScene(out, config.scene);
+  sim::SceneConfigFields().Emit(config.scene, out);
   EmitSensor(out, config.sensor);
 
   out << YAML::Key << "controller" << YAML::Value << YAML::BeginMap;
@@ -1065,17 +983,8 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   if (e.max_false_slip_per_min) EmitNumber(out, "max_false_slip_per_min", *e.max_false_slip_per_min);
   out << YAML::EndMap;
 
-  const MetricsConfig& m = config.metrics;
   out << YAML::Key << "metrics" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "creep_speed_m_s", m.creep_speed_m_s);
-  EmitNumber(out, "slip_speed_m_s", m.slip_speed_m_s);
-  EmitNumber(out, "slip_event_gap_s", m.slip_event_gap_s);
-  EmitNumber(out, "early_detection_window_s", m.early_detection_window_s);
-  EmitNumber(out, "grasp_force_n", m.grasp_force_n);
-  EmitNumber(out, "seating_s", m.seating_s);
-  EmitNumber(out, "drop_distance_m", m.drop_distance_m);
-  EmitNumber(out, "stable_window_s", m.stable_window_s);
-  EmitNumber(out, "stable_force_band", m.stable_force_band);
+  MetricsConfigFields().Emit(config.metrics, out);
   out << YAML::EndMap;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "controller/control_loop.h"
@@ -163,6 +164,10 @@ struct MetricsConfig {
   double stable_force_band = 0.1;  ///< relative band for the stable squeeze [-]
 };
 
+/// The fields of MetricsConfig (loader, emitter and reference table derive from it; the loader adds
+/// slip_speed_m_s >= creep_speed_m_s).
+const common::FieldTable<MetricsConfig>& MetricsConfigFields();
+
 /// Sensor options of a scenario: which layout, how the simulated backend samples, the strain
 /// model's non-ideal effects, the readout and the inversion.
 struct SensorOptions {
@@ -241,7 +246,9 @@ struct ScenarioConfig {
   /// the recording to replay (a run's signals.csv or a frame log; required). `graspbed run --log`.
   std::string log;
 
-  /// Throws std::invalid_argument naming the field and value (cross-field checks).
+  /// Checks the sections (scene, strain model, readout, inversion) and the cross-field rules.
+  /// @throws common::ConfigError with the key's path in a scenario file ("sensor.readout.adc_min_ohm",
+  ///   "controller.stale_timeout_s") and its value.
   void Validate() const;
 };
 
