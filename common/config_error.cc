@@ -56,7 +56,27 @@ ConfigError ConfigError::WithContext(const std::string& context) const {
 }
 
 void Require(bool ok, const std::string& key, double value, const std::string& message) {
-  if (!ok) throw ConfigError("", 0, key, FormatNumber(value), message);
+  if (!ok) throw ConfigError("", 0, key, ReadableNumber(value), message);
+}
+
+std::string ReadableNumber(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  // The shortest exact text: plain unless an exponent saves more than two characters ("0.0005",
+  // "20000", "-0.0999"; "1e6", "1e-10").
+  char buffer[64];
+  const auto fixed = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed);
+  const std::string plain(buffer, fixed.ptr);
+  const auto scientific =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::scientific);
+  std::string text(buffer, scientific.ptr);
+  const size_t e = text.find('e');
+  std::string exponent = text.substr(e + 1);
+  const bool negative = exponent[0] == '-';
+  exponent = exponent.substr(1);  // to_chars always writes the exponent's sign
+  while (exponent.size() > 1 && exponent[0] == '0') exponent = exponent.substr(1);
+  text = text.substr(0, e) + "e" + (negative ? "-" : "") + exponent;
+  return plain.size() <= text.size() + 2 ? plain : text;
 }
 
 std::string FormatNumber(double value) {

@@ -52,9 +52,13 @@ class ConfigError : public std::invalid_argument {
   std::string context_;
 };
 
-/// Throws ConfigError("", 0, key, FormatNumber(value), message) unless `ok`: the one check helper
+/// Throws ConfigError("", 0, key, ReadableNumber(value), message) unless `ok`: the one check helper
 /// for values built in code (constructor arguments, configs assembled without a file).
 void Require(bool ok, const std::string& key, double value, const std::string& message);
+
+/// Shortest text that reads back to exactly `value`, plain unless an exponent saves more than two
+/// characters ("0.0001", "20000", "1e6", "5.5e-4"; "nan", "inf"): values in messages and docs.
+std::string ReadableNumber(double value);
 
 /// Shortest text that reads back to exactly `value` (".inf", "-.inf", ".nan" as YAML spells them).
 std::string FormatNumber(double value);

@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -35,8 +36,7 @@ struct FieldReference {
   std::string doc;            ///< what the field means
 };
 
-/// A number as docs write it: up to 10 significant digits, exponents without '+' and leading zeros
-/// ("1e6", "5e-4"), NaN as "auto".
+/// A number as docs write it: ReadableNumber, NaN as "auto".
 std::string DocNumber(double value);
 /// `rule` in words for a reference table ("0 .. 1", "> 0, <= 1000", ">= 0", "any").
 std::string DescribeRule(const NumberRule& rule);
@@ -47,7 +47,17 @@ std::string ReferenceMarkdown(const std::vector<FieldReference>& rows);
 template <typename Struct>
 class FieldTable {
  public:
-  enum class Type { kNumber, kInteger, kBool, kText, kNumberArray, kSection, kCustom };
+  enum class Type {
+    kNumber,
+    kInteger,
+    kBool,
+    kText,
+    kNumberArray,
+    kSection,
+    kCustom,
+    kOptionalNumber,
+    kOptionalBool
+  };
 
   /// One field. Built by the static functions below (Number, Integer, ...), refined by the
   /// chainable setters.
@@ -68,6 +78,8 @@ class FieldTable {
     std::function<std::string(const Struct&)> get_text;
     std::function<void(Struct*, const std::string&)> set_text;
     std::function<std::span<double>(Struct*)> array;
+    std::function<std::optional<double>*(Struct*)> optional_number;
+    std::function<std::optional<bool>*(Struct*)> optional_bool;
     std::function<void(const YamlMap&, Struct*)> load_section;
     std::function<void(const Struct&)> validate_section;  ///< throws ConfigError, keys relative
     std::function<void(const Struct&, YAML::Emitter&)> emit_section;
@@ -120,6 +132,19 @@ class FieldTable {
     field.names = std::move(names);
     field.get_text = [member](const Struct& s) { return s.*member; };
     field.set_text = [member](Struct* s, const std::string& text) { s->*member = text; };
+    return field;
+  }
+  /// A number that may be absent (nullopt: not set, e.g. a check that is not made).
+  static Field OptionalNumber(std::string key, std::optional<double> Struct::*member, NumberRule rule,
+                              std::string unit, std::string doc) {
+    Field field = Base(std::move(key), Type::kOptionalNumber, rule, std::move(unit), std::move(doc));
+    field.optional_number = [member](Struct* s) { return &(s->*member); };
+    return field;
+  }
+  /// A flag that may be absent.
+  static Field OptionalBool(std::string key, std::optional<bool> Struct::*member, std::string doc) {
+    Field field = Base(std::move(key), Type::kOptionalBool, {}, "", std::move(doc));
+    field.optional_bool = [member](Struct* s) { return &(s->*member); };
     return field;
   }
   /// An enum written by name: `names` pairs every value with its name in files.
@@ -239,7 +264,13 @@ class FieldTable {
             throw error.WithKeyPrefix(field.key);
           }
           break;
+        case Type::kOptionalNumber: {
+          const std::optional<double>& value = *field.optional_number(&s);
+          if (value) CheckNumber(field.key, *value, field.rule);
+          break;
+        }
         case Type::kBool:
+        case Type::kOptionalBool:
         case Type::kCustom:
           break;
       }
@@ -283,6 +314,16 @@ class FieldTable {
           out << YAML::Key << field.key << YAML::Value << YAML::BeginMap;
           field.emit_section(config, out);
           out << YAML::EndMap;
+          break;
+        case Type::kOptionalNumber:
+          if (const std::optional<double>& value = *field.optional_number(&s)) {
+            out << YAML::Key << field.key << YAML::Value << FormatNumber(*value);
+          }
+          break;
+        case Type::kOptionalBool:
+          if (const std::optional<bool>& value = *field.optional_bool(&s)) {
+            out << YAML::Key << field.key << YAML::Value << *value;
+          }
           break;
         case Type::kCustom:
           break;
@@ -348,6 +389,18 @@ class FieldTable {
           row.default_value = field.custom_default;
           row.allowed = field.custom_allowed;
           break;
+        case Type::kOptionalNumber: {
+          const std::optional<double>& value = *field.optional_number(&defaults);
+          row.default_value = value ? DocNumber(*value) : "none";
+          row.allowed = DescribeRule(field.rule);
+          break;
+        }
+        case Type::kOptionalBool: {
+          const std::optional<bool>& value = *field.optional_bool(&defaults);
+          row.default_value = value ? (*value ? "true" : "false") : "none";
+          row.allowed = "true, false";
+          break;
+        }
       }
       if (!field.note.empty()) row.allowed += "; " + field.note;
       rows.push_back(std::move(row));
@@ -368,7 +421,7 @@ class FieldTable {
 
   static void CheckNumber(const std::string& key, double value, const NumberRule& rule) {
     const std::string failure = rule.Check(value);
-    if (!failure.empty()) throw ConfigError("", 0, key, FormatNumber(value), failure);
+    if (!failure.empty()) throw ConfigError("", 0, key, ReadableNumber(value), failure);
   }
 
   static void CheckText(const Field& field, const std::string& text) {
@@ -410,6 +463,20 @@ class FieldTable {
       }
       case Type::kSection:
         if (auto sub = map.GetMap(field.key)) field.load_section(*sub, config);
+        break;
+      case Type::kOptionalNumber:
+        if (map.Has(field.key)) {
+          *field.optional_number(config) = map.GetNumber(field.key, 0.0, field.rule);
+        } else {
+          valid->push_back(field.key);
+        }
+        break;
+      case Type::kOptionalBool:
+        if (map.Has(field.key)) {
+          *field.optional_bool(config) = map.GetBool(field.key, false);
+        } else {
+          valid->push_back(field.key);
+        }
         break;
       case Type::kCustom:
         valid->push_back(field.key);

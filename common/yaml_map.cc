@@ -308,7 +308,12 @@ void YamlMap::FailAt(const ConfigError& error) const {
   const std::string key = FullKey(error.key());
   if (complete && !error.key().empty())
     throw ConfigError(file_, LineOf(node), key, Scalar(node), error.message());
-  throw ConfigError(file_, LineOf(deepest_map), key, error.value(), error.message());
+  // Not in the file: the value in use is a default (the struct's, a profile's). Point at the
+  // section that holds the key, or at no line when that is the document itself.
+  const bool at_top = deepest_map.is(node_) && prefix_.empty();
+  const std::optional<std::string> value =
+      error.value() ? std::optional<std::string>(*error.value() + " (default)") : std::nullopt;
+  throw ConfigError(file_, at_top ? 0 : LineOf(deepest_map), key, value, error.message());
 }
 
 void YamlMap::RejectUnknownKeys(const std::vector<std::string>& also_valid) const {

@@ -76,7 +76,8 @@ class YamlMap {
   [[noreturn]] void FailHere(std::string_view message) const;
   /// Throws `error` (a check's, its key a dotted path relative to this map, e.g. "motor.armature_kg"
   /// or "size_m[2]") located in this file: at the line of that key and with the value as the file
-  /// spells it when the file sets it, else at this map's line with the error's own value.
+  /// spells it when the file sets it, else at the line of the nearest enclosing map the file has
+  /// (none for the document itself) with the error's own value marked "(default)".
   [[noreturn]] void FailAt(const ConfigError& error) const;
 
   const std::string& file() const { return file_; }

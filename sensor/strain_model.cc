@@ -80,8 +80,8 @@ const common::FieldTable<StrainModelConfig>& StrainModelConfigFields() {
         if (!(c.adc_min_ohm < c.adc_full_scale_ohm)) {
           common::FieldError("adc_min_ohm", c.adc_min_ohm,
                              "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" +
-                                 common::FormatNumber(c.adc_min_ohm) + " vs " +
-                                 common::FormatNumber(c.adc_full_scale_ohm) + ")");
+                                 common::ReadableNumber(c.adc_min_ohm) + " vs " +
+                                 common::ReadableNumber(c.adc_full_scale_ohm) + ")");
         }
       });
   return table;

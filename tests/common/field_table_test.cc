@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace graspbed::common {
@@ -121,8 +122,9 @@ TEST(FieldTableTest, UnknownKeysAreRefusedNamingTheValidOnes) {
 TEST(FieldTableTest, ACrossFieldCheckBlamesTheKeyAtItsLineOrTheMapWithTheValueInUse) {
   // The blamed key is in the file: its line and its text.
   EXPECT_STREQ(LoadError("low: 5\nhigh: 4\n").what(), "f.yaml:2: high = 4: must be > low");
-  // Not in the file: the map's line and the value in use (the default).
-  EXPECT_STREQ(LoadError("low: 5\n").what(), "f.yaml:1: high = 1: must be > low");
+  // Not in the file: the value in use (the default), at the enclosing section's line when there is
+  // one, at no line when that is the document itself.
+  EXPECT_STREQ(LoadError("low: 5\n").what(), "f.yaml: high = 1 (default): must be > low");
 }
 
 TEST(FieldTableTest, ValidateAppliesTheSameRulesToAConfigBuiltInCode) {
@@ -209,6 +211,35 @@ TEST(FieldTableTest, TheReferenceListsEveryFieldWithDefaultRuleAndUnit) {
   EXPECT_EQ(rows[9].unit, "m");
   EXPECT_EQ(rows[9].allowed, "> 0, <= 0.1");
   EXPECT_THAT(ReferenceMarkdown(rows), HasSubstr("| `inner.width_m` | m | 0.01 | > 0, <= 0.1 | a width |\n"));
+}
+
+struct Checks {
+  std::optional<double> max_slip_mm;
+  std::optional<bool> not_dropped;
+};
+
+TEST(FieldTableTest, OptionalFieldsStayUnsetUnlessGivenAndAreWrittenOnlyWhenSet) {
+  using Table = FieldTable<Checks>;
+  const Table table("checks", {
+                                  Table::OptionalNumber("max_slip_mm", &Checks::max_slip_mm,
+                                                        NumberRule::NonNegative(), "mm", "limit"),
+                                  Table::OptionalBool("not_dropped", &Checks::not_dropped, "flag"),
+                              });
+  Checks checks;
+  table.Load(YamlMap::LoadString("max_slip_mm: 2\n", "c.yaml"), &checks);
+  EXPECT_EQ(checks.max_slip_mm, 2.0);
+  EXPECT_FALSE(checks.not_dropped.has_value());
+  EXPECT_EQ(table.EmitYaml(checks), "max_slip_mm: 2\n");
+  Checks refused;
+  try {
+    table.Load(YamlMap::LoadString("not_dropped: true\nmax_slip_mm: -1\n", "c.yaml"), &refused);
+    FAIL() << "no error";
+  } catch (const ConfigError& error) {
+    EXPECT_STREQ(error.what(), "c.yaml:2: max_slip_mm = -1: must be >= 0");
+  }
+  checks.max_slip_mm = -1.0;
+  EXPECT_THROW(table.Validate(checks), ConfigError);
+  EXPECT_EQ(table.Reference()[0].default_value, "none");
 }
 
 TEST(FieldTableTest, DocNumbersAreShort) {
