@@ -28,9 +28,11 @@ void AddConfigReferenceCommand(CLI::App& root) {
   CLI::App* command = root.add_subcommand(
       "config-reference",
       "Print the keys of the config sections (unit, default, allowed values, meaning) as Markdown");
-  command->add_option("section", *section,
-                      "one section (object, hand, physics, sensor.strain_model, sensor.readout, "
-                      "sensor.inversion, metrics, serial); default: all");
+  std::string sections;
+  for (const scenario::ConfigSection& entry : scenario::ConfigReference()) {
+    sections += (sections.empty() ? "" : ", ") + entry.path;
+  }
+  command->add_option("section", *section, "one section (" + sections + "); default: all");
   command->callback([section] { RunConfigReference(*section); });
 }
 

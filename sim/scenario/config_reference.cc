@@ -1,6 +1,7 @@
 #include "sim/scenario/config_reference.h"
 
 #include "hardware/hardware_config.h"
+#include "sensor/fea/fea_config.h"
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
@@ -14,11 +15,15 @@ std::vector<ConfigSection> ConfigReference() {
       {"object", sim::ObjectConfigFields().Reference()},
       {"hand", sim::HandConfigFields().Reference()},
       {"physics", sim::PhysicsConfigFields().Reference()},
+      {"sensor", SensorOptionsFields().Reference()},
       {"sensor.strain_model", sensor::StrainModelConfigFields().Reference()},
       {"sensor.readout", sensor::ReadoutConfigFields().Reference()},
       {"sensor.inversion", sensor::InversionConfigFields().Reference()},
+      {"controller", ControllerOptionsFields().Reference()},
+      {"expectations", ExpectationsFields().Reference()},
       {"metrics", MetricsConfigFields().Reference()},
       {"serial", hardware::HardwareConfigFields().Reference()},
+      {"fea", fea::FeaConfigFields().Reference()},
   };
 }
 

@@ -12,9 +12,10 @@
 
 namespace graspbed::scenario {
 
-/// One section of a scenario file with a field table.
+/// One section of a scenario file with a field table (and "fea", the FEA config file of
+/// sensor.fea_config).
 struct ConfigSection {
-  std::string path;  ///< where it sits in a scenario file ("object", "sensor.readout", "serial")
+  std::string path;  ///< where it sits in a scenario file ("object", "sensor.readout", "serial", "fea")
   std::vector<common::FieldReference> rows;
 };
 
