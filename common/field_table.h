@@ -40,7 +40,7 @@ struct FieldReference {
 std::string DocNumber(double value);
 /// `rule` in words for a reference table ("0 .. 1", "> 0, <= 1000", ">= 0", "any").
 std::string DescribeRule(const NumberRule& rule);
-/// Markdown table (key, unit, default, allowed, meaning) of `rows`, keys prefixed by `prefix`.
+/// Markdown table (key, unit, default, allowed, meaning) of `rows`, one row each.
 std::string ReferenceMarkdown(const std::vector<FieldReference>& rows);
 
 /// The fields of `Struct`, their rules and its cross-field checks. See the file comment.
@@ -86,7 +86,7 @@ class FieldTable {
     std::function<std::vector<FieldReference>()> reference_section;
 
     /// NaN (in any entry) stands for "derived at run time": not checked, not written out, and
-    /// documented as "auto" (`explanation` says from what).
+    /// documented as "auto" (the field's doc says from what).
     Field&& NanIsAuto() && {
       nan_is_auto = true;
       return std::move(*this);
@@ -98,6 +98,7 @@ class FieldTable {
     }
   };
 
+  /// A number under `rule`; `unit` as docs write it ("N", "m/s", "-" for a ratio, "" for none).
   static Field Number(std::string key, double Struct::*member, NumberRule rule, std::string unit,
                       std::string doc) {
     Field field = Base(std::move(key), Type::kNumber, rule, std::move(unit), std::move(doc));
@@ -120,6 +121,7 @@ class FieldTable {
     field.integer = [member](Struct* s) { return &(s->*member); };
     return field;
   }
+  /// true / false (also yes / no, on / off in files).
   static Field Bool(std::string key, bool Struct::*member, std::string doc) {
     Field field = Base(std::move(key), Type::kBool, {}, "", std::move(doc));
     field.boolean = [member](Struct* s) { return &(s->*member); };

@@ -26,7 +26,9 @@ const common::FieldTable<InversionConfig>& InversionConfigFields() {
                         "rated range of Fn and abs(Ft) (paper: 10 N)"),
           Table::Number("out_of_range_margin_fraction", &C::out_of_range_margin_fraction,
                         NumberRule::Between(0.0, 100.0), "-",
-                        "an estimate beyond rated_force_n x (1 + this) is out of range"),
+                        "estimates beyond rated_force_n x (1 + this) are `out_of_range`; they keep their "
+                        "value, count as "
+                        "contacts, and stay out of the totals"),
       });
   return table;
 }

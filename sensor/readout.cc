@@ -44,31 +44,31 @@ const common::FieldTable<ReadoutConfig>& ReadoutConfigFields() {
       "readout",
       {
           Table::Integer("baseline_frames", &C::baseline_frames, 1, 1000000, "frames",
-                         "frames averaged for the tare baseline; contact before they have arrived biases "
-                         "the estimate"),
+                         "frames averaged for the tare after construction or `Reset()`; validity "
+                         "`not_tared` meanwhile; contact before they have arrived biases the estimate"),
           Table::Number("short_circuit_ohm", &C::short_circuit_ohm, NumberRule::Between(0.0, 1e6), "Ohm",
-                        "a channel at or below this reads as a short circuit"),
+                        "at or below: `short`"),
           Table::Number("open_circuit_ohm", &C::open_circuit_ohm, {0.0, 1e9, true}, "Ohm",
-                        "a channel at or above this (or infinite) reads as open circuit")
+                        "at or above (or inf): `open`")
               .Note("> `short_circuit_ohm`"),
           Table::Number("min_plausible_fraction", &C::min_plausible_fraction, NumberRule::Between(0.0, 0.999),
-                        "-", "a channel below this x nominal R0 (not a short) is implausible"),
+                        "-", "channel below this x R0 (not a short): `implausible`"),
           Table::Number("max_plausible_fraction", &C::max_plausible_fraction, {1.0, 1000.0, true}, "-",
-                        "a channel above this x nominal R0 (not open) is implausible"),
+                        "channel above this x R0 (not open): `implausible`"),
           Table::Number("max_baseline_deviation_fraction", &C::max_baseline_deviation_fraction,
                         {0.0, 100.0, true}, "-",
-                        "a tare baseline further than this from nominal R0 is implausible"),
+                        "tare further than this from R0 (or a channel without good readings in half the tare "
+                        "window): `implausible` until re-tared"),
           Table::Number("min_mean_dr_rel", &C::min_mean_dr_rel, NumberRule::Between(-10.0, -1e-9), "-",
-                        "a unit's mean dR/R below this is implausible (the mesa pulled hard; -0.1 is "
-                        "about -1.8 N at paper sensitivities)"),
+                        "mean dR/R of a unit below this (mesa pulled; -0.1 is about -1.8 N at paper "
+                        "sensitivities): `implausible`"),
           Table::Number("max_abs_dr_rel", &C::max_abs_dr_rel, {0.0, 1000.0, true}, "-",
-                        "a channel's abs(dR/R) above this is out of the gauge's linear range"),
+                        "abs(dR/R) above this: `out_of_range` (the paper's maximum is 0.96)"),
           Table::Number("adc_full_scale_ohm", &C::adc_full_scale_ohm, NumberRule::Between(0.0, 1e8), "Ohm",
-                        "the source's ADC full scale: a channel at or above it is out of range; 0 = "
-                        "unknown"),
+                        "the source's ADC full scale; a channel at it is `out_of_range`; 0 = unknown"),
           Table::Number("adc_min_ohm", &C::adc_min_ohm, NumberRule::Between(0.0, 1e8), "Ohm",
-                        "bottom of the source's ADC window: a channel at or below it is out of range; 0 "
-                        "= none")
+                        "bottom of the source's ADC window; a channel at or below it is `out_of_range`; "
+                        "0 = none")
               .Note("< `adc_full_scale_ohm` when that is > 0"),
       },
       [](const C& c) {
