@@ -25,6 +25,7 @@ struct ScoreCommandOptions {
   int jobs = 1;
   int limit = 0;
   std::string out_dir = "out/scorecard";
+  std::string runs_dir;  ///< empty: no per-run outputs
 };
 
 void ScoreCommand(const ScoreCommandOptions& options) {
@@ -40,6 +41,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   }
   score.jobs = options.jobs;
   score.limit = options.limit;
+  score.runs_dir = options.runs_dir;
   score.stop = &StopRequested();
   const bool terminal = ::isatty(STDERR_FILENO) == 1;
   score.on_finished = [terminal](int done, int total) {
@@ -78,6 +80,9 @@ void AddScoreCommand(CLI::App& root) {
       ->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--out", options->out_dir, "output directory (default out/scorecard)");
+  command->add_option("--runs-out", options->runs_dir,
+                      "also keep every run's outputs (signals.csv, summary.json, config.yaml; no plots) "
+                      "in DIR/<run>@<controller>/, to trace the figures back to their runs");
   command->callback([options] { ScoreCommand(*options); });
 }
 

@@ -9,17 +9,29 @@
 // coverage (sensed share of the finger's contact force) for a 10 N pinch of each object shape.
 // Run: build/bench/sim_bench   (docs/simulation.md)
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include <chrono>
-#include <ctime>
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <string>
 #include <memory>
+#include <vector>
 
+#include "common/data_dir.h"
+#include "common/process.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
 #include "sim/sim_rig.h"
+#include "sim/physics_checks.h"
+#include "sim/scenario/runner.h"
+#include "sim/scenario/scenario_config.h"
+#include "sim/scenario/suite.h"
 #include "sim/simulation.h"
+#include "sim/step_profile.h"
 
 namespace graspbed::sim {
 namespace {
@@ -70,15 +82,17 @@ void BM_FullPipeline(benchmark::State& bench) {
 }
 BENCHMARK(BM_FullPipeline)->Unit(benchmark::kMicrosecond);
 
+// A scenario run's fixed cost before its first step: generate the MJCF, compile it, allocate mjData.
+void BM_BuildSimulation(benchmark::State& bench) {
+  for (auto _ : bench) {
+    Simulation simulation(Layout(), SceneConfig{});
+    benchmark::DoNotOptimize(simulation.time_s());
+  }
+}
+BENCHMARK(BM_BuildSimulation)->Unit(benchmark::kMillisecond);
+
 double WallSeconds(const std::chrono::steady_clock::time_point& start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-// CPU time of this thread [s]: robust against other processes sharing the cores.
-double ThreadCpuSeconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 void PrintRatio(const char* label, const SceneConfig& scene) {
@@ -92,15 +106,15 @@ void PrintRatio(const char* label, const SceneConfig& scene) {
   double pipeline_cpu = 0.0;
   for (int round = 0; round < kRounds; ++round) {
     auto start = std::chrono::steady_clock::now();
-    double cpu_start = ThreadCpuSeconds();
+    double cpu_start = common::ThreadCpuSeconds();
     physics->StepUntil(physics->time_s() + kRoundS);
     physics_wall += WallSeconds(start);
-    physics_cpu += ThreadCpuSeconds() - cpu_start;
+    physics_cpu += common::ThreadCpuSeconds() - cpu_start;
     start = std::chrono::steady_clock::now();
-    cpu_start = ThreadCpuSeconds();
+    cpu_start = common::ThreadCpuSeconds();
     rig->AdvanceTo(rig->time_s() + kRoundS);
     pipeline_wall += WallSeconds(start);
-    pipeline_cpu += ThreadCpuSeconds() - cpu_start;
+    pipeline_cpu += common::ThreadCpuSeconds() - cpu_start;
   }
   const double simulated = kRounds * kRoundS;
   std::printf("\nPipeline cost, %s, 10 N pinch hold, %.0f s simulated each, interleaved:\n", label,
@@ -147,6 +161,156 @@ void PrintCoverage() {
   }
 }
 
+// One physics option against its speed and its fidelity: the held 10 N pinch profiled stage by
+// stage (CPU time per step; the stages are wall-timed shares of it), and the contact model's
+// promises measured with it: creep under half Coulomb's load (bound 5 um/s), pull / Coulomb at the
+// onset of slip (bound 1 +- 0.05) and the sensed share of the pinch (bound 0.95).
+struct PhysicsOption {
+  const char* name;
+  SceneConfig scene;
+};
+
+void PrintPhysicsOptions(const std::vector<PhysicsOption>& options) {
+  std::printf(
+      "\nPhysics options, held 10 N pinch of the default box (per step [us]; per simulated second [ms "
+      "CPU]):\n");
+  std::printf("  %-34s %6s %6s %6s %6s %6s %7s %5s %5s %5s %8s %7s %6s %5s\n", "option", "cpu", "coll",
+              "make", "proj", "solve", "ms/s", "con", "rows", "iter", "creep", "slip/C", "cover", "fault");
+  for (const PhysicsOption& option : options) {
+    auto simulation = HeldPhysics(option.scene);
+    const StepProfile p = ProfileSteps(*simulation, 1.0);
+    const double share = p.step_cpu_us / p.step_us;  // wall-timed stages scaled to CPU time
+    const CreepCheck creep = MeasureCreep(Layout(), option.scene);
+    const double onset = MeasureSlipOnsetRatio(Layout(), option.scene);
+    const PinchCheck pinch = MeasurePinch(Layout(), option.scene, 0.8, 0.2);
+    const bool fault = simulation->fault().occurred || creep.fault || pinch.fault;
+    std::printf("  %-34s %6.1f %6.1f %6.1f %6.1f %6.1f %7.1f %5.1f %5.1f %5.1f %6.2fum %7.4f %6.3f %5s\n",
+                option.name, p.step_cpu_us, share * p.collision_us, share * p.make_constraint_us,
+                share * p.project_constraint_us, share * p.solver_us,
+                p.step_cpu_us * 1e-3 / option.scene.physics.timestep_s, p.contacts, p.constraint_rows,
+                p.solver_iterations, creep.drift_m_s * 1e6, onset, pinch.sensed_share, fault ? "yes" : "-");
+  }
+}
+
+// The physics settings before the speed work (issue 16): 0.5 ms steps, 3 noslip iterations, impratio 10.
+PhysicsConfig PhysicsBefore() {
+  PhysicsConfig physics;
+  physics.timestep_s = 0.0005;
+  physics.noslip_iterations = 3;
+  physics.impratio = 10.0;
+  return physics;
+}
+
+std::vector<scenario::Override> PhysicsOverrides(const PhysicsConfig& physics) {
+  return {{"physics.timestep_s", std::to_string(physics.timestep_s)},
+          {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
+          {"physics.impratio", std::to_string(physics.impratio)}};
+}
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// `graspbed run scenarios/default.yaml --no-plots` as a user starts it, whole process: the median of
+// `repeats` runs' wall and CPU (user + system) time [s].
+struct ProcessTime {
+  double wall_s = 0.0;
+  double cpu_s = 0.0;
+  bool ok = false;
+};
+ProcessTime TimeProcess(const std::vector<std::string>& argv, int repeats) {
+  std::vector<double> walls;
+  std::vector<double> cpus;
+  bool ok = true;
+  for (int i = 0; i < repeats; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    const int pid = common::SpawnProcess(argv, -1, "", "");
+    int status = 0;
+    rusage usage{};
+    if (::wait4(pid, &status, 0, &usage) != pid) return {};
+    walls.push_back(WallSeconds(start));
+    cpus.push_back(static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                   1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec));
+    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  }
+  return {Median(walls), Median(cpus), ok};
+}
+
+// Real-time factors of the default scenario and the shipped suite's runs per minute, with the
+// contact model's figures beside them, for one set of physics settings.
+void PrintScenarioSpeed(const char* label, const PhysicsConfig& physics, const std::string& cli) {
+  const std::string out = (std::filesystem::temp_directory_path() / "graspbed_sim_bench").string();
+  const std::string default_yaml = common::DataPath("scenarios/default.yaml");
+  const std::vector<scenario::Override> overrides = PhysicsOverrides(physics);
+  const scenario::ScenarioConfig config = scenario::LoadScenario(default_yaml, overrides);
+
+  // In this process: the run as a suite or sweep makes it (outputs written, no plots).
+  constexpr int kRepeats = 5;
+  std::vector<double> walls;
+  std::vector<double> cpus;
+  bool passed = true;
+  for (int i = 0; i < kRepeats; ++i) {
+    scenario::RunOptions options;
+    options.out_dir = out + "/default";
+    options.write_plots = false;
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = common::ThreadCpuSeconds();
+    const scenario::RunResult result = scenario::RunScenario(config, options);
+    cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
+    walls.push_back(WallSeconds(start));
+    passed = passed && result.passed;
+  }
+  // The whole process, as a user starts it.
+  ProcessTime process{};
+  if (!cli.empty()) {
+    std::vector<std::string> argv = {cli, "run", default_yaml, "--no-plots", "--out", out + "/process"};
+    for (const scenario::Override& o : overrides) {
+      argv.push_back("--set");
+      argv.push_back(o.key + "=" + o.value);
+    }
+    process = TimeProcess(argv, kRepeats);
+  }
+  // The suite on 1 and 2 worker threads.
+  const std::vector<scenario::ScenarioConfig> suite =
+      scenario::LoadScenarios(scenario::ListScenarioFiles(common::DataPath("scenarios")), overrides);
+  double runs_per_min[2] = {0.0, 0.0};
+  int suite_passed = 0;
+  for (int jobs = 1; jobs <= 2; ++jobs) {
+    scenario::SuiteOptions options;
+    options.jobs = jobs;
+    options.out_dir = out + "/suite";
+    options.write_plots = false;
+    const scenario::SuiteResult result = scenario::RunSuite(suite, options);
+    runs_per_min[jobs - 1] = 60.0 * static_cast<double>(suite.size()) / result.wall_s;
+    suite_passed = result.passed;
+  }
+  SceneConfig scene;
+  scene.physics = physics;
+  const CreepCheck creep = MeasureCreep(Layout(), scene);
+  const double onset = MeasureSlipOnsetRatio(Layout(), scene);
+  const PinchCheck pinch = MeasurePinch(Layout(), scene, 0.8, 0.2);
+  const double duration = config.duration_s;
+  std::printf("  %-40s %7.1fx %7.1fx %7.1fx %7.1fx %9.1f %9.1f %4d/%-3zu %6.2fum %7.4f %6.3f %s\n", label,
+              duration / Median(walls), duration / Median(cpus),
+              process.wall_s > 0.0 ? duration / process.wall_s : 0.0,
+              process.cpu_s > 0.0 ? duration / process.cpu_s : 0.0, runs_per_min[0], runs_per_min[1],
+              suite_passed, suite.size(), creep.drift_m_s * 1e6, onset, pinch.sensed_share,
+              passed && (cli.empty() || process.ok) ? "" : " (default scenario FAILED)");
+}
+
+void PrintScenarioSpeeds(const std::string& cli) {
+  std::printf(
+      "\nScenario speed: the default scenario's real-time factor (outputs written, no plots; median of 5) "
+      "in\n"
+      "this process and as a whole `graspbed run` process, wall and CPU; the shipped suite's runs per\n"
+      "minute on 1 and 2 worker threads and how many passed; the contact model's figures beside them:\n");
+  std::printf("  %-40s %8s %8s %8s %8s %9s %9s %8s %8s %7s %6s\n", "physics", "run wall", "run CPU",
+              "proc wall", "proc CPU", "suite/min", "2 cores", "passed", "creep", "slip/C", "cover");
+  PrintScenarioSpeed("before: 0.5 ms, noslip 3, impratio 10", PhysicsBefore(), cli);
+  PrintScenarioSpeed("now: the defaults", PhysicsConfig{}, cli);
+}
+
 }  // namespace
 }  // namespace graspbed::sim
 
@@ -155,6 +319,43 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  {
+    using graspbed::sim::SceneConfig;
+    std::vector<graspbed::sim::PhysicsOption> options;
+    auto add = [&](const char* name, auto edit) {
+      SceneConfig scene;
+      edit(scene);
+      options.push_back({name, scene});
+    };
+    add("default", [](SceneConfig&) {});
+    add("timestep 0.5 ms", [](SceneConfig& s) { s.physics.timestep_s = 0.0005; });
+    add("tolerance 1e-8", [](SceneConfig& s) { s.physics.tolerance = 1e-8; });
+    add("noslip 0", [](SceneConfig& s) { s.physics.noslip_iterations = 0; });
+    add("noslip 1", [](SceneConfig& s) { s.physics.noslip_iterations = 1; });
+    add("noslip 2", [](SceneConfig& s) { s.physics.noslip_iterations = 2; });
+    add("noslip 0, impratio 100", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 100;
+    });
+    add("noslip 0, impratio 300", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 300;
+    });
+    add("noslip 0, impratio 1000", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.physics.impratio = 1000;
+    });
+    add("noslip 0, solimp dmax 0.999", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.object.solimp[1] = 0.999;
+    });
+    add("noslip 0, solimp 0.99 0.9999", [](SceneConfig& s) {
+      s.physics.noslip_iterations = 0;
+      s.object.solimp[0] = 0.99;
+      s.object.solimp[1] = 0.9999;
+    });
+    graspbed::sim::PrintPhysicsOptions(options);
+  }
   graspbed::sim::PrintRatio("prosthetic hand (default scene)", graspbed::sim::SceneConfig{});
   // The slide-joint jaw fixture: the default hand before the prosthetic one, for comparison.
   graspbed::sim::SceneConfig jaw;
@@ -162,5 +363,10 @@ int main(int argc, char** argv) {
   jaw.hand.open_gap_m = 0.065;
   graspbed::sim::PrintRatio("jaw fixture (the previous default hand)", jaw);
   graspbed::sim::PrintCoverage();
+#ifdef GRASPBED_CLI
+  graspbed::sim::PrintScenarioSpeeds(GRASPBED_CLI);
+#else
+  graspbed::sim::PrintScenarioSpeeds("");
+#endif
   return 0;
 }

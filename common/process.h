@@ -1,6 +1,7 @@
 #pragma once
 /// Starting a child program with its standard streams redirected (posix_spawn), for the pieces that
-/// drive another program: the video writer (ffmpeg) and the tests' child processes.
+/// drive another program: the video writer (ffmpeg) and the tests' child processes; and the CPU
+/// clock the benchmarks read.
 
 #include <string>
 #include <vector>
@@ -13,5 +14,9 @@ namespace graspbed::common {
 /// @throws std::runtime_error naming the program when it cannot be started.
 int SpawnProcess(const std::vector<std::string>& argv, int stdin_fd, const std::string& stdout_path,
                  const std::string& stderr_path);
+
+/// CPU time the calling thread has used [s] (CLOCK_THREAD_CPUTIME_ID): unlike wall time, not
+/// inflated when other processes share the cores.
+double ThreadCpuSeconds();
 
 }  // namespace graspbed::common

@@ -19,13 +19,12 @@ constexpr double kMaxStepS = 0.01;
 /// Loading ends once the measured grip reaches this fraction of the target.
 constexpr double kLoadedFraction = 0.9;
 
-/// Static name of the cues that fired in `signals` (telemetry; no allocation).
-const char* CueNames(const SlipSignals& signals) {
+/// Static name of the cues that count as slip (telemetry; no allocation).
+const char* CueNames(bool ratio, bool vibration, bool centroid) {
   static constexpr const char* kNames[8] = {
       "",         "ratio",          "vibration",          "ratio+vibration",
       "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
-  return kNames[(signals.ratio_slip ? 1 : 0) | (signals.vibration_slip ? 2 : 0) |
-                (signals.centroid_slip ? 4 : 0)];
+  return kNames[(ratio ? 1 : 0) | (vibration ? 2 : 0) | (centroid ? 4 : 0)];
 }
 
 /// One declared parameter bound to its field of GripSlipConfig.
@@ -97,7 +96,8 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("friction_learn_rate", friction_learn_rate, 0.0, 1.0, "",
                     "fraction of the way the estimate moves towards the ratio seen at slip"),
       GRASPBED_BIND("friction_learn_max_drop", friction_learn_max_drop, 0.0, 1.0, "",
-                    "one slip lowers the friction estimate by at most this fraction of it"),
+                    "one slip lowers the friction estimate by at most this fraction of it; a slip at a "
+                    "ratio further below the estimate (a jolt) teaches nothing"),
       GRASPBED_BIND("friction_learn_min_load_n", friction_learn_min_load_n, 0.0, 100.0, "N",
                     "the estimate is learned only from slips under at least this tangential load"),
       GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N",
@@ -164,6 +164,10 @@ const std::vector<Binding>& Bindings() {
                     "grip target as a fraction of the ceiling when the sensor cannot resolve shear"),
       GRASPBED_BIND("noise_floor_time_s", slip.noise_floor_time_s, 0.01, 100.0, "s",
                     "time constant of the learned noise floor"),
+      GRASPBED_BIND("vibration_noise_reference", slip.vibration_noise_reference, 0, 1, "",
+                    "1: the vibration threshold is at least vibration_factor x the high-passed shear RMS "
+                    "of the units off the contact (a live noise reference: a noise burst raises it, a "
+                    "slip does not)"),
       GRASPBED_BIND("centroid_detector", slip.centroid_enabled, 0, 1, "",
                     "1: use the contact-centroid movement cue"),
       GRASPBED_BIND("centroid_filter_s", slip.centroid_filter_s, 0.0, 0.1, "s",
@@ -183,6 +187,13 @@ const std::vector<Binding>& Bindings() {
           "centroid_grip_band", slip.centroid_grip_band, 0.0, 10.0, "",
           "the centroid drift reference is taken afresh when the grip moved by more than this fraction "
           "(the pad rolls with the grip); 0 = off"),
+      GRASPBED_BIND("centroid_load_fraction", slip.centroid_load_fraction, 0.0, 10.0, "",
+                    "with a shear estimate, the centroid cue fires only while the load ratio is at least "
+                    "this fraction of the ratio threshold (the pad's centroid moves with load and "
+                    "squeeze); 0 = off"),
+      GRASPBED_BIND("centroid_rolling_preload_n", slip.centroid_rolling_preload_n, 0.0, 100.0, "N",
+                    "centroid_load_fraction applies to contacts that seated with at least this much "
+                    "locked-in shear (a pad that met the object obliquely and rolls)"),
       GRASPBED_BIND("detector_settle_s", slip.settle_s, 0.0, 1.0, "s",
                     "slip cues stay silent at least this long after contact onset or after stale data"),
       GRASPBED_BIND(
@@ -299,6 +310,10 @@ void GripSlipController::Reset() {
   target_n_ = 0.0;
   integrator_ = 0.0;
   refractory_until_s_ = 0.0;
+  ratio_was_up_ = false;
+  ratio_counts_ = false;
+  centroid_counts_ = false;
+  ratio_rise_s_ = 0.0;
   last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
@@ -372,13 +387,17 @@ void GripSlipController::RespondToSlip(double time_s) {
   // cues teach the estimate.
   if ((signals.vibration_slip || signals.centroid_slip) &&
       signals.tangential_load_n >= config_.friction_learn_min_load_n) {
-    // In the coordinates the ratio cue and the coupling use (the load's part, preload removed), and
-    // by at most friction_learn_max_drop of the estimate per event: a slip at a ratio far below the
-    // estimate is a jolt (an impact, the pad reseating), not the friction limit.
-    const double observed = std::clamp(std::max(signals.load_ratio, signals.instant_load_ratio),
-                                       (1.0 - config_.friction_learn_max_drop) * friction_, friction_);
-    friction_ =
-        std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+    // In the coordinates the ratio cue and the coupling use (the load's part, preload removed). A
+    // slip at a ratio more than friction_learn_max_drop below the estimate is a jolt (an impact,
+    // the pad reseating, a load step), not the friction limit, and teaches nothing: clamped to half
+    // the estimate instead, each such flag halved it, and the ratio and centroid cues then fired on
+    // ordinary loads (4 of the scorecard's false flags, the friction estimate down to 0.15).
+    const double seen = std::max(signals.load_ratio, signals.instant_load_ratio);
+    if (seen >= (1.0 - config_.friction_learn_max_drop) * friction_) {
+      const double observed = std::min(seen, friction_);
+      friction_ =
+          std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
+    }
   }
   const double grip_n = diagnostics_.measured_grip_n;
   slip_floor_n_ = std::max(target_n_, grip_n) * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
@@ -491,7 +510,19 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
                             grip_n >= kLoadedFraction * std::min(config_.initial_grip_n, ceiling_n);
         if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
       }
-      slip_now = signals.any();
+      // The ratio cue held up with the target at its ceiling says the load is beyond what the
+      // ceiling allows by the friction estimate, not that the contact is sliding now (the grip can
+      // rise no further either way). Past its first slip_refractory_s it no longer counts as slip,
+      // nor does the centroid cue, whose check on a rolling pad is that same load ratio (the pad
+      // deforms under the load); the vibration cue still does. Held up, it hid every later slip
+      // (a flag already up when a slip begins detects nothing) and kept the flag up for seconds.
+      if (signals.ratio_slip && !ratio_was_up_) ratio_rise_s_ = time_s;
+      ratio_was_up_ = signals.ratio_slip;
+      const bool ratio_held =
+          signals.ratio_slip && target_n_ >= ceiling_n && time_s - ratio_rise_s_ > config_.slip_refractory_s;
+      ratio_counts_ = signals.ratio_slip && !ratio_held;
+      centroid_counts_ = signals.centroid_slip && !ratio_held;
+      slip_now = ratio_counts_ || signals.vibration_slip || centroid_counts_;
       // Slip persisting within the refractory time: the step did not cover the load; keep raising.
       if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
       if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
@@ -517,12 +548,18 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       break;
   }
 
+  // Outside the phases that watch for slip the cues are silent: a ratio cue up again later rose anew.
+  if (phase_ != Phase::kLoading && phase_ != Phase::kHolding && phase_ != Phase::kSlip) {
+    ratio_was_up_ = false;
+    ratio_counts_ = false;
+    centroid_counts_ = false;
+  }
   if (data_ok) last_good_command_ = command;
   telemetry_.phase = PhaseName(phase_);
   telemetry_.grip_target_n = target_n_;
   telemetry_.friction_estimate = friction_;
   telemetry_.slip_detected = slip_now;
-  telemetry_.slip_cues = slip_now ? CueNames(signals) : "";
+  telemetry_.slip_cues = slip_now ? CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_) : "";
   diagnostics_.effort = command.grip_effort;
   diagnostics_.integrator = integrator_;
   diagnostics_.ceiling_n = ceiling_n;

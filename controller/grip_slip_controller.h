@@ -51,7 +51,9 @@ struct GripSlipConfig {
   double friction_min = 0.15;              ///< the estimate never goes below this
   double friction_learn_rate = 1.0;        ///< fraction of the way towards the ratio observed at slip
   double friction_learn_min_load_n = 0.2;  ///< learn only from slips under at least this tangential load [N]
-  double friction_learn_max_drop = 0.5;    ///< one slip lowers the estimate by at most this fraction of it
+  /// One slip lowers the estimate by at most this fraction of it; a slip at a ratio further below
+  /// the estimate (a jolt, not the friction limit) teaches nothing.
+  double friction_learn_max_drop = 0.5;
 
   // Force loop (feed-forward + PI with anti-windup) on the measured grip.
   double effort_per_newton = 0.05;  ///< feed-forward effort per newton of target (1 / the 20 N stall pinch)
@@ -149,6 +151,10 @@ class GripSlipController final : public GraspController {
   double target_n_ = 0.0;
   double integrator_ = 0.0;
   double refractory_until_s_ = 0.0;
+  bool ratio_was_up_ = false;     ///< the ratio cue was up in the last frame
+  bool ratio_counts_ = false;     ///< the ratio cue counts as slip now (not held at the ceiling)
+  bool centroid_counts_ = false;  ///< the centroid cue counts as slip now (likewise)
+  double ratio_rise_s_ = 0.0;     ///< when the ratio cue last rose [s]
   hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;

@@ -22,13 +22,18 @@ constexpr long kNoisePrimeFrames = 50;
 /// Centroid weights start at this fraction of the contact threshold (noise on unloaded units
 /// carries no weight, light contacts still count).
 constexpr double kCentroidDeadbandFraction = 0.5;
+/// Units under this fraction of the contact threshold are off the contact (the noise reference).
+constexpr double kReferenceFraction = 0.5;
 /// A measured grip above this multiple of the per-unit contact threshold also means contact.
 constexpr double kContactSumFactor = 3.0;
 /// Below this sum of squared weights a set carries no vibration estimate [N^2].
 constexpr double kMinWeightEnergyN2 = 1e-4;
-/// Samples of the high-pass impulse response summed for its noise power gain (it has decayed to
-/// nothing long before: the slowest pole pair settles within a few hundred samples at 40 Hz / 1 kHz).
+/// Most samples of the high-pass impulse response summed for its noise power gain; the sum stops
+/// earlier once a stretch of kImpulseTailSamples adds less than kImpulseTailFraction of it (at
+/// 40 Hz / 1 kHz after a few hundred samples: the whole loop cost 5 % of a short scenario run).
 constexpr int kImpulseResponseSamples = 20000;
+constexpr int kImpulseTailSamples = 32;
+constexpr double kImpulseTailFraction = 1e-20;
 
 void Require(bool ok, const char* field, double value, const char* rule) {
   if (ok) return;
@@ -72,6 +77,9 @@ void SlipDetectorConfig::Validate() const {
   Require(centroid_noise_sigmas >= 0.0, "centroid_noise_sigmas", centroid_noise_sigmas, "must be >= 0");
   Require(centroid_min_weight_n > 0.0, "centroid_min_weight_n", centroid_min_weight_n, "must be > 0");
   Require(centroid_grip_band >= 0.0, "centroid_grip_band", centroid_grip_band, "must be >= 0");
+  Require(centroid_load_fraction >= 0.0, "centroid_load_fraction", centroid_load_fraction, "must be >= 0");
+  Require(centroid_rolling_preload_n >= 0.0, "centroid_rolling_preload_n", centroid_rolling_preload_n,
+          "must be >= 0");
   Require(settle_s >= 0.0, "settle_s", settle_s, "must be >= 0");
   Require(settle_max_s >= settle_s, "settle_max_s", settle_max_s, "must be >= settle_s");
 }
@@ -94,11 +102,18 @@ SlipDetector::SlipDetector(const SlipDetectorConfig& config) : config_(config) {
   // White noise power the high-pass keeps: the energy of its impulse response.
   HighPassBiquad impulse(config_.vibration_highpass_hz, config_.sample_rate_hz);
   highpass_power_fraction_ = 0.0;
+  double tail = 0.0;
   for (int n = 0; n < kImpulseResponseSamples; ++n) {
     const double h = impulse.Update(n == 0 ? 1.0 : 0.0);
     highpass_power_fraction_ += h * h;
+    tail += h * h;
+    if ((n + 1) % kImpulseTailSamples == 0) {
+      if (n > kImpulseTailSamples && tail < kImpulseTailFraction * highpass_power_fraction_) break;
+      tail = 0.0;
+    }
   }
   vibration_energy_ = LowPassFilter(config_.vibration_window_s, period_s);
+  reference_energy_ = LowPassFilter(config_.vibration_window_s, period_s);
   centroid_row_filter_ = LowPassFilter(config_.centroid_filter_s, period_s);
   const double centroid_alpha =
       config_.centroid_filter_s > 0.0 ? 1.0 - std::exp(-period_s / config_.centroid_filter_s) : 1.0;
@@ -114,6 +129,7 @@ void SlipDetector::Reset() {
   noise_energy_ = start_rms * start_rms;
   noise_samples_ = 0;
   signals_ = SlipSignals{};
+  settle_threshold_n_ = 0.0;
   noise_known_seen_ = false;
   noise_generation_seen_ = 0;
   RestartContact();
@@ -127,6 +143,7 @@ void SlipDetector::Restart() {
   ratio_filter_.Clear();
   ratio_circumferential_filter_.Clear();
   vibration_energy_.Reset(0.0);
+  reference_energy_.Clear();
   centroid_row_filter_.Clear();
   centroid_column_filter_.Clear();
   centroid_history_.Clear();
@@ -185,7 +202,9 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   // Settled: settle_s over and the contact quiet (last frame's vibration statistic under its
   // threshold), or settle_max_s over. Once settled it stays so until the next Restart().
   if (!signals_.settled) {
-    const bool quiet = signals_.vibration_rms_n <= signals_.vibration_threshold_n;
+    // Against the threshold without the live noise reference, which would call the contact quiet
+    // while the seating still rings (it knows the noise before the learned floor has converged).
+    const bool quiet = signals_.vibration_rms_n <= settle_threshold_n_;
     signals_.settled = settle_remaining_ == 0 && (quiet || settle_max_remaining_ == 0);
   }
   const bool live = armed && signals_.settled && signals_.in_contact;
@@ -217,7 +236,15 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   vibration_frames_ = signals_.vibration_rms_n > signals_.vibration_threshold_n ? vibration_frames_ + 1 : 0;
   signals_.vibration_slip = live && config_.vibration_enabled && !signals_.shear_blind &&
                             vibration_frames_ >= config_.vibration_confirm_frames;
-  signals_.centroid_slip = live && config_.centroid_enabled &&
+  // The centroid moves with load and squeeze on a soft pad: with a shear estimate to check it
+  // against, the movement is slip only while the load is a good part of the way to the friction limit.
+  const bool rolling_pad =
+      have_preload_ && std::hypot(signals_.preload_shear_axial_n, signals_.preload_shear_circumferential_n) >=
+                           config_.centroid_rolling_preload_n;
+  const bool load_corroborates =
+      signals_.shear_blind || !config_.ratio_enabled || !rolling_pad ||
+      signals_.load_ratio >= config_.centroid_load_fraction * signals_.ratio_threshold;
+  signals_.centroid_slip = live && config_.centroid_enabled && load_corroborates &&
                            (signals_.centroid_shift_units > signals_.centroid_shift_threshold ||
                             signals_.centroid_drift_units > signals_.centroid_drift_threshold);
   if (signals_.centroid_slip) {
@@ -358,10 +385,16 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
   // square root of the number of loaded units.
   double weighted[2] = {0.0, 0.0};
   double weight_energy[2] = {0.0, 0.0};
+  double reference_square_sum = 0.0;  // off-contact units: noise only
+  int reference_units = 0;
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
     const double highpassed =
         shear_highpass_[static_cast<size_t>(i)].Update(state.ft_n[static_cast<size_t>(i)]);
+    if (state.fn_n[static_cast<size_t>(i)] < kReferenceFraction * config_.contact_unit_threshold_n) {
+      reference_square_sum += highpassed * highpassed;
+      ++reference_units;
+    }
     const double weight = std::max(state.fn_n[static_cast<size_t>(i)], 0.0);
     const int set = (!signals_.orientation_consistent || IsAxial(i)) ? 0 : 1;
     weighted[set] += weight * highpassed;
@@ -401,6 +434,19 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
       std::max(config_.vibration_min_rms_n, config_.vibration_noise_sigmas * signals_.sensor_shear_noise_n *
                                                 std::sqrt(highpass_power_fraction_));
   signals_.vibration_threshold_n = std::max(config_.vibration_factor * signals_.noise_rms_n, floor_n);
+  settle_threshold_n_ = signals_.vibration_threshold_n;
+  // The live noise reference: a noise burst (EMI, a loose connector) raises every unit's noise at
+  // once, faster than the slow floor follows and while a slip response has it frozen; the units off
+  // the contact show it, and a slip's vibration on the loaded units leaves them quiet.
+  if (config_.vibration_noise_reference && reference_units >= SlipDetectorConfig::kMinReferenceUnits) {
+    signals_.vibration_reference_rms_n =
+        std::sqrt(reference_energy_.Update(reference_square_sum / reference_units));
+    signals_.vibration_threshold_n = std::max(signals_.vibration_threshold_n,
+                                              config_.vibration_factor * signals_.vibration_reference_rms_n);
+  } else {
+    reference_energy_.Clear();
+    signals_.vibration_reference_rms_n = 0.0;
+  }
 }
 
 void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool live) {

@@ -480,9 +480,12 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << "\" impratio=\"" << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations
     << "\" iterations=\"" << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
     << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
-  // Sized for a pinch on all mesas (a few hundred constraint rows) with margin; MuJoCo 2.x allocates
-  // njmax^2 doubles for the solver, so njmax 4000 would cost 128 MB per run for nothing.
-  o << "  <size nconmax=\"300\" njmax=\"1000\" nstack=\"1000000\"/>\n";
+  // Sized from use with a wide margin: over the shipped suite and the scorecard set the most seen at
+  // once were 21 contacts, 65 constraint rows and 1.7k stack doubles (mjData.maxuse_*). MuJoCo 2.x
+  // allocates and clears njmax^2 doubles for the solver when a run starts: njmax 1000 and nstack 1e6
+  // cost 2.9 ms of the 4.8 ms a Simulation took to build (bench/sim_bench BM_BuildSimulation). A
+  // scene that outgrows them gets MuJoCo's buffer-full warning, which ends the run as a fault.
+  o << "  <size nconmax=\"100\" njmax=\"300\" nstack=\"100000\"/>\n";
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
   o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
@@ -510,7 +513,11 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
   if (physics.table) {
     o << "    <body name=\"table\">\n";
-    o << "      <geom name=\"table_geom\" type=\"box\" size=\"0.3 0.3 0.02\" pos=\"0 0 -0.02\" rgba=\"0.55 "
+    // A plane, not a box: MuJoCo tests a plane against every geom with cheap analytic functions,
+    // while a box this large overlaps every geom's bounding sphere and sends each hand geom to a
+    // box-box or general convex test every step; and a box resting on the plane gets its four
+    // corner contacts, not two (docs/simulation.md, "Where a step's time goes").
+    o << "      <geom name=\"table_geom\" type=\"plane\" size=\"0.3 0.3 0.02\" rgba=\"0.55 "
          "0.45 0.35 1\""
       << " contype=\"1\" conaffinity=\"3\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
     o << "    </body>\n";

@@ -201,8 +201,10 @@ struct HandConfig {
 struct PhysicsConfig {
   double timestep_s = 0.0005;   ///< physics step [s]
   bool elliptic_cones = true;   ///< elliptic friction cones (pyramidal drops held objects)
-  double impratio = 10.0;       ///< friction-to-normal impedance ratio
-  int noslip_iterations = 3;    ///< post-solve friction projection; removes soft-contact creep
+  /// Friction-to-normal impedance ratio: 1000 keeps soft-contact creep near 1 um/s without noslip.
+  double impratio = 1000.0;
+  /// Post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step).
+  int noslip_iterations = 0;
   int solver_iterations = 100;  ///< Newton iterations
   double tolerance = 1e-10;     ///< solver tolerance
   int condim = 3;               ///< contact dimensionality of object contacts (3, 4 or 6)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <list>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -54,32 +55,83 @@ void PointVelocity(const mjModel* m, const mjData* d, int body, const mjtNum p[3
   for (int k = 0; k < 3; ++k) v[k] = vel[3 + k] + w_cross_r[k];
 }
 
+// The object's friction in the MJCF a Simulation compiles; the scene's own is set on the model.
+constexpr double kCompiledObjectFriction = 1.0;
+
+struct ModelFree {
+  void operator()(mjModel* model) const { mj_deleteModel(model); }
+};
+
+// Compiled models by MJCF text, most recently used first, shared by every Simulation of the process.
+// Few entries suffice: the runs of a suite or sweep repeat a few scenes.
+class CompiledModels {
+ public:
+  static CompiledModels& Instance() {
+    static CompiledModels cache;
+    return cache;
+  }
+  // A private copy of the model compiled from `mjcf`, compiling it on first use. Throws
+  // std::runtime_error with MuJoCo's message when it does not compile.
+  mjModel* Copy(const std::string& mjcf) {
+    // MuJoCo's XML parser keeps global state while it loads: one model at a time, process-wide
+    // (the same lock covers the cache). Runs then step in parallel on their own mjModel/mjData.
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto found =
+        std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.mjcf == mjcf; });
+    if (found == entries_.end()) {
+      entries_.push_front({mjcf, Compile(mjcf)});
+      if (entries_.size() > kCapacity) entries_.pop_back();
+      found = entries_.begin();
+    } else if (found != entries_.begin()) {
+      entries_.splice(entries_.begin(), entries_, found);
+      found = entries_.begin();
+    }
+    mjModel* copy = mj_copyModel(nullptr, found->model.get());
+    if (copy == nullptr) throw std::runtime_error("MuJoCo could not copy the compiled model");
+    return copy;
+  }
+
+ private:
+  static constexpr size_t kCapacity = 8;
+  struct Entry {
+    std::string mjcf;
+    std::unique_ptr<mjModel, ModelFree> model;
+  };
+
+  static std::unique_ptr<mjModel, ModelFree> Compile(const std::string& mjcf) {
+    auto vfs = std::make_unique<mjVFS>();
+    mj_defaultVFS(vfs.get());
+    constexpr const char* kFileName = "graspbed_scene.xml";
+    if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf.size())) != 0) {
+      throw std::runtime_error("cannot create the in-memory model file");
+    }
+    const int file = mj_findFileVFS(vfs.get(), kFileName);
+    std::memcpy(vfs->filedata[file], mjcf.data(), mjcf.size());
+    char error[1000] = {0};
+    std::unique_ptr<mjModel, ModelFree> model(mj_loadXML(kFileName, vfs.get(), error, sizeof(error)));
+    mj_deleteVFS(vfs.get());
+    if (model == nullptr)
+      throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+    return model;
+  }
+
+  std::mutex mutex_;
+  std::list<Entry> entries_;
+};
+
 }  // namespace
 
 Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     : layout_(layout), scene_(scene) {
   InstallHandlers();
   mjcf_ = GenerateMjcf(layout_, scene_);
-
-  auto vfs = std::make_unique<mjVFS>();
-  mj_defaultVFS(vfs.get());
-  constexpr const char* kFileName = "graspbed_scene.xml";
-  if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf_.size())) != 0) {
-    throw std::runtime_error("cannot create the in-memory model file");
-  }
-  const int file = mj_findFileVFS(vfs.get(), kFileName);
-  std::memcpy(vfs->filedata[file], mjcf_.data(), mjcf_.size());
-  char error[1000] = {0};
-  {
-    // MuJoCo's XML parser keeps global state while it loads: one model at a time, process-wide.
-    // Runs then step in parallel on their own mjModel/mjData.
-    static std::mutex xml_loader;
-    std::lock_guard<std::mutex> lock(xml_loader);
-    model_.reset(mj_loadXML(kFileName, vfs.get(), error, sizeof(error)));
-  }
-  mj_deleteVFS(vfs.get());
-  if (model_ == nullptr)
-    throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+  // The object's friction is set after loading, so runs that differ only in it (friction sweeps,
+  // a suite's repeated scenes) share one compiled model instead of parsing and compiling the same
+  // MJCF again. Not the mass: on MuJoCo 2.2.2, a body_mass changed on a compiled model reached
+  // gravity but not the mass matrix (qM kept the compiled mass), so the mass must be compiled in.
+  SceneConfig canonical = scene_;
+  canonical.object.friction = kCompiledObjectFriction;
+  model_.reset(CompiledModels::Instance().Copy(GenerateMjcf(layout_, canonical)));
   data_.reset(mj_makeData(model_.get()));
   if (data_ == nullptr) throw std::runtime_error("MuJoCo could not allocate mjData");
 
@@ -151,6 +203,7 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
 
   object_mass_ = m->body_mass[object_body_];
   for (int k = 0; k < 3; ++k) object_inertia_[k] = m->body_inertia[3 * object_body_ + k];
+  SetObjectFriction(scene_.object.friction);
   hand_weight_n_ = m->body_subtreemass[wrist_body_] * scene_.physics.gravity_m_s2;
   for (int k = 0; k < 3; ++k) wrist_target_[k] = m->body_pos[3 * wrist_body_ + k];
   mj_forward(model_.get(), data_.get());

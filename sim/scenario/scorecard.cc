@@ -281,9 +281,11 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
     }
   }
 
-  // The suite's worker pool (longest expected run first, Ctrl-C aware); nothing written per run.
+  // The suite's worker pool (longest expected run first, Ctrl-C aware); nothing written per run
+  // unless runs_dir asks for it.
   SuiteOptions suite_options;
   suite_options.jobs = scorecard.jobs;
+  suite_options.out_dir = options.runs_dir;
   suite_options.write_plots = false;
   suite_options.stop = options.stop;
   if (!options.custom_controllers.empty()) {

@@ -102,6 +102,9 @@ struct ScorecardOptions {
   std::vector<std::string> controllers = {"grip_slip", "open_loop"};
   int jobs = 1;
   int limit = 0;  ///< > 0: only the first `limit` runs of the set (smoke tests)
+  /// Non-empty: every run's outputs (signals.csv, summary.json, config.yaml; no plots) go to
+  /// runs_dir/<run>@<controller>/, for reading a scorecard's figures back to their runs.
+  std::string runs_dir;
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, total).
   std::function<void(int, int)> on_finished;

@@ -469,6 +469,84 @@ TEST(GripSlipControllerTest, MaxGripParameterIsTheOverallCeiling) {
   EXPECT_LE(loop.max_grip_n, 4.0 + kCeilingTolN);
 }
 
+/// A load beyond what the ceiling holds by the friction estimate keeps the ratio cue up, with the
+/// target at the ceiling, while the (grippier) object does not move: the flag rises once, then
+/// stops counting as slip after slip_refractory_s, so a later slip would be a new flag.
+TEST(GripSlipControllerTest, RatioCueHeldAtTheCeilingStopsCountingAsSlip) {
+  HandPlant::Options plant;
+  plant.friction = 1.2;  // the object holds: no slip whatever the estimate says
+  ClosedLoop loop(DefaultConfig(), plant, {});
+  constexpr double kCeilingN = 3.0;
+  constexpr double kOnsetS = 1.2;
+  loop.controller.SetGripCeiling(kCeilingN);
+  loop.Grasp(0.2, 1.0);
+  int ratio_up_ticks = 0;
+  int flagged_ticks = 0;
+  int flagged_late_ticks = 0;  // flagged with the ratio cue up longer than the refractory time
+  double ratio_rise_s = -1.0;
+  // 1.8 N at 3 N is a load ratio of 0.6, over the cue's 0.9 x 0.5.
+  loop.RunUntil(
+      2.5, [](double t) { return t < kOnsetS ? 0.2 : 1.8; },
+      [&](double t) {
+        const bool ratio_up = loop.controller.diagnostics().signals.ratio_slip;
+        if (ratio_up && ratio_rise_s < 0.0) ratio_rise_s = t;
+        ratio_up_ticks += ratio_up;
+        const bool flagged = loop.controller.telemetry().slip_detected;
+        flagged_ticks += flagged;
+        if (flagged && ratio_rise_s > 0.0 &&
+            t - ratio_rise_s > loop.controller.config().slip_refractory_s + 0.01)
+          ++flagged_late_ticks;
+      });
+  std::printf("[ measure  ] ratio cue up %d ms, flagged %d ms, slid %.2f mm, target %.2f N\n", ratio_up_ticks,
+              flagged_ticks, loop.plant.slip_distance_m() * 1e3, loop.controller.telemetry().grip_target_n);
+  ASSERT_FALSE(loop.plant.dropped());
+  EXPECT_LT(loop.plant.slip_distance_m(), 0.5e-3) << "the object was meant to hold";
+  EXPECT_DOUBLE_EQ(loop.controller.telemetry().grip_target_n, kCeilingN);
+  // The cue stayed up for most of the 1.3 s, so the check below could fail.
+  EXPECT_GT(ratio_up_ticks, 1000);
+  EXPECT_GT(flagged_ticks, 0) << "the load's rise is still flagged";
+  EXPECT_EQ(flagged_late_ticks, 0);
+}
+
+/// Friction is learned from a slip at the friction limit, not from a jolt: a vibration burst under
+/// a light load (ratio 0.1 against the estimate 0.5) is flagged but teaches nothing; the same burst
+/// with the load at 0.4 lowers the estimate to about that ratio.
+TEST(GripSlipControllerTest, AJoltTeachesNoFrictionASlipAtTheLimitDoes) {
+  GripSlipController controller(DefaultConfig());
+  SyntheticTactile sensor({});
+  controller.SetIntent(GraspIntent::kClose);
+  constexpr double kGripN = 3.0;
+  // The sensor reports a steady 3 N pinch (open loop: the frames do not follow the commands).
+  const auto run = [&](double from_s, double to_s, double load_ratio, double burst_n) {
+    for (double t = from_s; t < to_s - 1e-9; t += kPeriodS) {
+      SyntheticContact contact;
+      contact.grip_n = kGripN;
+      contact.load_axial_n = load_ratio * kGripN;
+      contact.vibration_n = burst_n * (std::fmod(t * 120.0, 1.0) - 0.5);  // 120 Hz sawtooth
+      controller.Update(sensor.Frame(contact, t), t);
+    }
+  };
+  const double initial = controller.config().friction_initial;
+  run(0.0, 0.6, 0.0, 0.0);
+  ASSERT_STREQ(controller.telemetry().phase, "holding");
+  run(0.6, 1.0, 0.1, 0.0);  // a light load comes on smoothly: nothing to flag
+  ASSERT_EQ(controller.telemetry().slip_events, 0);
+  run(1.0, 1.1, 0.1, 1.5);
+  run(1.1, 1.5, 0.1, 0.0);
+  const int jolt_events = controller.telemetry().slip_events;
+  const double after_jolt = controller.telemetry().friction_estimate;
+  run(1.5, 1.9, 0.4, 0.0);
+  run(1.9, 2.0, 0.4, 1.5);
+  std::printf("[ measure  ] jolt at ratio 0.1: %d events, estimate %.3f; burst at ratio 0.4: estimate %.3f\n",
+              jolt_events, after_jolt, controller.telemetry().friction_estimate);
+  EXPECT_GT(jolt_events, 0) << "the burst was meant to be flagged";
+  EXPECT_DOUBLE_EQ(after_jolt, initial);
+  EXPECT_GT(controller.telemetry().slip_events, jolt_events);
+  EXPECT_LT(controller.telemetry().friction_estimate, initial - 0.05);
+  EXPECT_GT(controller.telemetry().friction_estimate,
+            initial * (1.0 - controller.config().friction_learn_max_drop));
+}
+
 TEST(GripSlipControllerTest, SafeHoldOnStaleDataKeepsCommandAndNeverOpens) {
   ClosedLoop loop(DefaultConfig(), {}, {});
   loop.Grasp(0.8, 1.0);

@@ -294,6 +294,75 @@ TEST(SlipDetectorTest, ShearLockedInAtTheGraspIsPreloadAndMoreGripAddsNoLoad) {
   EXPECT_LT(first_s - kOnsetS, kSlipLatencyLimitS);
 }
 
+/// A pad that seated with shear locked in rolls with load and squeeze (docs/controller.md): its
+/// pressure centroid moves without any slip. With a shear estimate to check it against, such a move
+/// is slip only while the load ratio is at the ratio cue's threshold (centroid_load_fraction); a
+/// square pinch (no preload) keeps the centroid as a cue of its own.
+TEST(SlipDetectorTest, CentroidMoveOnARollingPadIsSlipOnlyWithTheLoadAtTheFrictionLimit) {
+  constexpr double kPreloadRatio = 0.4;
+  constexpr double kRampS = 0.1;
+  constexpr double kMoveS = 0.6;
+  constexpr double kMovePitchPerS = 50.0;  // 1 pitch in 20 ms: well over centroid_shift_units
+  // Centroid moves counted after kMoveS, and whether the preload was there to gate them.
+  const auto centroid_flags = [&](const SlipDetectorConfig& config, double load_ratio) {
+    SlipDetectorConfig cues = config;
+    cues.vibration_enabled = false;  // the moving patch shakes each unit's shear; watch the centroid
+    SlipDetector detector(cues);
+    SyntheticTactile sensor({});
+    int flags = 0;
+    for (double t = 0.0; t < 1.0; t += kPeriodS) {
+      SyntheticContact contact;
+      contact.grip_n = 0.5 + (kGripN - 0.5) * std::min(t / kRampS, 1.0);
+      contact.load_axial_n = kPreloadRatio * contact.grip_n;
+      if (t >= kMoveS) {
+        contact.load_axial_n = kPreloadRatio * kGripN + load_ratio * kGripN;
+        contact.centre_row = 2.0 - kMovePitchPerS * std::min(t - kMoveS, 0.02);
+      }
+      const sensor::TactileState state = sensor.Frame(contact, t);
+      const SlipSignals& signals = detector.Update(state, state.total_fn_n, kFriction, true, true);
+      if (t >= kMoveS && signals.centroid_slip) ++flags;
+    }
+    EXPECT_GT(std::hypot(detector.signals().preload_shear_axial_n,
+                         detector.signals().preload_shear_circumferential_n),
+              cues.centroid_rolling_preload_n);
+    return flags;
+  };
+  const SlipDetectorConfig defaults;
+  // The pad rolls a pitch under a light load (ratio 0.1 against the cue's 0.45): no slip.
+  EXPECT_EQ(centroid_flags(defaults, 0.1), 0);
+  // The same move with the check off is read as slip, so the check is what silences it.
+  SlipDetectorConfig unchecked = defaults;
+  unchecked.centroid_load_fraction = 0.0;
+  EXPECT_GT(centroid_flags(unchecked, 0.1), 0);
+  // With the load at the friction limit the move is slip, and the centroid says so.
+  EXPECT_GT(centroid_flags(defaults, kFriction), 0);
+}
+
+/// A noise burst (three times the noise on every unit for 0.3 s, as degraded_sensor stages it) is
+/// not slip: the units off the contact show it too, and the vibration threshold follows them
+/// (vibration_noise_reference). Without that reference the same burst is flagged.
+TEST(SlipDetectorTest, NoiseBurstOnEveryUnitRaisesNoVibrationFlag) {
+  const auto vibration_flags = [](bool reference) {
+    SlipDetectorConfig config = SquarePinch();
+    config.vibration_noise_reference = reference;
+    Stream stream(config);
+    stream.Run(0.0, 2.0, Hold);
+    int flags = 0;
+    stream.sensor.SetNoiseScale(3.0);
+    for (double t = 2.0; t < 2.3; t += kPeriodS) {
+      const sensor::TactileState state = stream.sensor.Frame(Hold(t), t);
+      flags += stream.detector.Update(state, state.total_fn_n, kFriction, true, true).vibration_slip;
+    }
+    return flags;
+  };
+  const int with_reference = vibration_flags(true);
+  const int without_reference = vibration_flags(false);
+  std::printf("[ measure  ] 3x noise burst, 0.3 s: %d flagged frames with the noise reference, %d without\n",
+              with_reference, without_reference);
+  EXPECT_EQ(with_reference, 0);
+  EXPECT_GT(without_reference, 0) << "the burst was meant to reach the vibration cue";
+}
+
 TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
   SlipDetectorConfig config;
   config.vibration_highpass_hz = 600.0;

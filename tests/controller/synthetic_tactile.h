@@ -56,6 +56,9 @@ class SyntheticTactile {
     return ((row + column) % 2 == 0) == options_.even_units_axial;
   }
   /// Marks a unit permanently invalid (dead) or valid again.
+  /// Multiplies the injected noise (a noise burst); the reported figure stays the tare's.
+  void SetNoiseScale(double scale) { noise_scale_ = scale; }
+
   void SetUnitValidity(int unit, sensor::UnitValidity validity) {
     forced_validity_[static_cast<size_t>(unit)] = validity;
   }
@@ -91,8 +94,9 @@ class SyntheticTactile {
       const bool axial = IsAxial(i);
       const double shear_load = axial ? contact.load_axial_n : contact.load_circumferential_n;
       const double shear_vibration = contact.vibration_n * (axial ? direction_axial : direction_circ);
-      state.fn_n[u] = contact.grip_n * share + options_.noise_fn_n * normal_(rng_);
-      state.ft_n[u] = (shear_load + shear_vibration) * share + options_.noise_ft_n * normal_(rng_);
+      state.fn_n[u] = contact.grip_n * share + noise_scale_ * options_.noise_fn_n * normal_(rng_);
+      state.ft_n[u] =
+          (shear_load + shear_vibration) * share + noise_scale_ * options_.noise_ft_n * normal_(rng_);
       sensor::UnitValidity validity = forced_validity_[u];
       if (validity == sensor::UnitValidity::kValid &&
           (std::abs(state.fn_n[u]) > options_.range_n || std::abs(state.ft_n[u]) > options_.range_n)) {
@@ -109,6 +113,7 @@ class SyntheticTactile {
   }
 
  private:
+  double noise_scale_ = 1.0;
   Options options_;
   std::mt19937 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};

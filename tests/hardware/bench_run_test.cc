@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -55,6 +56,7 @@ constexpr double kRunDeadlineS = 60.0;
 constexpr double kGripTolFraction = 0.05;
 // The span over which the held grip is averaged at the end of the run [s].
 constexpr double kHoldWindowS = 0.3;
+constexpr double kLiftS = 0.8;  // the scenario's lift, announced to the bench person then
 
 /// A signals.csv: numeric columns by name, and the text columns.
 struct Csv {
@@ -94,18 +96,24 @@ std::vector<std::string> PhaseSequence(const Csv& csv) {
   return phases;
 }
 
-/// Mean of `column` over the rows with time_s in the last `window_s`.
-double MeanAtEnd(const Csv& csv, const std::string& column, double window_s) {
+/// Mean of `column` over the rows with time_s in [from_s, to_s).
+double MeanBetween(const Csv& csv, const std::string& column, double from_s, double to_s) {
   const std::vector<double>& time = csv.numeric.at("time_s");
   const std::vector<double>& values = csv.numeric.at(column);
   double sum = 0.0;
   int count = 0;
   for (size_t i = 0; i < time.size(); ++i) {
-    if (time[i] < time.back() - window_s) continue;
+    if (time[i] < from_s || time[i] >= to_s) continue;
     sum += values[i];
     ++count;
   }
   return count > 0 ? sum / count : 0.0;
+}
+
+/// Mean of `column` over the rows with time_s in the last `window_s`.
+double MeanAtEnd(const Csv& csv, const std::string& column, double window_s) {
+  return MeanBetween(csv, column, csv.numeric.at("time_s").back() - window_s,
+                     std::numeric_limits<double>::infinity());
 }
 
 std::string Join(const std::vector<std::string>& items) {
@@ -238,33 +246,51 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
         bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
     return;
   }
-  // The simulation's phases, in order, are the bench run's up to the controller's response to the
-  // lift (closing, loading, holding, slip). After it the paths part: with the grip-slip controller
-  // of b40c96b the simulation returns to holding within about 40 ms, while over the wire the ratio
-  // cue stays up (measured: slip flagged on about 1600 ticks to the end against the simulation's 14,
-  // at the same grip). That tail is reported, not compared.
-  const auto through_first_slip = [](std::vector<std::string> phases) {
-    const auto slip = std::find(phases.begin(), phases.end(), "slip");
-    if (slip != phases.end()) phases.erase(slip + 1, phases.end());
+  // The phases, in order, agree up to the first slip flag of either run. Whether the lift itself is
+  // flagged is a marginal call on this hand: the object leaving the table passes the vibration cue's
+  // high-pass at about its threshold (with the controller of 20c5678, 0.092 N against 0.077 N in the
+  // simulation, 0.086 N against 0.090 N over the wire, the floors learned over a grasp that began at
+  // another instant). From there the runs may part (a slip response raises the grip to the ceiling),
+  // so the grip is compared while both still hold before the lift, and at the end only when both took
+  // the same path; otherwise the tail is reported.
+  const auto before_first_slip = [](std::vector<std::string> phases) {
+    phases.erase(std::find(phases.begin(), phases.end(), "slip"), phases.end());
     return phases;
   };
   const std::vector<std::string> sim_phases = PhaseSequence(simulated);
   const std::vector<std::string> bench_phases = PhaseSequence(serial);
-  EXPECT_EQ(Join(through_first_slip(bench_phases)), Join(through_first_slip(sim_phases)));
-  EXPECT_NE(std::find(sim_phases.begin(), sim_phases.end(), "slip"), sim_phases.end())
-      << "the simulation saw no slip at the lift: the comparison above stops nowhere";
   std::printf("[   INFO   ] phases, simulation: %s; serial: %s\n", Join(sim_phases).c_str(),
               Join(bench_phases).c_str());
+  const std::vector<std::string> sim_head = before_first_slip(sim_phases);
+  const std::vector<std::string> bench_head = before_first_slip(bench_phases);
+  const size_t common = std::min(sim_head.size(), bench_head.size());
+  EXPECT_EQ(Join({bench_head.begin(), bench_head.begin() + static_cast<std::ptrdiff_t>(common)}),
+            Join({sim_head.begin(), sim_head.begin() + static_cast<std::ptrdiff_t>(common)}));
+  EXPECT_EQ(Join(sim_head).substr(0, std::string("safe_hold idle closing loading holding").size()),
+            "safe_hold idle closing loading holding")
+      << "the simulation flagged slip before it held the box: nothing above was compared";
   const double sim_peak_n = *std::max_element(simulated.numeric.at("est_total_fn_n").begin(),
                                               simulated.numeric.at("est_total_fn_n").end());
   const double bench_peak_n = bench.at("peak_est_total_fn_n").get<double>();
   EXPECT_NEAR(bench_peak_n, sim_peak_n, kGripTolFraction * sim_peak_n);
+  // Held before the lift (announced at 0.8 s): no slip flag in either run by then.
+  for (const Csv* run : {&simulated, &serial}) {
+    const std::vector<double>& time = run->numeric.at("time_s");
+    const std::vector<double>& flag = run->numeric.at("slip_flag");
+    for (size_t i = 0; i < time.size() && time[i] < kLiftS; ++i) ASSERT_EQ(flag[i], 0.0) << "t = " << time[i];
+  }
+  const double sim_before_lift_n = MeanBetween(simulated, "est_total_fn_n", kLiftS - kHoldWindowS, kLiftS);
+  const double bench_before_lift_n = MeanBetween(serial, "est_total_fn_n", kLiftS - kHoldWindowS, kLiftS);
+  ASSERT_GT(sim_before_lift_n, 1.0) << "the simulation does not hold the box";
+  EXPECT_NEAR(bench_before_lift_n, sim_before_lift_n, kGripTolFraction * sim_before_lift_n);
   const double sim_hold_n = MeanAtEnd(simulated, "est_total_fn_n", kHoldWindowS);
   const double bench_hold_n = MeanAtEnd(serial, "est_total_fn_n", kHoldWindowS);
-  ASSERT_GT(sim_hold_n, 1.0) << "the simulation does not hold the box";
-  EXPECT_NEAR(bench_hold_n, sim_hold_n, kGripTolFraction * sim_hold_n);
-  std::printf("[   INFO   ] sensed grip, simulation vs serial: peak %.3f vs %.3f N, held %.3f vs %.3f N\n",
-              sim_peak_n, bench_peak_n, sim_hold_n, bench_hold_n);
+  if (sim_phases == bench_phases) EXPECT_NEAR(bench_hold_n, sim_hold_n, kGripTolFraction * sim_hold_n);
+  std::printf(
+      "[   INFO   ] sensed grip, simulation vs serial: peak %.3f vs %.3f N, before the lift %.3f vs %.3f N, "
+      "held at the end %.3f vs %.3f N (compared: %s)\n",
+      sim_peak_n, bench_peak_n, sim_before_lift_n, bench_before_lift_n, sim_hold_n, bench_hold_n,
+      sim_phases == bench_phases ? "yes" : "no, the runs parted");
 }
 
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {

@@ -31,7 +31,7 @@ constexpr double kLiftHeightM = 0.05;     // HeldBoxScenario's lift
 constexpr double kGripFloorN = 5.0;       // the open-loop default effort squeezes about 10 N
 constexpr double kReleasedN = 0.5;        // squeeze left after opening
 constexpr double kR0Ohm = 3400.0;         // paper R0, unloaded reading of an ideal unit
-constexpr double kPhysicsStepS = 0.0005;  // default physics.timestep_s
+const double kPhysicsStepS = sim::PhysicsConfig{}.timestep_s;  // the default physics step [s]
 
 // Minimum and maximum of `column` over rows with time in [t0, t1].
 std::pair<double, double> Range(const Signals& s, const std::string& column, double t0, double t1) {

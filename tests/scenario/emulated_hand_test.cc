@@ -16,8 +16,8 @@ namespace graspbed::scenario {
 namespace {
 
 constexpr double kFramePeriodS = 0.001;  // the scenario's 1 kHz sensor
-// Simulated time moves in physics steps (0.5 ms): a frame's target is reached to within one step.
-constexpr double kStepS = 0.0005;
+// Simulated time moves in physics steps: a frame's target is reached to within one step.
+const double kStepS = sim::PhysicsConfig{}.timestep_s;
 constexpr int kCloseFrames = 600;  // 0.6 s of closing: the 5 mm gap is long closed and settled
 constexpr double kCloseEffort = 0.3;
 

@@ -234,12 +234,20 @@ TEST(ScorecardCliTest, LimitTakesTheFirstRunsOfTheShippedSetForOneController) {
   const CliResult result = RunCli("score --set-dir " + std::string(GRASPBED_SOURCE_DIR) +
                                   "/scenarios/scorecard --limit 2 "
                                   "--controller open_loop --out " +
-                                  dir.Path("out"));
+                                  dir.Path("out") + " --runs-out " + dir.Path("runs"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
   EXPECT_NE(result.out.find("2 runs per controller"), std::string::npos) << result.out;
   const nlohmann::json json = nlohmann::json::parse(ReadText(dir.Path("out") + "/scorecard.json"));
   ASSERT_EQ(json.at("controllers").size(), 1u);
-  EXPECT_EQ(json.at("runs").size(), 2u);
+  ASSERT_EQ(json.at("runs").size(), 2u);
+  // --runs-out keeps each run's outputs under <run>@<controller>, the same summary as the scorecard's.
+  for (const nlohmann::json& run : json.at("runs")) {
+    const std::string run_dir = dir.Path("runs") + "/" + run.at("run").get<std::string>() + "@open_loop";
+    EXPECT_TRUE(std::filesystem::exists(run_dir + "/signals.csv")) << run_dir;
+    EXPECT_TRUE(std::filesystem::exists(run_dir + "/config.yaml")) << run_dir;
+    const nlohmann::json summary = nlohmann::json::parse(ReadText(run_dir + "/summary.json"));
+    EXPECT_EQ(summary.at("metrics").at("held_s"), run.at("summary").at("metrics").at("held_s")) << run_dir;
+  }
 }
 
 TEST(ScorecardCliTest, BadInputExitsTwoWithOneLineAndWritesNothing) {

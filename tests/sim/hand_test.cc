@@ -9,6 +9,7 @@
 
 #include "sim/hand_kinematics.h"
 #include "sim/model_generator.h"
+#include "sim/physics_checks.h"
 #include "tests/sim/sim_fixture.h"
 
 namespace graspbed::sim {
@@ -17,8 +18,7 @@ namespace {
 constexpr double kAngleTolRad = 1e-9;
 // The generated model carries 8 significant digits; site positions come back within microns.
 constexpr double kSiteTolM = 5e-6;
-// Half effort of a 20 N stall pinch.
-constexpr double kPinchEffort = 0.5;
+// The half-effort pinch of sim/physics_checks.h on the default 20 N stall motors [N].
 constexpr double kPinchN = 10.0;
 // Force coverage the hand must keep: the sensed share of the fingertip's contact force in a 10 N
 // pinch (the jaw fixture's flat pad had 100 %; below 95 % the estimate misses a twentieth of the grip).
@@ -34,37 +34,10 @@ class HandTest : public test_support::MujocoTest {
     return ProstheticKinematics(scene.hand.finger, scene.hand.thumb, layout.holder.length_m,
                                 0.5 * layout.holder.minor_axis_m, layout.unit.mesa_height_m);
   }
-  // Pinches the object of `scene` at half effort for `settle_s`, then averages the units' normal
-  // loads over `average_s`: the load centroid along the holder axis [m] and the sensed share.
-  struct Pinch {
-    double centroid_axial_m = 0.0;
-    double sensed_share = 0.0;
-    double squeeze_n = 0.0;
-  };
-  Pinch PinchAndAverage(const SceneConfig& scene, double settle_s, double average_s) {
-    Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
-    simulation.SetGripEffort(kPinchEffort);
-    simulation.StepUntil(settle_s);
-    std::array<sensor::UnitLoad, sensor::kMaxUnits> loads{};
-    const int units = simulation.unit_count();
-    double moment = 0.0;
-    double total = 0.0;
-    double share_sum = 0.0;
-    int steps = 0;
-    while (simulation.time_s() < settle_s + average_s) {
-      simulation.Step();
-      simulation.ComputeUnitLoads({loads.data(), static_cast<size_t>(units)});
-      for (int i = 0; i < units; ++i) {
-        moment += loads[i].fn_n * DefaultLayout().units[i].position_m.x();
-        total += loads[i].fn_n;
-      }
-      share_sum += simulation.truth().sensed_share;
-      ++steps;
-    }
-    Pinch pinch;
-    pinch.centroid_axial_m = total > 0.0 ? moment / total : 0.0;
-    pinch.sensed_share = share_sum / steps;
-    pinch.squeeze_n = simulation.truth().object_squeeze_n;
+  // Pinches the object of `scene` at half effort (sim/physics_checks.h); a fault fails the test.
+  static PinchCheck PinchAndAverage(const SceneConfig& scene, double settle_s, double average_s) {
+    const PinchCheck pinch = MeasurePinch(DefaultLayout(), scene, settle_s, average_s);
+    EXPECT_FALSE(pinch.fault) << "physics fault in the pinch";
     return pinch;
   }
 };
@@ -114,7 +87,7 @@ TEST_F(HandTest, ATenNewtonPinchOfEachShippedShapeIsSensedByTheMesas) {
     SceneConfig scene;
     scene.object.shape = shape;
     scene.object.size_m = size;
-    const Pinch pinch = PinchAndAverage(scene, 0.8, 0.2);
+    const PinchCheck pinch = PinchAndAverage(scene, 0.8, 0.2);
     EXPECT_GE(pinch.sensed_share, kMinCoverage) << ToString(shape);
     // A 10 N-class pinch: the motors are sized from the kinematics' contact points; a round object
     // meets the thumb elsewhere on its rounded tip, which changes its lever arm (cylinder: +12 %).
@@ -129,8 +102,8 @@ TEST_F(HandTest, TheLoadMovesAlongTheFingertipWithTheObjectsWidth) {
   narrow.object.size_m = {0.03, 0.05, 0.08};
   SceneConfig wide;
   wide.object.size_m = {0.07, 0.05, 0.08};
-  const Pinch a = PinchAndAverage(narrow, 0.8, 0.4);
-  const Pinch b = PinchAndAverage(wide, 0.8, 0.4);
+  const PinchCheck a = PinchAndAverage(narrow, 0.8, 0.4);
+  const PinchCheck b = PinchAndAverage(wide, 0.8, 0.4);
   RecordProperty("centroid_narrow_mm", std::to_string(a.centroid_axial_m * 1e3));
   RecordProperty("centroid_wide_mm", std::to_string(b.centroid_axial_m * 1e3));
   EXPECT_GE(std::abs(a.centroid_axial_m - b.centroid_axial_m), kMinCentroidShiftM)
@@ -140,103 +113,28 @@ TEST_F(HandTest, TheLoadMovesAlongTheFingertipWithTheObjectsWidth) {
 }
 
 // Physics stays honest on the flexing finger: a held object does not creep, and it slips where
-// Coulomb friction says it must (docs/simulation.md, "Contact and solver parameters").
-class FrictionTest : public test_support::MujocoTest {
- protected:
-  // A 100 g box pinched at half effort in zero gravity, no table: the only tangential load is the
-  // external force a test applies.
-  Simulation& Pinched() {
-    SceneConfig scene;
-    scene.physics.gravity_m_s2 = 0.0;
-    scene.physics.table = false;
-    scene.object.initial_position_m = {0.0, 0.0, 0.04};
-    Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
-    simulation.SetGripEffort(kPinchEffort);
-    simulation.StepUntil(1.0);
-    // Brakes on: the digits hold their posture, so the squeeze stays what it is while the object is
-    // loaded along the pad (a back-drivable finger would otherwise yield to the pull and change
-    // the normal force; that is the hand's behaviour, not the contact's).
-    simulation.SetGripBrake(true);
-    simulation.StepUntil(1.2);
-    return simulation;
-  }
-  // Object position relative to the holder along world z [m].
-  static double ObjectAlongPad(const Simulation& simulation) {
-    const mjModel* m = simulation.model();
-    const mjData* d = simulation.data();
-    return d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "object") + 2] -
-           d->xpos[3 * mj_name2id(m, mjOBJ_BODY, "holder") + 2];
-  }
-  // Coulomb's limit of the pinch: friction x the normal force of both digits [N].
-  static double CoulombLimitN(const Simulation& simulation) {
-    const GroundTruth truth = simulation.truth();
-    return simulation.scene().object.friction * (truth.finger_normal_force_n + truth.thumb_normal_force_n);
-  }
-  // Slides the object along the pad with `fraction` x Coulomb's limit for `duration_s`: distance [m].
-  double SlideUnder(double fraction, double duration_s) {
-    Simulation& simulation = Pinched();
-    const double limit = CoulombLimitN(simulation);
-    const double start = ObjectAlongPad(simulation);
-    simulation.SetObjectExternalForce({0.0, 0.0, -fraction * limit});
-    simulation.StepUntil(simulation.time_s() + duration_s);
-    return std::abs(ObjectAlongPad(simulation) - start);
-  }
-};
+// Coulomb friction says it must (docs/simulation.md, "Contact and solver parameters"). The
+// procedures are in sim/physics_checks.cc, shared with bench/sim_bench's table of physics options.
 
 // Residual creep allowed in a static hold: 1 mm in 200 s, far below the 0.5 mm/s the metrics count.
 constexpr double kMaxCreepM_S = 5e-6;
 // Slip must start within 5 % of Coulomb's limit, the contact model's promise (docs/simulation.md).
 constexpr double kCoulombBand = 0.05;
 
+class FrictionTest : public test_support::MujocoTest {};
+
 TEST_F(FrictionTest, AHeldObjectDoesNotCreep) {
-  Simulation& simulation = Pinched();
-  // A steady load of half Coulomb's limit along the pad, as a held weight would be.
-  simulation.SetObjectExternalForce({0.0, 0.0, -0.5 * CoulombLimitN(simulation)});
-  simulation.StepUntil(simulation.time_s() + 0.3);  // the contact takes up the load
-  const double start = ObjectAlongPad(simulation);
-  const double t0 = simulation.time_s();
-  double slip_speed_sum = 0.0;
-  int steps = 0;
-  while (simulation.time_s() < t0 + 2.0) {
-    simulation.Step();
-    slip_speed_sum += simulation.truth().mean_slip_speed_m_s;
-    ++steps;
-  }
+  const CreepCheck creep = MeasureCreep(DefaultLayout(), SceneConfig{});
+  ASSERT_FALSE(creep.fault);
   // Both ways: the object's drift along the pad and the contacts' mean relative speed.
-  const double drift = std::abs(ObjectAlongPad(simulation) - start) / (simulation.time_s() - t0);
-  RecordProperty("creep_um_s", std::to_string(drift * 1e6));
-  EXPECT_LT(drift, kMaxCreepM_S) << drift * 1e6 << " um/s";
-  EXPECT_LT(slip_speed_sum / steps, kMaxCreepM_S) << slip_speed_sum / steps * 1e6 << " um/s at the contacts";
+  RecordProperty("creep_um_s", std::to_string(creep.drift_m_s * 1e6));
+  EXPECT_LT(creep.drift_m_s, kMaxCreepM_S) << creep.drift_m_s * 1e6 << " um/s";
+  EXPECT_LT(creep.contact_slip_m_s, kMaxCreepM_S) << creep.contact_slip_m_s * 1e6 << " um/s at the contacts";
 }
 
 TEST_F(FrictionTest, TheObjectSlipsWithinFivePercentOfCoulombsLimit) {
-  // A pull along the pad that ramps slowly from 0 to twice the pinch's initial Coulomb limit.
-  // Slip starts when the object leaves the pad at 1 mm/s; at that instant the pull is compared
-  // with friction x the normal force of both digits then (a tilted pad wedges the object a little
-  // and raises the normal force while it is pulled, so the limit is taken when it matters).
-  Simulation& simulation = Pinched();
-  const double initial_limit = CoulombLimitN(simulation);
-  const double t0 = simulation.time_s();
-  constexpr double kRampS = 2.0;
-  constexpr double kWindowS = 0.01;  // speed over 10 ms: the contact's elastic take-up is not slip
-  double window_start_position = ObjectAlongPad(simulation);
-  double window_start_s = t0;
-  double ratio_at_onset = 0.0;
-  while (simulation.time_s() < t0 + kRampS) {
-    const double pull = 2.0 * initial_limit * (simulation.time_s() - t0) / kRampS;
-    simulation.SetObjectExternalForce({0.0, 0.0, -pull});
-    simulation.Step();
-    if (simulation.time_s() - window_start_s < kWindowS) continue;
-    const double now = ObjectAlongPad(simulation);
-    const double speed = std::abs(now - window_start_position) / (simulation.time_s() - window_start_s);
-    window_start_position = now;
-    window_start_s = simulation.time_s();
-    if (speed > 1e-3) {
-      ratio_at_onset = pull / CoulombLimitN(simulation);
-      break;
-    }
-  }
-  ASSERT_GT(ratio_at_onset, 0.0) << "never slipped up to twice the initial limit";
+  const double ratio_at_onset = MeasureSlipOnsetRatio(DefaultLayout(), SceneConfig{});
+  ASSERT_GT(ratio_at_onset, 0.0) << "never slipped up to twice the initial limit (or faulted)";
   RecordProperty("ratio_at_onset", std::to_string(ratio_at_onset));
   EXPECT_NEAR(ratio_at_onset, 1.0, kCoulombBand) << "pull / (mu x normal force) at the onset of slip";
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -45,6 +46,44 @@ TEST_F(ModelTest, CheckedInModelIsCurrent) {
   ADD_FAILURE() << "models/hand_default.xml is stale (first difference at line " << line
                 << "); regenerate: graspbed model -o models/hand_default.xml\n  checked in: " << line_a
                 << "\n  generated:  " << line_b;
+}
+
+// A Simulation compiles the object with a nominal friction (one compiled model for the runs that
+// differ only in it) and sets the scene's own afterwards: the result is the model compiled directly
+// from the scene's MJCF.
+TEST_F(ModelTest, TheObjectsFrictionSetAfterLoadingGivesTheModelCompiledWithIt) {
+  SceneConfig scene;
+  scene.object.mass_kg = 0.237;
+  scene.object.friction = 0.43;
+  const std::string mjcf = GenerateMjcf(DefaultLayout(), scene);
+  char error[1000] = {0};
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "scene.xml", static_cast<int>(mjcf.size())), 0);
+  std::copy(mjcf.begin(), mjcf.end(), static_cast<char*>(vfs.filedata[mj_findFileVFS(&vfs, "scene.xml")]));
+  mjModel* direct = mj_loadXML("scene.xml", &vfs, error, sizeof(error));
+  mj_deleteVFS(&vfs);
+  ASSERT_NE(direct, nullptr) << error;
+  const Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
+  const mjModel* patched = simulation.model();
+  ASSERT_EQ(patched->nbody, direct->nbody);
+  ASSERT_EQ(patched->nv, direct->nv);
+  ASSERT_EQ(patched->ngeom, direct->ngeom);
+  constexpr double kRelTol = 1e-12;
+  auto expect_same = [&](const char* what, const mjtNum* a, const mjtNum* b, int n) {
+    for (int i = 0; i < n; ++i)
+      EXPECT_NEAR(a[i], b[i], kRelTol * std::max(1.0, std::abs(b[i]))) << what << "[" << i << "]";
+  };
+  expect_same("body_mass", patched->body_mass, direct->body_mass, direct->nbody);
+  expect_same("body_inertia", patched->body_inertia, direct->body_inertia, 3 * direct->nbody);
+  expect_same("body_invweight0", patched->body_invweight0, direct->body_invweight0, 2 * direct->nbody);
+  expect_same("dof_invweight0", patched->dof_invweight0, direct->dof_invweight0, direct->nv);
+  expect_same("geom_friction", patched->geom_friction, direct->geom_friction, 3 * direct->ngeom);
+  expect_same("body_subtreemass", patched->body_subtreemass, direct->body_subtreemass, direct->nbody);
+  // The solver scales its convergence tests by the mean inertia.
+  expect_same("stat.meaninertia", &patched->stat.meaninertia, &direct->stat.meaninertia, 1);
+  expect_same("stat.meanmass", &patched->stat.meanmass, &direct->stat.meanmass, 1);
+  mj_deleteModel(direct);
 }
 
 TEST_F(ModelTest, MesaGeomsFollowTheLayoutInOrder) {
