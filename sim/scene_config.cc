@@ -278,10 +278,12 @@ const common::FieldTable<PhysicsConfig>& PhysicsConfigFields() {
                         "physics step"),
           Table::Bool("elliptic_cones", &C::elliptic_cones,
                       "elliptic friction cones; pyramidal cones drop held objects (docs/simulation.md)"),
-          Table::Number("impratio", &C::impratio, NumberRule::Between(1.0, kMaxImpratio), "-",
-                        "friction-to-normal impedance ratio"),
-          Table::Integer("noslip_iterations", &C::noslip_iterations, 0, kMaxNoslipIterations, "",
-                         "removes soft-contact creep"),
+          Table::Number(
+              "impratio", &C::impratio, NumberRule::Between(1.0, kMaxImpratio), "-",
+              "friction-to-normal impedance ratio; 1000 keeps soft-contact creep near 1 um/s without noslip"),
+          Table::Integer(
+              "noslip_iterations", &C::noslip_iterations, 0, kMaxNoslipIterations, "",
+              "post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step)"),
           Table::Integer("solver_iterations", &C::solver_iterations, 1, kMaxSolverIterations, "",
                          "Newton iterations"),
           Table::Number("tolerance", &C::tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance), "-",
