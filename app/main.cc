@@ -22,6 +22,9 @@ int main(int argc, char** argv) {
     if (dynamic_cast<const CLI::RuntimeError*>(&error) != nullptr) return code;
     return code == 0 ? 0 : graspbed::app::kExitBadInput;
   } catch (const std::invalid_argument& error) {
+    // Bad input, decided here for every command: common::ConfigError (a config file, --set, a
+    // command-line value; file, line, key and value in its message) and any other
+    // std::invalid_argument a library throws for arguments it refuses.
     std::cerr << "graspbed: error: " << error.what() << '\n';
     return graspbed::app::kExitBadInput;
   } catch (const std::exception& error) {

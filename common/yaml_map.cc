@@ -15,10 +15,16 @@ std::string Scalar(const YAML::Node& node) {
   return "{...}";
 }
 
-std::string FormatNumber(double value) {
+// A bound as messages have always written it (6 significant digits: "1e+06", "0.001").
+std::string FormatBound(double value) {
   std::ostringstream out;
   out << value;
   return out.str();
+}
+
+int LineOf(const YAML::Node& node) {
+  const YAML::Mark mark = node.IsDefined() ? node.Mark() : YAML::Mark::null_mark();
+  return mark.is_null() ? 0 : mark.line + 1;
 }
 
 std::string Join(const std::vector<std::string>& items) {
@@ -29,6 +35,17 @@ std::string Join(const std::vector<std::string>& items) {
 
 }  // namespace
 
+std::string NumberRule::Check(double value) const {
+  if (!std::isfinite(value)) return "must be a finite number";
+  if (min_exclusive ? !(value > min) : !(value >= min)) {
+    return std::string("must be ") + (min_exclusive ? "> " : ">= ") + FormatBound(min);
+  }
+  if (max_exclusive ? !(value < max) : !(value <= max)) {
+    return std::string("must be ") + (max_exclusive ? "< " : "<= ") + FormatBound(max);
+  }
+  return "";
+}
+
 std::string Where(const std::string& file, const YAML::Node& node) {
   const YAML::Mark mark = node.IsDefined() ? node.Mark() : YAML::Mark::null_mark();
   if (mark.is_null()) return file + ": ";
@@ -37,7 +54,7 @@ std::string Where(const std::string& file, const YAML::Node& node) {
 
 YamlMap YamlMap::LoadFile(const std::string& path) {
   std::ifstream stream(path);
-  if (!stream) throw ConfigError(path + ": cannot open file");
+  if (!stream) throw ConfigError(path, 0, "", std::nullopt, "cannot open file");
   std::stringstream text;
   text << stream.rdbuf();
   return LoadString(text.str(), path);
@@ -48,11 +65,11 @@ YamlMap YamlMap::LoadString(const std::string& text, const std::string& source_n
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& error) {
-    throw ConfigError(source_name + ":" + std::to_string(error.mark.line + 1) +
-                      ": YAML syntax error: " + error.msg);
+    throw ConfigError(source_name, error.mark.line + 1, "", std::nullopt, "YAML syntax error: " + error.msg);
   }
   if (!root.IsNull() && !root.IsMap()) {
-    throw ConfigError(Where(source_name, root) + "expected a mapping of keys at the top level");
+    throw ConfigError(source_name, LineOf(root), "", std::nullopt,
+                      "expected a mapping of keys at the top level");
   }
   return YamlMap(root, source_name, "");
 }
@@ -60,7 +77,7 @@ YamlMap YamlMap::LoadString(const std::string& text, const std::string& source_n
 YamlMap::YamlMap(YAML::Node node, std::string file, std::string prefix)
     : node_(std::move(node)), file_(std::move(file)), prefix_(std::move(prefix)) {
   if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
-    throw ConfigError(Where(file_, node_) + prefix_ + " = " + Scalar(node_) + ": expected a mapping");
+    throw ConfigError(file_, LineOf(node_), prefix_, Scalar(node_), "expected a mapping");
   }
 }
 
@@ -105,12 +122,11 @@ void YamlMap::Fail(std::string_view key, std::string_view message) const {
     }
   }
   const YAML::Node& position = value.IsDefined() && !value.IsNull() ? value : node_;
-  throw ConfigError(Where(file_, position) + FullKey(key) + " = " + Scalar(value) + ": " +
-                    std::string(message));
+  throw ConfigError(file_, LineOf(position), FullKey(key), Scalar(value), std::string(message));
 }
 
 void YamlMap::FailHere(std::string_view message) const {
-  throw ConfigError(Where(file_, node_) + (prefix_.empty() ? "(top level)" : prefix_) + ": " +
+  throw ConfigError(file_, LineOf(node_), prefix_.empty() ? "(top level)" : prefix_, std::nullopt,
                     std::string(message));
 }
 
@@ -120,7 +136,7 @@ namespace {
 double ParseNumber(const std::string& file, const std::string& full_key, const YAML::Node& node,
                    const NumberRule& rule) {
   const auto fail = [&](const std::string& reason) {
-    throw ConfigError(Where(file, node) + full_key + " = " + Scalar(node) + ": " + reason);
+    throw ConfigError(file, LineOf(node), full_key, Scalar(node), reason);
   };
   if (!node.IsScalar()) fail("expected a number");
   double number = 0.0;
@@ -131,11 +147,8 @@ double ParseNumber(const std::string& file, const std::string& full_key, const Y
     fail("expected a number");
   }
   if (consumed != node.Scalar().size()) fail("expected a number");
-  if (!std::isfinite(number)) fail("must be a finite number");
-  if (rule.min_exclusive ? !(number > rule.min) : !(number >= rule.min)) {
-    fail(std::string("must be ") + (rule.min_exclusive ? "> " : ">= ") + FormatNumber(rule.min));
-  }
-  if (number > rule.max) fail("must be <= " + FormatNumber(rule.max));
+  const std::string failure = rule.Check(number);
+  if (!failure.empty()) fail(failure);
   return number;
 }
 
@@ -233,8 +246,7 @@ std::vector<YamlMap> YamlMap::GetMapList(std::string_view key) const {
   for (size_t i = 0; i < value.size(); ++i) {
     const std::string element_key = FullKey(key) + "[" + std::to_string(i) + "]";
     if (!value[i].IsMap()) {
-      throw ConfigError(Where(file_, value[i]) + element_key + " = " + Scalar(value[i]) +
-                        ": expected a mapping of keys");
+      throw ConfigError(file_, LineOf(value[i]), element_key, Scalar(value[i]), "expected a mapping of keys");
     }
     maps.emplace_back(value[i], file_, element_key);
   }
@@ -242,6 +254,67 @@ std::vector<YamlMap> YamlMap::GetMapList(std::string_view key) const {
 }
 
 YAML::Node YamlMap::Raw(std::string_view key) const { return Lookup(key); }
+
+void YamlMap::FailAt(const ConfigError& error) const {
+  // Walk the key path ("motor.armature_kg", "size_m[2]") through the nested maps and lists as far
+  // as the file goes. Handles are rebound with reset(): yaml-cpp's operator= would overwrite the
+  // node a handle points at.
+  YAML::Node node;
+  node.reset(node_);
+  YAML::Node deepest_map;
+  deepest_map.reset(node_);
+  bool complete = true;
+  std::string path = error.key();
+  while (!path.empty() && complete) {
+    const size_t end = path.find_first_of(".[");
+    const std::string step = path.substr(0, end);
+    path = end == std::string::npos ? "" : path.substr(end);
+    YAML::Node next;
+    bool have_next = false;
+    if (step.empty() || !node.IsMap()) {
+      complete = false;
+      break;
+    }
+    for (const auto& entry : node) {
+      if (entry.first.Scalar() == step) {
+        next.reset(entry.second);
+        have_next = true;
+      }
+    }
+    while (have_next && !path.empty() && path[0] == '[') {
+      const size_t close = path.find(']');
+      const std::string digits = close == std::string::npos ? "" : path.substr(1, close - 1);
+      if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) {
+        have_next = false;  // "units[]": no index to follow
+        break;
+      }
+      const size_t index = std::stoul(digits);
+      path = path.substr(close + 1);
+      if (!next.IsSequence() || index >= next.size()) {
+        have_next = false;
+        break;
+      }
+      const YAML::Node list = next;
+      next.reset(list[index]);
+    }
+    if (!path.empty() && path[0] == '.') path = path.substr(1);
+    if (!have_next || !next.IsDefined() || next.IsNull()) {
+      complete = false;
+      break;
+    }
+    node.reset(next);
+    if (node.IsMap()) deepest_map.reset(node);
+  }
+  const std::string key = FullKey(error.key());
+  if (complete && !error.key().empty())
+    throw ConfigError(file_, LineOf(node), key, Scalar(node), error.message());
+  // Not in the file: the value in use is a default (the struct's, a profile's). Point at the
+  // section that holds the key, or at no line when that is the document itself.
+  const bool at_top = deepest_map.is(node_) && prefix_.empty();
+  const std::optional<std::string> value =
+      error.value() ? std::optional<std::string>(*error.value() + " (default)") : std::nullopt;
+  throw ConfigError(file_, at_top ? 0 : LineOf(deepest_map), key, value, error.message());
+}
 
 void YamlMap::RejectUnknownKeys(const std::vector<std::string>& also_valid) const {
   if (!node_.IsMap()) return;
@@ -252,8 +325,8 @@ void YamlMap::RejectUnknownKeys(const std::vector<std::string>& also_valid) cons
   for (const auto& entry : node_) {
     const std::string& key = entry.first.Scalar();
     if (std::find(valid.begin(), valid.end(), key) == valid.end()) {
-      throw ConfigError(Where(file_, entry.first) + FullKey(key) +
-                        ": unknown key; valid keys: " + Join(valid));
+      throw ConfigError(file_, LineOf(entry.first), FullKey(key), std::nullopt,
+                        "unknown key; valid keys: " + Join(valid));
     }
   }
 }

@@ -7,27 +7,25 @@
 
 #include <limits>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "common/config_error.h"
+
 namespace graspbed::common {
 
-/// Bad input in a configuration file. what() is one line: "file:line: key = value: reason".
-class ConfigError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
-
-/// Inclusive/exclusive bounds for a numeric value.
+/// Inclusive/exclusive bounds for a numeric value; the one rule loading and validating both apply.
 struct NumberRule {
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
   bool min_exclusive = false;  ///< true: value must be > min, not >= min
+  bool max_exclusive = false;  ///< true: value must be < max, not <= max
   static NumberRule Positive() { return {0.0, std::numeric_limits<double>::infinity(), true}; }
   static NumberRule NonNegative() { return {0.0, std::numeric_limits<double>::infinity(), false}; }
   static NumberRule Between(double lo, double hi) { return {lo, hi, false}; }
+  /// "" when `value` is finite and within the bounds, else why not ("must be > 0").
+  std::string Check(double value) const;
 };
 
 /// One YAML mapping read strictly. Every Get/Require marks its key as used; RejectUnknownKeys()
@@ -76,6 +74,11 @@ class YamlMap {
   [[noreturn]] void Fail(std::string_view key, std::string_view message) const;
   /// Throws ConfigError "file:line: prefix: message" about the map itself.
   [[noreturn]] void FailHere(std::string_view message) const;
+  /// Throws `error` (a check's, its key a dotted path relative to this map, e.g. "motor.armature_kg"
+  /// or "size_m[2]") located in this file: at the line of that key and with the value as the file
+  /// spells it when the file sets it, else at the line of the nearest enclosing map the file has
+  /// (none for the document itself) with the error's own value marked "(default)".
+  [[noreturn]] void FailAt(const ConfigError& error) const;
 
   const std::string& file() const { return file_; }
   /// Dotted path of this map from the document root ("" at the root).

@@ -4,13 +4,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/config_error.h"
+
 namespace graspbed::controller {
 
 void ControlLoopConfig::Validate() const {
-  if (!(stale_timeout_s > 0.0) || !std::isfinite(stale_timeout_s)) {
-    throw std::invalid_argument("control loop stale_timeout_s = " + std::to_string(stale_timeout_s) +
-                                ": must be > 0");
-  }
+  common::Require(stale_timeout_s > 0.0 && std::isfinite(stale_timeout_s), "control_loop.stale_timeout_s",
+                  stale_timeout_s, "must be > 0");
   readout.Validate();
   inversion.Validate();
 }

@@ -24,7 +24,7 @@ struct ControlLoopConfig {
   sensor::ReadoutConfig readout;
   sensor::InversionConfig inversion;
 
-  /// Throws std::invalid_argument naming the offending field and value.
+  /// @throws common::ConfigError naming the field (key path) and value.
   void Validate() const;
 };
 

@@ -14,6 +14,8 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include "common/config_error.h"
+
 namespace graspbed::hardware {
 namespace {
 
@@ -28,17 +30,16 @@ int64_t SecondsToNs(double s) { return static_cast<int64_t>(std::llround(s * 1e9
 }  // namespace
 
 void EmulatorConfig::Validate() const {
-  auto fail = [](const std::string& field, double value, const char* reason) {
-    throw std::invalid_argument("emulator config: " + field + " = " + std::to_string(value) + ": " + reason);
-  };
-  if (link_path.empty()) throw std::invalid_argument("emulator config: link_path is empty");
-  if (unit_count < 1 || unit_count > kMaxUnitsOnWire)
-    fail("unit_count", unit_count, "must be in 1..62 (512-byte packets)");
-  if (frame_rate_hz < 1 || frame_rate_hz > 10000) fail("frame_rate_hz", frame_rate_hz, "must be in 1..10000");
-  if (!(hello_period_s > 0)) fail("hello_period_s", hello_period_s, "must be > 0");
-  if (!(connect_delay_s >= 0)) fail("connect_delay_s", connect_delay_s, "must be >= 0");
-  if (!(watchdog_s > 0)) fail("watchdog_s", watchdog_s, "must be > 0");
-  if (!(nominal_r0_ohm > 0)) fail("nominal_r0_ohm", nominal_r0_ohm, "must be > 0");
+  using common::Require;
+  if (link_path.empty()) throw common::ConfigError("", 0, "emulator.link_path", "\"\"", "must not be empty");
+  Require(unit_count >= 1 && unit_count <= kMaxUnitsOnWire, "emulator.unit_count", unit_count,
+          "must be in 1..62 (512-byte packets)");
+  Require(frame_rate_hz >= 1 && frame_rate_hz <= 10000, "emulator.frame_rate_hz", frame_rate_hz,
+          "must be in 1..10000");
+  Require(hello_period_s > 0, "emulator.hello_period_s", hello_period_s, "must be > 0");
+  Require(connect_delay_s >= 0, "emulator.connect_delay_s", connect_delay_s, "must be >= 0");
+  Require(watchdog_s > 0, "emulator.watchdog_s", watchdog_s, "must be > 0");
+  Require(nominal_r0_ohm > 0, "emulator.nominal_r0_ohm", nominal_r0_ohm, "must be > 0");
 }
 
 DeviceEmulator::DeviceEmulator(const EmulatorConfig& config, FrameSource source, MotorSink sink)

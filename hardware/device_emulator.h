@@ -29,7 +29,7 @@ struct EmulatorConfig {
   uint16_t firmware_version = 0x0100;
   double nominal_r0_ohm = 3400.0;  ///< reported in HELLO [Ohm]
 
-  /// Throws std::invalid_argument naming the field and value.
+  /// @throws common::ConfigError naming the field (key path) and value.
   void Validate() const;
 };
 

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 
 namespace graspbed::hardware {
@@ -23,12 +24,17 @@ struct HardwareConfig {
   double poll_interval_s = 0.002;        ///< I/O thread's longest sleep in poll() [s]
   double write_timeout_s = 0.02;         ///< longest wait for room in the output queue [s]
 
-  /// Throws common::ConfigError naming the field and value.
+  /// Checks every field against HardwareConfigFields().
+  /// @throws common::ConfigError "serial.KEY = VALUE: reason".
   void Validate() const;
 };
 
+/// The fields of HardwareConfig (loader, Validate(), emitter and reference table derive from it).
+const common::FieldTable<HardwareConfig>& HardwareConfigFields();
+
 /// Reads a hardware config from `map` (keys as the field names; the `serial:` section of a
 /// `graspbed hw --config` file, docs/hardware.md "Configuration"); unknown keys are refused.
+/// @throws common::ConfigError naming file, line, key and value.
 HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map);
 
 }  // namespace graspbed::hardware

@@ -10,31 +10,34 @@ namespace {
 
 using common::NumberRule;
 
-void Require(bool ok, const std::string& field, double value, const char* reason) {
-  if (ok) return;
-  std::ostringstream out;
-  out << "inversion: " << field << " = " << value << ": " << reason;
-  throw std::invalid_argument(out.str());
-}
+using common::Require;
 
 }  // namespace
 
-void InversionConfig::Validate() const {
-  Require(contact_threshold_n >= 0.0 && std::isfinite(contact_threshold_n), "contact_threshold_n",
-          contact_threshold_n, "must be finite and >= 0");
-  Require(rated_force_n > 0.0 && std::isfinite(rated_force_n), "rated_force_n", rated_force_n, "must be > 0");
-  Require(out_of_range_margin_fraction >= 0.0 && std::isfinite(out_of_range_margin_fraction),
-          "out_of_range_margin_fraction", out_of_range_margin_fraction, "must be finite and >= 0");
+const common::FieldTable<InversionConfig>& InversionConfigFields() {
+  using Table = common::FieldTable<InversionConfig>;
+  using C = InversionConfig;
+  static const Table table(
+      "inversion",
+      {
+          Table::Number("contact_threshold_n", &C::contact_threshold_n, NumberRule::Between(0.0, 1000.0), "N",
+                        "a valid unit with Fn above this counts as in contact"),
+          Table::Number("rated_force_n", &C::rated_force_n, {0.0, 1000.0, true}, "N",
+                        "rated range of Fn and abs(Ft) (paper: 10 N)"),
+          Table::Number("out_of_range_margin_fraction", &C::out_of_range_margin_fraction,
+                        NumberRule::Between(0.0, 100.0), "-",
+                        "estimates beyond rated_force_n x (1 + this) are `out_of_range`; they keep their "
+                        "value, count as "
+                        "contacts, and stay out of the totals"),
+      });
+  return table;
 }
+
+void InversionConfig::Validate() const { InversionConfigFields().Validate(*this); }
 
 InversionConfig LoadInversionConfig(const common::YamlMap& map) {
   InversionConfig config;
-  config.contact_threshold_n =
-      map.GetNumber("contact_threshold_n", config.contact_threshold_n, NumberRule::Between(0.0, 1000.0));
-  config.rated_force_n = map.GetNumber("rated_force_n", config.rated_force_n, {0.0, 1000.0, true});
-  config.out_of_range_margin_fraction = map.GetNumber(
-      "out_of_range_margin_fraction", config.out_of_range_margin_fraction, NumberRule::Between(0.0, 100.0));
-  map.RejectUnknownKeys();
+  InversionConfigFields().Load(map, &config);
   return config;
 }
 
@@ -58,7 +61,7 @@ Inversion::Inversion(const Layout& layout, const Calibration& calibration, const
   }
   for (int unit = 0; unit < unit_count_; ++unit) {
     const UnitCalibration& constants = calibration.units[static_cast<size_t>(unit)];
-    const std::string prefix = "units[" + std::to_string(unit) + "].";
+    const std::string prefix = "calibration.units[" + std::to_string(unit) + "].";
     Require(constants.gauge_factor > 0.0 && std::isfinite(constants.gauge_factor), prefix + "gauge_factor",
             constants.gauge_factor, "must be > 0");
     Require(constants.kn_per_n > 0.0 && std::isfinite(constants.kn_per_n), prefix + "kn_per_n",

@@ -5,6 +5,7 @@
 #include <array>
 #include <vector>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
@@ -23,11 +24,16 @@ struct InversionConfig {
   /// noise at exactly the rated load from flickering the flag.
   double out_of_range_margin_fraction = 0.05;
 
-  /// Throws std::invalid_argument naming the offending field and value.
+  /// Checks every field against InversionConfigFields().
+  /// @throws common::ConfigError "inversion.KEY = VALUE: reason".
   void Validate() const;
 };
 
+/// The fields of InversionConfig (loader, Validate(), emitter and reference table derive from it).
+const common::FieldTable<InversionConfig>& InversionConfigFields();
+
 /// Reads an InversionConfig from its own YAML section (field names as keys; unknown keys refused).
+/// @throws common::ConfigError naming file, line, key and value.
 InversionConfig LoadInversionConfig(const common::YamlMap& map);
 
 /// Fn and Ft of one unit [N], unit frame.

@@ -12,12 +12,7 @@ namespace {
 
 using common::NumberRule;
 
-void Require(bool ok, const char* field, double value, const char* reason) {
-  if (ok) return;
-  std::ostringstream out;
-  out << "readout: " << field << " = " << value << ": " << reason;
-  throw std::invalid_argument(out.str());
-}
+using common::Require;
 
 // Severity order when two channels disagree: the more specific hardware fault wins.
 int Severity(UnitValidity validity) {
@@ -42,57 +37,56 @@ UnitValidity Worse(UnitValidity a, UnitValidity b) { return Severity(a) >= Sever
 
 }  // namespace
 
-void ReadoutConfig::Validate() const {
-  Require(baseline_frames >= 1, "baseline_frames", baseline_frames, "must be >= 1");
-  Require(short_circuit_ohm >= 0.0 && std::isfinite(short_circuit_ohm), "short_circuit_ohm",
-          short_circuit_ohm, "must be finite and >= 0");
-  Require(open_circuit_ohm > short_circuit_ohm, "open_circuit_ohm", open_circuit_ohm,
-          "must be > short_circuit_ohm");
-  Require(min_plausible_fraction >= 0.0 && min_plausible_fraction < 1.0, "min_plausible_fraction",
-          min_plausible_fraction, "must be in [0, 1)");
-  Require(max_plausible_fraction > 1.0 && std::isfinite(max_plausible_fraction), "max_plausible_fraction",
-          max_plausible_fraction, "must be > 1");
-  Require(max_baseline_deviation_fraction > 0.0 && std::isfinite(max_baseline_deviation_fraction),
-          "max_baseline_deviation_fraction", max_baseline_deviation_fraction, "must be > 0");
-  Require(min_mean_dr_rel < 0.0 && std::isfinite(min_mean_dr_rel), "min_mean_dr_rel", min_mean_dr_rel,
-          "must be < 0");
-  Require(max_abs_dr_rel > 0.0 && std::isfinite(max_abs_dr_rel), "max_abs_dr_rel", max_abs_dr_rel,
-          "must be > 0");
-  Require(adc_full_scale_ohm >= 0.0 && std::isfinite(adc_full_scale_ohm), "adc_full_scale_ohm",
-          adc_full_scale_ohm, "must be >= 0 (0 = unknown)");
-  Require(adc_min_ohm >= 0.0 && std::isfinite(adc_min_ohm), "adc_min_ohm", adc_min_ohm,
-          "must be >= 0 (0 = none)");
-  Require(adc_full_scale_ohm == 0.0 || adc_min_ohm < adc_full_scale_ohm, "adc_min_ohm", adc_min_ohm,
-          "must be < adc_full_scale_ohm");
+const common::FieldTable<ReadoutConfig>& ReadoutConfigFields() {
+  using Table = common::FieldTable<ReadoutConfig>;
+  using C = ReadoutConfig;
+  static const Table table(
+      "readout",
+      {
+          Table::Integer("baseline_frames", &C::baseline_frames, 1, 1000000, "frames",
+                         "frames averaged for the tare after construction or `Reset()`; validity "
+                         "`not_tared` meanwhile; contact before they have arrived biases the estimate"),
+          Table::Number("short_circuit_ohm", &C::short_circuit_ohm, NumberRule::Between(0.0, 1e6), "Ohm",
+                        "at or below: `short`"),
+          Table::Number("open_circuit_ohm", &C::open_circuit_ohm, {0.0, 1e9, true}, "Ohm",
+                        "at or above (or inf): `open`")
+              .Note("> `short_circuit_ohm`"),
+          Table::Number("min_plausible_fraction", &C::min_plausible_fraction, NumberRule::Between(0.0, 0.999),
+                        "-", "channel below this x R0 (not a short): `implausible`"),
+          Table::Number("max_plausible_fraction", &C::max_plausible_fraction, {1.0, 1000.0, true}, "-",
+                        "channel above this x R0 (not open): `implausible`"),
+          Table::Number("max_baseline_deviation_fraction", &C::max_baseline_deviation_fraction,
+                        {0.0, 100.0, true}, "-",
+                        "tare further than this from R0 (or a channel without good readings in half the tare "
+                        "window): `implausible` until re-tared"),
+          Table::Number("min_mean_dr_rel", &C::min_mean_dr_rel, NumberRule::Between(-10.0, -1e-9), "-",
+                        "mean dR/R of a unit below this (mesa pulled; -0.1 is about -1.8 N at paper "
+                        "sensitivities): `implausible`"),
+          Table::Number("max_abs_dr_rel", &C::max_abs_dr_rel, {0.0, 1000.0, true}, "-",
+                        "abs(dR/R) above this: `out_of_range` (the paper's maximum is 0.96)"),
+          Table::Number("adc_full_scale_ohm", &C::adc_full_scale_ohm, NumberRule::Between(0.0, 1e8), "Ohm",
+                        "the source's ADC full scale; a channel at it is `out_of_range`; 0 = unknown"),
+          Table::Number("adc_min_ohm", &C::adc_min_ohm, NumberRule::Between(0.0, 1e8), "Ohm",
+                        "bottom of the source's ADC window; a channel at or below it is `out_of_range`; "
+                        "0 = none")
+              .Note("< `adc_full_scale_ohm` when that is > 0"),
+      },
+      [](const C& c) {
+        if (!(c.open_circuit_ohm > c.short_circuit_ohm)) {
+          common::FieldError("open_circuit_ohm", c.open_circuit_ohm, "must be > short_circuit_ohm");
+        }
+        if (c.adc_full_scale_ohm > 0.0 && !(c.adc_min_ohm < c.adc_full_scale_ohm)) {
+          common::FieldError("adc_min_ohm", c.adc_min_ohm, "needs adc_min_ohm < adc_full_scale_ohm");
+        }
+      });
+  return table;
 }
+
+void ReadoutConfig::Validate() const { ReadoutConfigFields().Validate(*this); }
 
 ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig& defaults) {
   ReadoutConfig config = defaults;
-  const ReadoutConfig& d = defaults;
-  config.baseline_frames = map.GetInt("baseline_frames", d.baseline_frames, 1, 1000000);
-  config.short_circuit_ohm =
-      map.GetNumber("short_circuit_ohm", d.short_circuit_ohm, NumberRule::Between(0.0, 1e6));
-  config.open_circuit_ohm = map.GetNumber("open_circuit_ohm", d.open_circuit_ohm, {0.0, 1e9, true});
-  config.min_plausible_fraction =
-      map.GetNumber("min_plausible_fraction", d.min_plausible_fraction, NumberRule::Between(0.0, 0.999));
-  config.max_plausible_fraction =
-      map.GetNumber("max_plausible_fraction", d.max_plausible_fraction, {1.0, 1000.0, true});
-  config.max_baseline_deviation_fraction =
-      map.GetNumber("max_baseline_deviation_fraction", d.max_baseline_deviation_fraction, {0.0, 100.0, true});
-  config.min_mean_dr_rel =
-      map.GetNumber("min_mean_dr_rel", d.min_mean_dr_rel, NumberRule::Between(-10, -1e-9));
-  config.max_abs_dr_rel = map.GetNumber("max_abs_dr_rel", d.max_abs_dr_rel, {0.0, 1000.0, true});
-  config.adc_full_scale_ohm =
-      map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, NumberRule::Between(0.0, 1e8));
-  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::Between(0.0, 1e8));
-  if (config.adc_full_scale_ohm > 0.0 && !(config.adc_min_ohm < config.adc_full_scale_ohm)) {
-    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm",
-             "needs adc_min_ohm < adc_full_scale_ohm");
-  }
-  map.RejectUnknownKeys();
-  if (!(config.open_circuit_ohm > config.short_circuit_ohm)) {
-    map.Fail("open_circuit_ohm", "must be > short_circuit_ohm");
-  }
+  ReadoutConfigFields().Load(map, &config);
   return config;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <span>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_state.h"
@@ -59,12 +60,18 @@ struct ReadoutConfig {
   /// range. 0 = none (a divider reads down to 0 Ohm, which is a short).
   double adc_min_ohm = 0.0;
 
-  /// Throws std::invalid_argument naming the offending field and value.
+  /// Checks every field against ReadoutConfigFields().
+  /// @throws common::ConfigError "readout.KEY = VALUE: reason".
   void Validate() const;
 };
 
+/// The fields of ReadoutConfig: keys, rules, units, docs; its loader, Validate(), emitter (Emit) and
+/// reference table (`graspbed config-reference`) all come from it.
+const common::FieldTable<ReadoutConfig>& ReadoutConfigFields();
+
 /// Reads a ReadoutConfig from its own YAML section (field names as keys; unknown keys refused).
 /// Keys absent from `map` keep their value in `defaults`.
+/// @throws common::ConfigError naming file, line, key and value.
 ReadoutConfig LoadReadoutConfig(const common::YamlMap& map, const ReadoutConfig& defaults = {});
 
 /// Tare + dR/R + per-unit validity + channel noise. Holds the baseline; Process() allocates nothing.

@@ -14,15 +14,7 @@ using common::NumberRule;
 // Spreads are drawn from a normal distribution clipped to +-3 sigma so no R0 or k goes negative.
 constexpr double kSpreadClipSigma = 3.0;
 
-std::string Describe(const char* field, double value, const char* reason) {
-  std::ostringstream out;
-  out << "strain model: " << field << " = " << value << ": " << reason;
-  return out.str();
-}
-
-void Require(bool ok, const char* field, double value, const char* reason) {
-  if (!ok) throw std::invalid_argument(Describe(field, value, reason));
-}
+using common::Require;
 
 double Clip(double value, double limit) { return limit > 0.0 ? std::clamp(value, -limit, limit) : value; }
 
@@ -35,81 +27,88 @@ GaugeResistances IdealGaugeResistances(const UnitConstants& constants, double fn
           constants.r0_ohm * (1.0 + constants.gauge_factor * (eps_n - eps_t))};
 }
 
+const common::FieldTable<StrainModelConfig>& StrainModelConfigFields() {
+  using Table = common::FieldTable<StrainModelConfig>;
+  using C = StrainModelConfig;
+  using U = UnitConstants;
+  static const Table table(
+      "strain_model",
+      {
+          Table::Number("r0_ohm", &C::nominal, &U::r0_ohm, {0.0, 1e7, true}, "Ohm", "unstrained R1 = R2"),
+          Table::Number("gauge_factor", &C::nominal, &U::gauge_factor, {0.0, 1000.0, true}, "-",
+                        "G, dR/R per strain"),
+          Table::Number("kn_per_n", &C::nominal, &U::kn_per_n, {0.0, 1.0, true}, "1/N",
+                        "strain per N of Fn (set by the FEA with `sensitivities: fea`)"),
+          Table::Number("kt_per_n", &C::nominal, &U::kt_per_n, {0.0, 1.0, true}, "1/N",
+                        "strain per N of Ft (set by the FEA with `sensitivities: fea`)"),
+          Table::Number("rated_force_n", &C::nominal, &U::rated_force_n, {0.0, 1000.0, true}, "N",
+                        "rated range of Fn and abs(Ft)"),
+          Table::Number(
+              "r0_spread_fraction", &C::r0_spread_fraction, NumberRule::Between(0.0, 0.3), "-",
+              "per-channel R0 = r0 (1 + f z), z ~ N(0,1) clipped to +-3, drawn once from the seed; 0 = off"),
+          Table::Number("sensitivity_spread_fraction", &C::sensitivity_spread_fraction,
+                        NumberRule::Between(0.0, 0.3), "-",
+                        "per-unit kn, kt spread of the same form; 0 = off"),
+          Table::Number("noise_ohm", &C::noise_ohm, NumberRule::Between(0.0, 1e6), "Ohm",
+                        "Gaussian noise (standard deviation) per channel per sample, seeded; "
+                        "`SetNoiseScale()` scales it; 0 = off"),
+          Table::Integer(
+              "adc_bits", &C::adc_bits, 0, 32, "bits",
+              "0 = ideal; else readings are rounded to the window / (2^bits - 1) and clipped to the window"),
+          Table::Number("adc_full_scale_ohm", &C::adc_full_scale_ohm, {0.0, 1e8, true}, "Ohm",
+                        "top of the ADC window (only with adc_bits > 0); a channel at full scale is out of "
+                        "range to a readout told the same value"),
+          Table::Number("adc_min_ohm", &C::adc_min_ohm, NumberRule::Between(0.0, 1e8), "Ohm",
+                        "bottom of the ADC window: codes span adc_min_ohm .. adc_full_scale_ohm (a bridge "
+                        "reads a window around R0)")
+              .Note("< `adc_full_scale_ohm`"),
+          Table::Number("temperature_coefficient_per_k", &C::temperature_coefficient_per_k,
+                        NumberRule::Between(-0.0999, 0.0999), "1/K",
+                        "R0(T) = R0 (1 + alpha dT); untared drift shows as apparent Fn; 0 = off"),
+          Table::Number("temperature_offset_k", &C::temperature_offset_k, NumberRule::Between(-200.0, 200.0),
+                        "K", "dT at t = 0; `SetTemperatureOffsetK()` adds to it at run time"),
+          Table::Number("temperature_ramp_k_per_s", &C::temperature_ramp_k_per_s,
+                        NumberRule::Between(-100.0, 100.0), "K/s", "dT(t) = offset + ramp t"),
+          Table::Number("saturation_force_n", &C::saturation_force_n, NumberRule::Between(0.0, 1000.0), "N",
+                        "0 = off; else Fn, Ft and cross shear reaching the gauge are clipped to +-this "
+                        "(overload stop); the inversion flags the estimate out of range"),
+          Table::Number("cross_talk_shear_fraction", &C::cross_talk_shear_fraction,
+                        NumberRule::Between(-1.0, 1.0), "-",
+                        "fraction of the cross-axis shear that appears as Ft"),
+          Table::Number("cross_talk_offset_per_mm", &C::cross_talk_offset_per_mm,
+                        NumberRule::Between(-10.0, 10.0), "1/mm",
+                        "Fn x offset along the beam [mm] x this appears as Ft (off-centre load)"),
+          Table::Custom("dead_units", "", "[]", "unit indices of the layout, each once",
+                        "those units read open circuit (R = +inf) from the start"),
+          Table::Custom("shorted_units", "", "[]", "unit indices of the layout, each once, not dead",
+                        "those units read short circuit (R = 0) from the start"),
+      },
+      [](const C& c) {
+        if (!(c.adc_min_ohm < c.adc_full_scale_ohm)) {
+          common::FieldError("adc_min_ohm", c.adc_min_ohm,
+                             "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" +
+                                 common::ReadableNumber(c.adc_min_ohm) + " vs " +
+                                 common::ReadableNumber(c.adc_full_scale_ohm) + ")");
+        }
+      });
+  return table;
+}
+
 void StrainModelConfig::Validate() const {
-  Require(nominal.r0_ohm > 0.0 && std::isfinite(nominal.r0_ohm), "r0_ohm", nominal.r0_ohm, "must be > 0");
-  Require(nominal.gauge_factor > 0.0 && std::isfinite(nominal.gauge_factor), "gauge_factor",
-          nominal.gauge_factor, "must be > 0");
-  Require(nominal.kn_per_n > 0.0 && std::isfinite(nominal.kn_per_n), "kn_per_n", nominal.kn_per_n,
-          "must be > 0");
-  Require(nominal.kt_per_n > 0.0 && std::isfinite(nominal.kt_per_n), "kt_per_n", nominal.kt_per_n,
-          "must be > 0");
-  Require(nominal.rated_force_n > 0.0 && std::isfinite(nominal.rated_force_n), "rated_force_n",
-          nominal.rated_force_n, "must be > 0");
-  Require(r0_spread_fraction >= 0.0 && r0_spread_fraction <= 0.3, "r0_spread_fraction", r0_spread_fraction,
-          "must be in [0, 0.3]");
-  Require(sensitivity_spread_fraction >= 0.0 && sensitivity_spread_fraction <= 0.3,
-          "sensitivity_spread_fraction", sensitivity_spread_fraction, "must be in [0, 0.3]");
-  Require(noise_ohm >= 0.0 && std::isfinite(noise_ohm), "noise_ohm", noise_ohm, "must be >= 0");
-  Require(adc_bits >= 0 && adc_bits <= 32, "adc_bits", adc_bits, "must be in [0, 32]");
-  Require(adc_full_scale_ohm > 0.0 && std::isfinite(adc_full_scale_ohm), "adc_full_scale_ohm",
-          adc_full_scale_ohm, "must be > 0");
-  Require(adc_min_ohm >= 0.0 && adc_min_ohm < adc_full_scale_ohm, "adc_min_ohm", adc_min_ohm,
-          "must be >= 0 and < adc_full_scale_ohm");
-  Require(std::isfinite(temperature_coefficient_per_k) && std::abs(temperature_coefficient_per_k) < 0.1,
-          "temperature_coefficient_per_k", temperature_coefficient_per_k, "must be in (-0.1, 0.1)");
-  Require(std::isfinite(temperature_offset_k), "temperature_offset_k", temperature_offset_k,
-          "must be finite");
-  Require(std::isfinite(temperature_ramp_k_per_s), "temperature_ramp_k_per_s", temperature_ramp_k_per_s,
-          "must be finite");
-  Require(saturation_force_n >= 0.0 && std::isfinite(saturation_force_n), "saturation_force_n",
-          saturation_force_n, "must be >= 0 (0 = off)");
-  Require(std::isfinite(cross_talk_shear_fraction) && std::abs(cross_talk_shear_fraction) <= 1.0,
-          "cross_talk_shear_fraction", cross_talk_shear_fraction, "must be in [-1, 1]");
-  Require(std::isfinite(cross_talk_offset_per_mm) && std::abs(cross_talk_offset_per_mm) <= 10.0,
-          "cross_talk_offset_per_mm", cross_talk_offset_per_mm, "must be in [-10, 10]");
-  for (int unit : dead_units) Require(unit >= 0 && unit < kMaxUnits, "dead_units[]", unit, "no such unit");
+  StrainModelConfigFields().Validate(*this);
+  for (int unit : dead_units)
+    Require(unit >= 0 && unit < kMaxUnits, "strain_model.dead_units[]", unit, "no such unit");
   for (int unit : shorted_units) {
-    Require(unit >= 0 && unit < kMaxUnits, "shorted_units[]", unit, "no such unit");
-    Require(std::find(dead_units.begin(), dead_units.end(), unit) == dead_units.end(), "shorted_units[]",
-            unit, "is also in dead_units");
+    Require(unit >= 0 && unit < kMaxUnits, "strain_model.shorted_units[]", unit, "no such unit");
+    Require(std::find(dead_units.begin(), dead_units.end(), unit) == dead_units.end(),
+            "strain_model.shorted_units[]", unit, "is also in dead_units");
   }
 }
 
 StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count,
                                         const StrainModelConfig& defaults) {
   StrainModelConfig config = defaults;
-  const StrainModelConfig& d = defaults;
-  UnitConstants& nominal = config.nominal;
-  nominal.r0_ohm = map.GetNumber("r0_ohm", d.nominal.r0_ohm, {0.0, 1e7, true});
-  nominal.gauge_factor = map.GetNumber("gauge_factor", d.nominal.gauge_factor, {0.0, 1000.0, true});
-  nominal.kn_per_n = map.GetNumber("kn_per_n", d.nominal.kn_per_n, {0.0, 1.0, true});
-  nominal.kt_per_n = map.GetNumber("kt_per_n", d.nominal.kt_per_n, {0.0, 1.0, true});
-  nominal.rated_force_n = map.GetNumber("rated_force_n", d.nominal.rated_force_n, {0.0, 1000.0, true});
-  config.r0_spread_fraction =
-      map.GetNumber("r0_spread_fraction", d.r0_spread_fraction, NumberRule::Between(0.0, 0.3));
-  config.sensitivity_spread_fraction = map.GetNumber(
-      "sensitivity_spread_fraction", d.sensitivity_spread_fraction, NumberRule::Between(0.0, 0.3));
-  config.noise_ohm = map.GetNumber("noise_ohm", d.noise_ohm, NumberRule::Between(0.0, 1e6));
-  config.adc_bits = map.GetInt("adc_bits", d.adc_bits, 0, 32);
-  config.adc_full_scale_ohm = map.GetNumber("adc_full_scale_ohm", d.adc_full_scale_ohm, {0.0, 1e8, true});
-  config.adc_min_ohm = map.GetNumber("adc_min_ohm", d.adc_min_ohm, NumberRule::Between(0.0, 1e8));
-  if (!(config.adc_min_ohm < config.adc_full_scale_ohm)) {
-    map.Fail(map.Has("adc_min_ohm") ? "adc_min_ohm" : "adc_full_scale_ohm",
-             "the ADC window needs adc_min_ohm < adc_full_scale_ohm (" + std::to_string(config.adc_min_ohm) +
-                 " vs " + std::to_string(config.adc_full_scale_ohm) + ")");
-  }
-  config.temperature_coefficient_per_k = map.GetNumber(
-      "temperature_coefficient_per_k", d.temperature_coefficient_per_k, NumberRule::Between(-0.0999, 0.0999));
-  config.temperature_offset_k =
-      map.GetNumber("temperature_offset_k", d.temperature_offset_k, NumberRule::Between(-200.0, 200.0));
-  config.temperature_ramp_k_per_s = map.GetNumber("temperature_ramp_k_per_s", d.temperature_ramp_k_per_s,
-                                                  NumberRule::Between(-100.0, 100.0));
-  config.saturation_force_n =
-      map.GetNumber("saturation_force_n", d.saturation_force_n, NumberRule::Between(0.0, 1000.0));
-  config.cross_talk_shear_fraction =
-      map.GetNumber("cross_talk_shear_fraction", d.cross_talk_shear_fraction, NumberRule::Between(-1, 1));
-  config.cross_talk_offset_per_mm =
-      map.GetNumber("cross_talk_offset_per_mm", d.cross_talk_offset_per_mm, NumberRule::Between(-10, 10));
+  StrainModelConfigFields().Load(map, &config);
   const auto read_units = [&](const char* key) {
     std::vector<int> units;
     for (double value : map.GetNumberList(key, {}, 0, NumberRule::Between(0, unit_count - 1))) {
@@ -129,8 +128,18 @@ StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_cou
       map.Fail("shorted_units", "unit " + std::to_string(unit) + " is also in dead_units");
     }
   }
-  map.RejectUnknownKeys();
   return config;
+}
+
+void EmitStrainModelConfig(const StrainModelConfig& config, YAML::Emitter& out,
+                           const std::vector<std::string>& skip) {
+  StrainModelConfigFields().Emit(config, out, skip);
+  for (const auto& [key, units] :
+       {std::pair{"dead_units", &config.dead_units}, std::pair{"shorted_units", &config.shorted_units}}) {
+    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (int unit : *units) out << unit;
+    out << YAML::EndSeq;
+  }
 }
 
 StrainModel::StrainModel(const Layout& layout, const StrainModelConfig& config, uint64_t seed)

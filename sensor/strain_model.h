@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "sensor/layout.h"
 #include "sensor/raw_frame.h"
@@ -86,15 +87,25 @@ struct StrainModelConfig {
   /// Units whose channels read short circuit (0 Ohm) from the start (layout indices).
   std::vector<int> shorted_units;
 
-  /// Throws std::invalid_argument naming the offending field and value.
+  /// Checks every field against StrainModelConfigFields() and the unit lists against kMaxUnits.
+  /// @throws common::ConfigError "strain_model.KEY = VALUE: reason".
   void Validate() const;
 };
+
+/// The fields of StrainModelConfig (loader, Validate(), emitter and reference table derive from
+/// it); dead_units and shorted_units are its custom fields (bounded by the layout at load).
+const common::FieldTable<StrainModelConfig>& StrainModelConfigFields();
 
 /// Reads a StrainModelConfig from its own YAML section (unknown keys are refused); errors are
 /// common::ConfigError naming file, line, key and value. `unit_count` bounds dead/shorted units.
 /// Keys absent from `map` keep their value in `defaults` (a sensor profile, sensor_profile.h).
+/// @throws common::ConfigError naming file, line, key and value.
 StrainModelConfig LoadStrainModelConfig(const common::YamlMap& map, int unit_count = kMaxUnits,
                                         const StrainModelConfig& defaults = {});
+/// Writes `config` as the keys of the YAML map `out` is in (the keys in `skip` left out), the unit
+/// lists included; LoadStrainModelConfig reads it back to the same config.
+void EmitStrainModelConfig(const StrainModelConfig& config, YAML::Emitter& out,
+                           const std::vector<std::string>& skip = {});
 
 /// Per-unit loads -> RawFrame. Mutable per-run state (RNG, faults, biases) lives here; the layout
 /// is only read at construction. Sample() allocates nothing and never throws for valid sizes.

@@ -8,53 +8,18 @@
 namespace graspbed::sim {
 namespace {
 
-[[noreturn]] void Bad(const std::string& field, double value, const std::string& reason) {
-  std::ostringstream message;
-  message << "scene." << field << " = " << value << ": " << reason;
-  throw std::invalid_argument(message.str());
+using common::FieldError;
+using common::NumberRule;
+
+// A cross-field failure of the scene: `key` relative to the scene ("object.solimp[1]").
+[[noreturn]] void Bad(const std::string& key, double value, const std::string& reason) {
+  FieldError(key, value, reason);
 }
 
-void RequirePositive(const std::string& field, double value) {
-  if (!(value > 0.0) || !std::isfinite(value)) Bad(field, value, "must be > 0");
-}
-
-void RequireNonNegative(const std::string& field, double value) {
-  if (!(value >= 0.0) || !std::isfinite(value)) Bad(field, value, "must be >= 0");
-}
-
-void RequireIn(const std::string& field, double value, double min, double max) {
+void RequireIn(const std::string& key, double value, double min, double max) {
   if (!(value >= min && value <= max)) {
-    std::ostringstream reason;
-    reason << "must be in [" << min << ", " << max << "]";
-    Bad(field, value, reason.str());
+    Bad(key, value, "must be in [" + common::DocNumber(min) + ", " + common::DocNumber(max) + "]");
   }
-}
-
-void RequireAtMost(const std::string& field, double value, double max) {
-  if (value > max) {
-    std::ostringstream reason;
-    reason << "must be <= " << max;
-    Bad(field, value, reason.str());
-  }
-}
-
-HandModel ParseHandModel(const std::string& text) {
-  return text == "jaw" ? HandModel::kJaw : HandModel::kProsthetic;  // GetString restricted the names
-}
-
-GraspType ParseGrasp(const std::string&) { return GraspType::kPinch; }  // the only name GetString allows
-
-ObjectShape ParseShape(const std::string& text) {
-  if (text == "box") return ObjectShape::kBox;
-  if (text == "cylinder") return ObjectShape::kCylinder;
-  return ObjectShape::kSphere;  // GetString already restricted the value to the three names
-}
-
-std::array<double, 3> GetTriple(const common::YamlMap& map, std::string_view key,
-                                std::array<double, 3> fallback, common::NumberRule rule = {}) {
-  const std::vector<double> list =
-      map.GetNumberList(key, std::vector<double>(fallback.begin(), fallback.end()), 3, rule);
-  return {list[0], list[1], list[2]};
 }
 
 }  // namespace
@@ -102,205 +67,267 @@ double ObjectConfig::RestHalfHeightM() const {
   return 0.0;
 }
 
-void SceneConfig::Validate() const {
-  const int used_sizes = object.shape == ObjectShape::kBox ? 3 : 1;
-  for (int i = 0; i < used_sizes; ++i) {
-    RequireIn("object.size_m[" + std::to_string(i) + "]", object.size_m[i], kMinObjectSizeM, kMaxObjectSizeM);
-  }
-  if (object.shape == ObjectShape::kCylinder) {
-    RequireIn("object.size_m[2]", object.size_m[2], kMinObjectSizeM, kMaxObjectSizeM);
-  }
-  RequireIn("object.mass_kg", object.mass_kg, kMinObjectMassKg, kMaxObjectMassKg);
-  RequirePositive("object.friction", object.friction);
-  RequireAtMost("object.friction", object.friction, kMaxFriction);
-  RequireIn("object.torsional_friction", object.torsional_friction, 0.0, kMaxTorsionalFrictionM);
-  if (object.solref_timeconst_s < 2.0 * physics.timestep_s) {
-    Bad("object.solref_timeconst_s", object.solref_timeconst_s, "must be >= 2 x physics.timestep_s");
-  }
-  RequireAtMost("object.solref_timeconst_s", object.solref_timeconst_s, kMaxSolrefTimeconstS);
-  RequirePositive("object.solref_dampratio", object.solref_dampratio);
-  RequireAtMost("object.solref_dampratio", object.solref_dampratio, kMaxSolrefDampratio);
-  if (!(object.solimp[0] > 0.0 && object.solimp[0] <= object.solimp[1] && object.solimp[1] < 1.0)) {
-    Bad("object.solimp[1]", object.solimp[1], "need 0 < dmin <= dmax < 1");
-  }
-  RequirePositive("object.solimp[2]", object.solimp[2]);
-  RequireAtMost("object.solimp[2]", object.solimp[2], kMaxSolimpWidthM);
-  RequireIn("object.solimp[3]", object.solimp[3], 0.0, 1.0);
-  RequireIn("object.solimp[4]", object.solimp[4], 1.0, kMaxSolimpPower);
-  for (int k = 0; k < 2; ++k) {
-    RequireIn("object.initial_position_m[" + std::to_string(k) + "]", object.initial_position_m[k],
-              -kMaxObjectOffsetM, kMaxObjectOffsetM);
-  }
-  RequireIn("object.initial_position_m[2]", object.initial_position_m[2], -kMaxPositionM, kMaxPositionM);
-  RequireIn("object.initial_yaw_rad", object.initial_yaw_rad, -kMaxYawRad, kMaxYawRad);
-  RequireIn("object.crush_limit_n", object.crush_limit_n, 0.0, kMaxForceN);
-  if (!std::isnan(hand.open_gap_m)) {
-    RequireIn("hand.open_gap_m", hand.open_gap_m, kMinOpenGapM, kMaxOpenGapM);
-  }
-  RequireNonNegative("hand.preshape_clearance_m", hand.preshape_clearance_m);
-  if (OpenGapM() <= ObjectWidthM()) {
-    Bad("hand.open_gap_m", OpenGapM(),
-        "the pre-shape must be wider than the object (object.size_m across the grasp: " +
-            std::to_string(ObjectWidthM()) + " m)");
-  }
-  RequirePositive("hand.finger.proximal_length_m", hand.finger.proximal_length_m);
-  RequirePositive("hand.finger.middle_length_m", hand.finger.middle_length_m);
-  RequirePositive("hand.finger.pip_mcp_ratio", hand.finger.pip_mcp_ratio);
-  RequirePositive("hand.thumb.proximal_length_m", hand.thumb.proximal_length_m);
-  RequirePositive("hand.thumb.distal_length_m", hand.thumb.distal_length_m);
-  RequirePositive("hand.thumb.tip_radius_m", hand.thumb.tip_radius_m);
-  RequirePositive("hand.digit_motor.stall_pinch_force_n", hand.digit_motor.stall_pinch_force_n);
-  RequirePositive("hand.digit_motor.no_load_speed_rad_s", hand.digit_motor.no_load_speed_rad_s);
-  RequireNonNegative("hand.digit_motor.armature_kg_m2", hand.digit_motor.armature_kg_m2);
-  RequireNonNegative("hand.digit_motor.damping_n_m_s", hand.digit_motor.damping_n_m_s);
-  RequireIn("hand.palm_mass_kg", hand.palm_mass_kg, kMinPalmMassKg, kMaxPalmMassKg);
-  RequireIn("hand.digit_mass_kg", hand.digit_mass_kg, kMinDigitMassKg, kMaxDigitMassKg);
-  RequirePositive("hand.friction", hand.friction);
-  RequireAtMost("hand.friction", hand.friction, kMaxFriction);
-  for (int k = 0; k < 3; ++k) {
-    // NaN = chosen from the object (pre-grasp pose).
-    if (std::isnan(hand.initial_wrist_position_m[k])) continue;
-    RequireIn("hand.initial_wrist_position_m[" + std::to_string(k) + "]", hand.initial_wrist_position_m[k],
-              -kMaxPositionM, kMaxPositionM);
-  }
-  RequirePositive("hand.wrist_stiffness_n_m", hand.wrist_stiffness_n_m);
-  RequireAtMost("hand.wrist_stiffness_n_m", hand.wrist_stiffness_n_m, kMaxWristStiffnessNM);
-  RequireIn("hand.wrist_damping_n_s_m", hand.wrist_damping_n_s_m, 0.0, kMaxWristDampingNSM);
-  RequirePositive("hand.motor.stall_force_n", hand.motor.stall_force_n);
-  RequireAtMost("hand.motor.stall_force_n", hand.motor.stall_force_n, kMaxStallForceN);
-  RequirePositive("hand.motor.no_load_speed_m_s", hand.motor.no_load_speed_m_s);
-  RequireAtMost("hand.motor.no_load_speed_m_s", hand.motor.no_load_speed_m_s, kMaxDigitSpeedMS);
-  RequireIn("hand.motor.armature_kg", hand.motor.armature_kg, 0.0, kMaxArmatureKg);
-  RequireIn("hand.motor.damping_n_s_m", hand.motor.damping_n_s_m, 0.0, kMaxMotorDampingNSM);
-  RequireIn("physics.timestep_s", physics.timestep_s, kMinTimestepS, kMaxTimestepS);
-  RequireIn("physics.impratio", physics.impratio, 1.0, kMaxImpratio);
-  RequireIn("physics.noslip_iterations", physics.noslip_iterations, 0, kMaxNoslipIterations);
-  RequireIn("physics.solver_iterations", physics.solver_iterations, 1, kMaxSolverIterations);
-  RequireIn("physics.tolerance", physics.tolerance, kMinTolerance, kMaxTolerance);
-  if (physics.condim != 3 && physics.condim != 4 && physics.condim != 6) {
-    Bad("physics.condim", physics.condim, "must be 3, 4 or 6");
-  }
-  RequireIn("physics.gravity_m_s2", physics.gravity_m_s2, 0.0, kMaxGravityMS2);
+const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
+  using Table = common::FieldTable<ObjectConfig>;
+  using C = ObjectConfig;
+  static const Table table(
+      "object",
+      {
+          Table::Choice("shape", &C::shape,
+                        {{ObjectShape::kBox, "box"},
+                         {ObjectShape::kCylinder, "cylinder"},
+                         {ObjectShape::kSphere, "sphere"}},
+                        ""),
+          Table::Numbers("size_m", &C::size_m, NumberRule::Between(0.0, kMaxObjectSizeM), "m",
+                         "box: edge lengths x, y, z; cylinder: diameter, unused, height (axis along z); "
+                         "sphere: diameter, unused, unused")
+              .Note("the ones the shape uses >= 0.001"),
+          Table::Number("mass_kg", &C::mass_kg, NumberRule::Between(kMinObjectMassKg, kMaxObjectMassKg), "kg",
+                        "uniform solid"),
+          Table::Number("friction", &C::friction, {0.0, kMaxFriction, true}, "-",
+                        "Coulomb coefficient of every contact with the object"),
+          Table::Number("torsional_friction", &C::torsional_friction,
+                        NumberRule::Between(0.0, kMaxTorsionalFrictionM), "m",
+                        "only with `physics.condim` >= 4"),
+          Table::Number("solref_timeconst_s", &C::solref_timeconst_s, {0.0, kMaxSolrefTimeconstS, true}, "s",
+                        "contact compliance (MuJoCo solref); larger = softer (e.g. a compliant cup: 0.006)")
+              .Note(">= 2 x `physics.timestep_s`"),
+          Table::Number("solref_dampratio", &C::solref_dampratio, {0.0, kMaxSolrefDampratio, true}, "-", ""),
+          Table::Numbers("solimp", &C::solimp, NumberRule::Between(0.0, kMaxSolimpPower), "",
+                         "MuJoCo solimp: dmin, dmax, width [m], midpoint, power")
+              .Note("0 < dmin <= dmax < 1, 0 < width <= 0.1, midpoint 0 .. 1, power 1 .. 10"),
+          Table::Numbers("initial_position_m", &C::initial_position_m,
+                         NumberRule::Between(-kMaxPositionM, kMaxPositionM), "m",
+                         "centre; z < 0 = resting on the table")
+              .Note("x, y -0.3 .. 0.3 (on the table)"),
+          Table::Number("initial_yaw_rad", &C::initial_yaw_rad, NumberRule::Between(-kMaxYawRad, kMaxYawRad),
+                        "rad", "rotation about z"),
+          Table::Number("crush_limit_n", &C::crush_limit_n, NumberRule::Between(0.0, kMaxForceN), "N",
+                        "squeeze above which the object counts as crushed (scored, not simulated); 0 = not "
+                        "fragile"),
+      },
+      [](const C& o) {
+        const int used_sizes = o.shape == ObjectShape::kBox ? 3 : 1;
+        for (int i = 0; i < used_sizes; ++i) {
+          RequireIn("size_m[" + std::to_string(i) + "]", o.size_m[i], kMinObjectSizeM, kMaxObjectSizeM);
+        }
+        if (o.shape == ObjectShape::kCylinder) {
+          RequireIn("size_m[2]", o.size_m[2], kMinObjectSizeM, kMaxObjectSizeM);
+        }
+        if (!(o.solimp[0] > 0.0 && o.solimp[0] <= o.solimp[1] && o.solimp[1] < 1.0)) {
+          Bad("solimp[1]", o.solimp[1], "need 0 < dmin <= dmax < 1");
+        }
+        if (!(o.solimp[2] > 0.0)) Bad("solimp[2]", o.solimp[2], "must be > 0");
+        RequireIn("solimp[2]", o.solimp[2], 0.0, kMaxSolimpWidthM);
+        RequireIn("solimp[3]", o.solimp[3], 0.0, 1.0);
+        RequireIn("solimp[4]", o.solimp[4], 1.0, kMaxSolimpPower);
+        for (int k = 0; k < 2; ++k) {
+          RequireIn("initial_position_m[" + std::to_string(k) + "]", o.initial_position_m[k],
+                    -kMaxObjectOffsetM, kMaxObjectOffsetM);
+        }
+      });
+  return table;
 }
 
+namespace {
+
+const common::FieldTable<MotorConfig>& MotorConfigFields() {
+  using Table = common::FieldTable<MotorConfig>;
+  using C = MotorConfig;
+  static const Table table(
+      "motor",
+      {
+          Table::Number("stall_force_n", &C::stall_force_n, {0.0, kMaxStallForceN, true}, "N",
+                        "jaw only: tendon (= static pinch) force at effort 1"),
+          Table::Number("no_load_speed_m_s", &C::no_load_speed_m_s, {0.0, kMaxDigitSpeedMS, true}, "m/s",
+                        "jaw only: closing speed of the gap at effort 1, no load"),
+          Table::Number("armature_kg", &C::armature_kg, NumberRule::Between(0.0, kMaxArmatureKg), "kg",
+                        "jaw only: reflected rotor inertia per digit slide"),
+          Table::Number("damping_n_s_m", &C::damping_n_s_m, NumberRule::Between(0.0, kMaxMotorDampingNSM),
+                        "N s/m", "jaw only: viscous friction per digit slide"),
+      });
+  return table;
+}
+
+const common::FieldTable<FingerConfig>& FingerConfigFields() {
+  using Table = common::FieldTable<FingerConfig>;
+  using C = FingerConfig;
+  static const Table table(
+      "finger",
+      {
+          Table::Number("proximal_length_m", &C::proximal_length_m, NumberRule::Between(0.02, 0.07), "m",
+                        "prosthetic index, MCP -> PIP"),
+          Table::Number("middle_length_m", &C::middle_length_m, NumberRule::Between(0.01, 0.05), "m",
+                        "PIP -> DIP (the distal phalanx is the holder, its length from the layout)"),
+          Table::Number("pip_mcp_ratio", &C::pip_mcp_ratio, NumberRule::Between(0.5, 2.0), "-",
+                        "PIP flexion per radian of MCP flexion, fixed by the linkage"),
+          Table::Number("dip_flexion_rad", &C::dip_flexion_rad, NumberRule::Between(0.0, 1.0), "rad",
+                        "fixed DIP flexion"),
+          Table::Number("mcp_rest_angle_rad", &C::mcp_rest_angle_rad, NumberRule::Between(-0.6, 0.6), "rad",
+                        "angle of the proximal phalanx below the palm plane at MCP = 0. With the three "
+                        "above it must leave the pad able to meet a 50 mm object squarely inside the MCP "
+                        "range, else the load fails with `hand.finger: the pad cannot meet an object "
+                        "squarely`"),
+      });
+  return table;
+}
+
+const common::FieldTable<ThumbConfig>& ThumbConfigFields() {
+  using Table = common::FieldTable<ThumbConfig>;
+  using C = ThumbConfig;
+  static const Table table(
+      "thumb",
+      {
+          Table::Number("proximal_length_m", &C::proximal_length_m, NumberRule::Between(0.02, 0.07), "m",
+                        "flexion joint (CMC) -> IP"),
+          Table::Number("distal_length_m", &C::distal_length_m, NumberRule::Between(0.01, 0.05), "m",
+                        "IP -> tip centre"),
+          Table::Number("tip_radius_m", &C::tip_radius_m, NumberRule::Between(0.004, 0.015), "m",
+                        "the rounded, unsensorised tip"),
+          Table::Number("ip_flexion_rad", &C::ip_flexion_rad, NumberRule::Between(0.0, 1.2), "rad",
+                        "fixed interphalangeal flexion"),
+          Table::Number("opposition_rad", &C::opposition_rad, NumberRule::Between(-0.2, 1.7), "rad",
+                        "rotation about the palm normal, held during the run; auto: 0 in a pinch (the thumb "
+                        "flexes in the index's plane)")
+              .NanIsAuto(),
+      });
+  return table;
+}
+
+const common::FieldTable<DigitMotorConfig>& DigitMotorConfigFields() {
+  using Table = common::FieldTable<DigitMotorConfig>;
+  using C = DigitMotorConfig;
+  static const Table table(
+      "digit_motor",
+      {
+          Table::Number("stall_pinch_force_n", &C::stall_pinch_force_n, NumberRule::Between(1.0, 200.0), "N",
+                        "fingertip force of each digit at stall, effort 1, in this object's contact "
+                        "posture: each motor's stall torque is this x the digit's lever arm there (the "
+                        "static pinch is this x effort)"),
+          Table::Number("no_load_speed_rad_s", &C::no_load_speed_rad_s, NumberRule::Between(0.1, 50.0),
+                        "rad/s",
+                        "index MCP speed at effort 1, no load (open to closed in about 1 s); the thumb's is "
+                        "scaled by the lever arms so both contacts close at the same speed"),
+          Table::Number("armature_kg_m2", &C::armature_kg_m2, NumberRule::Between(0.0, 1.0), "kg m^2",
+                        "reflected rotor + gearbox inertia on each driven joint"),
+          Table::Number("damping_n_m_s", &C::damping_n_m_s, NumberRule::Between(0.0, 10.0), "N m s/rad",
+                        "viscous friction on every finger joint (the back-EMF comes on top)"),
+      });
+  return table;
+}
+
+}  // namespace
+
+const common::FieldTable<HandConfig>& HandConfigFields() {
+  using Table = common::FieldTable<HandConfig>;
+  using C = HandConfig;
+  static const Table table(
+      "hand",
+      {
+          Table::Choice("model", &C::model,
+                        {{HandModel::kProsthetic, "prosthetic"}, {HandModel::kJaw, "jaw"}},
+                        "`prosthetic`: index finger flexing at MCP and PIP (linkage), the holder as its "
+                        "distal phalanx, opposable thumb, one DC motor per digit. `jaw`: the slide-joint "
+                        "bench fixture (docs/simulation.md, \"The jaw fixture\")"),
+          Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}},
+                        "the grasp the pre-shape prepares: index fingertip pad against the thumb tip, near "
+                        "the object's top (a box or cylinder 13 mm below its top, a sphere at its equator); "
+                        "the only one built"),
+          Table::Number("open_gap_m", &C::open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM), "m",
+                        "pre-shape aperture between the pad's mesa tops and the thumb's contact point. "
+                        "Unset (auto), it follows the object: its width across the pinch + 2 x "
+                        "`preshape_clearance_m` (65 mm for the 50 mm box), so `--set object.size_m=[w,d,h]` "
+                        "alone re-targets the grasp. Set, it stays whatever the object. A pre-shape wider "
+                        "than the prosthetic hand opens (186.84 mm) is refused")
+              .NanIsAuto()
+              .Note("wider than the object across the pinch"),
+          Table::Number("preshape_clearance_m", &C::preshape_clearance_m, NumberRule::Between(0.0, 0.05), "m",
+                        "clearance on each side of the object in the automatic pre-shape"),
+          Table::Number("palm_mass_kg", &C::palm_mass_kg, NumberRule::Between(kMinPalmMassKg, kMaxPalmMassKg),
+                        "kg", "palm with wrist carriage"),
+          Table::Number("digit_mass_kg", &C::digit_mass_kg,
+                        NumberRule::Between(kMinDigitMassKg, kMaxDigitMassKg), "kg",
+                        "each digit (prosthetic: index 50/25/25 % over its phalanges, thumb 60/40 %)"),
+          Table::Number("friction", &C::friction, {0.0, kMaxFriction, true}, "-",
+                        "hand geoms against geoms without contact priority (the table)"),
+          Table::Numbers("initial_wrist_position_m", &C::initial_wrist_position_m,
+                         NumberRule::Between(-kMaxPositionM, kMaxPositionM), "m",
+                         "wrist start; each auto (unset) entry is chosen from the object: x, y over the "
+                         "object's start, z so that the contacts meet it at the pinch height (prosthetic) or "
+                         "the holder centre is level with the object's centre (jaw)")
+              .NanIsAuto(),
+          Table::Number("wrist_stiffness_n_m", &C::wrist_stiffness_n_m, {0.0, kMaxWristStiffnessNM, true},
+                        "N/m", "wrist position servo per axis"),
+          Table::Number("wrist_damping_n_s_m", &C::wrist_damping_n_s_m,
+                        NumberRule::Between(0.0, kMaxWristDampingNSM), "N s/m", ""),
+          Table::Section("motor", &C::motor, MotorConfigFields()),
+          Table::Section("finger", &C::finger, FingerConfigFields()),
+          Table::Section("thumb", &C::thumb, ThumbConfigFields()),
+          Table::Section("digit_motor", &C::digit_motor, DigitMotorConfigFields()),
+      });
+  return table;
+}
+
+const common::FieldTable<PhysicsConfig>& PhysicsConfigFields() {
+  using Table = common::FieldTable<PhysicsConfig>;
+  using C = PhysicsConfig;
+  static const Table table(
+      "physics",
+      {
+          Table::Number("timestep_s", &C::timestep_s, NumberRule::Between(kMinTimestepS, kMaxTimestepS), "s",
+                        "physics step"),
+          Table::Bool("elliptic_cones", &C::elliptic_cones,
+                      "elliptic friction cones; pyramidal cones drop held objects (docs/simulation.md)"),
+          Table::Number(
+              "impratio", &C::impratio, NumberRule::Between(1.0, kMaxImpratio), "-",
+              "friction-to-normal impedance ratio; 1000 keeps soft-contact creep near 1 um/s without noslip"),
+          Table::Integer(
+              "noslip_iterations", &C::noslip_iterations, 0, kMaxNoslipIterations, "",
+              "post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step)"),
+          Table::Integer("solver_iterations", &C::solver_iterations, 1, kMaxSolverIterations, "",
+                         "Newton iterations"),
+          Table::Number("tolerance", &C::tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance), "-",
+                        "solver tolerance"),
+          Table::Integer("condim", &C::condim, 3, 6, "", "object contact dimensionality").Note("not 5"),
+          Table::Number("gravity_m_s2", &C::gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2), "m/s^2",
+                        "along -z; 0 = off"),
+          Table::Bool("table", &C::table, "include the table (off for free-floating tests)"),
+      },
+      [](const C& p) {
+        if (p.condim != 3 && p.condim != 4 && p.condim != 6) Bad("condim", p.condim, "must be 3, 4 or 6");
+      });
+  return table;
+}
+
+const common::FieldTable<SceneConfig>& SceneConfigFields() {
+  using Table = common::FieldTable<SceneConfig>;
+  using C = SceneConfig;
+  static const Table table(
+      "scene",
+      {
+          Table::Section("object", &C::object, ObjectConfigFields()),
+          Table::Section("hand", &C::hand, HandConfigFields()),
+          Table::Section("physics", &C::physics, PhysicsConfigFields()),
+      },
+      [](const C& scene) {
+        if (scene.object.solref_timeconst_s < 2.0 * scene.physics.timestep_s) {
+          Bad("object.solref_timeconst_s", scene.object.solref_timeconst_s,
+              "must be >= 2 x physics.timestep_s");
+        }
+        if (scene.OpenGapM() <= scene.ObjectWidthM()) {
+          Bad("hand.open_gap_m", scene.OpenGapM(),
+              "the pre-shape must be wider than the object (object.size_m across the grasp: " +
+                  std::to_string(scene.ObjectWidthM()) + " m)");
+        }
+      });
+  return table;
+}
+
+void SceneConfig::Validate() const { SceneConfigFields().Validate(*this); }
+
 SceneConfig LoadSceneConfig(const common::YamlMap& map) {
-  using common::NumberRule;
   SceneConfig scene;
-  if (auto object = map.GetMap("object")) {
-    ObjectConfig& o = scene.object;
-    o.shape = ParseShape(object->GetString("shape", ToString(o.shape), {"box", "cylinder", "sphere"}));
-    o.size_m = GetTriple(*object, "size_m", o.size_m, NumberRule::Between(0.0, kMaxObjectSizeM));
-    o.mass_kg =
-        object->GetNumber("mass_kg", o.mass_kg, NumberRule::Between(kMinObjectMassKg, kMaxObjectMassKg));
-    o.friction = object->GetNumber("friction", o.friction, {0.0, kMaxFriction, true});
-    o.torsional_friction = object->GetNumber("torsional_friction", o.torsional_friction,
-                                             NumberRule::Between(0.0, kMaxTorsionalFrictionM));
-    o.solref_timeconst_s =
-        object->GetNumber("solref_timeconst_s", o.solref_timeconst_s, {0.0, kMaxSolrefTimeconstS, true});
-    o.solref_dampratio =
-        object->GetNumber("solref_dampratio", o.solref_dampratio, {0.0, kMaxSolrefDampratio, true});
-    const std::vector<double> solimp =
-        object->GetNumberList("solimp", std::vector<double>(o.solimp.begin(), o.solimp.end()), 5,
-                              NumberRule::Between(0.0, kMaxSolimpPower));
-    for (int i = 0; i < 5; ++i) o.solimp[i] = solimp[i];
-    o.initial_position_m = GetTriple(*object, "initial_position_m", o.initial_position_m,
-                                     NumberRule::Between(-kMaxPositionM, kMaxPositionM));
-    o.initial_yaw_rad =
-        object->GetNumber("initial_yaw_rad", o.initial_yaw_rad, NumberRule::Between(-kMaxYawRad, kMaxYawRad));
-    o.crush_limit_n =
-        object->GetNumber("crush_limit_n", o.crush_limit_n, NumberRule::Between(0.0, kMaxForceN));
-    object->RejectUnknownKeys();
-  }
-  if (auto hand = map.GetMap("hand")) {
-    HandConfig& h = scene.hand;
-    h.model = ParseHandModel(hand->GetString("model", ToString(h.model), {"prosthetic", "jaw"}));
-    h.grasp = ParseGrasp(hand->GetString("grasp", ToString(h.grasp), {"pinch"}));
-    h.open_gap_m =
-        hand->GetNumber("open_gap_m", h.open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM));
-    h.preshape_clearance_m =
-        hand->GetNumber("preshape_clearance_m", h.preshape_clearance_m, NumberRule::Between(0.0, 0.05));
-    h.palm_mass_kg =
-        hand->GetNumber("palm_mass_kg", h.palm_mass_kg, NumberRule::Between(kMinPalmMassKg, kMaxPalmMassKg));
-    h.digit_mass_kg = hand->GetNumber("digit_mass_kg", h.digit_mass_kg,
-                                      NumberRule::Between(kMinDigitMassKg, kMaxDigitMassKg));
-    h.friction = hand->GetNumber("friction", h.friction, {0.0, kMaxFriction, true});
-    h.initial_wrist_position_m = GetTriple(*hand, "initial_wrist_position_m", h.initial_wrist_position_m,
-                                           NumberRule::Between(-kMaxPositionM, kMaxPositionM));
-    h.wrist_stiffness_n_m =
-        hand->GetNumber("wrist_stiffness_n_m", h.wrist_stiffness_n_m, {0.0, kMaxWristStiffnessNM, true});
-    h.wrist_damping_n_s_m = hand->GetNumber("wrist_damping_n_s_m", h.wrist_damping_n_s_m,
-                                            NumberRule::Between(0.0, kMaxWristDampingNSM));
-    if (auto motor = hand->GetMap("motor")) {
-      MotorConfig& m = h.motor;
-      m.stall_force_n = motor->GetNumber("stall_force_n", m.stall_force_n, {0.0, kMaxStallForceN, true});
-      m.no_load_speed_m_s =
-          motor->GetNumber("no_load_speed_m_s", m.no_load_speed_m_s, {0.0, kMaxDigitSpeedMS, true});
-      m.armature_kg =
-          motor->GetNumber("armature_kg", m.armature_kg, NumberRule::Between(0.0, kMaxArmatureKg));
-      m.damping_n_s_m =
-          motor->GetNumber("damping_n_s_m", m.damping_n_s_m, NumberRule::Between(0.0, kMaxMotorDampingNSM));
-      motor->RejectUnknownKeys();
-    }
-    if (auto finger = hand->GetMap("finger")) {
-      FingerConfig& f = h.finger;
-      f.proximal_length_m =
-          finger->GetNumber("proximal_length_m", f.proximal_length_m, NumberRule::Between(0.02, 0.07));
-      f.middle_length_m =
-          finger->GetNumber("middle_length_m", f.middle_length_m, NumberRule::Between(0.01, 0.05));
-      f.pip_mcp_ratio = finger->GetNumber("pip_mcp_ratio", f.pip_mcp_ratio, NumberRule::Between(0.5, 2.0));
-      f.dip_flexion_rad =
-          finger->GetNumber("dip_flexion_rad", f.dip_flexion_rad, NumberRule::Between(0.0, 1.0));
-      f.mcp_rest_angle_rad =
-          finger->GetNumber("mcp_rest_angle_rad", f.mcp_rest_angle_rad, NumberRule::Between(-0.6, 0.6));
-      finger->RejectUnknownKeys();
-    }
-    if (auto thumb = hand->GetMap("thumb")) {
-      ThumbConfig& t = h.thumb;
-      t.proximal_length_m =
-          thumb->GetNumber("proximal_length_m", t.proximal_length_m, NumberRule::Between(0.02, 0.07));
-      t.distal_length_m =
-          thumb->GetNumber("distal_length_m", t.distal_length_m, NumberRule::Between(0.01, 0.05));
-      t.tip_radius_m = thumb->GetNumber("tip_radius_m", t.tip_radius_m, NumberRule::Between(0.004, 0.015));
-      t.ip_flexion_rad = thumb->GetNumber("ip_flexion_rad", t.ip_flexion_rad, NumberRule::Between(0.0, 1.2));
-      t.opposition_rad = thumb->GetNumber("opposition_rad", t.opposition_rad, NumberRule::Between(-0.2, 1.7));
-      thumb->RejectUnknownKeys();
-    }
-    if (auto motor = hand->GetMap("digit_motor")) {
-      DigitMotorConfig& m = h.digit_motor;
-      m.stall_pinch_force_n =
-          motor->GetNumber("stall_pinch_force_n", m.stall_pinch_force_n, NumberRule::Between(1.0, 200.0));
-      m.no_load_speed_rad_s =
-          motor->GetNumber("no_load_speed_rad_s", m.no_load_speed_rad_s, NumberRule::Between(0.1, 50.0));
-      m.armature_kg_m2 = motor->GetNumber("armature_kg_m2", m.armature_kg_m2, NumberRule::Between(0.0, 1.0));
-      m.damping_n_m_s = motor->GetNumber("damping_n_m_s", m.damping_n_m_s, NumberRule::Between(0.0, 10.0));
-      motor->RejectUnknownKeys();
-    }
-    hand->RejectUnknownKeys();
-  }
-  if (auto physics = map.GetMap("physics")) {
-    PhysicsConfig& p = scene.physics;
-    p.timestep_s =
-        physics->GetNumber("timestep_s", p.timestep_s, NumberRule::Between(kMinTimestepS, kMaxTimestepS));
-    p.elliptic_cones = physics->GetBool("elliptic_cones", p.elliptic_cones);
-    p.impratio = physics->GetNumber("impratio", p.impratio, NumberRule::Between(1.0, kMaxImpratio));
-    p.noslip_iterations = physics->GetInt("noslip_iterations", p.noslip_iterations, 0, kMaxNoslipIterations);
-    p.solver_iterations = physics->GetInt("solver_iterations", p.solver_iterations, 1, kMaxSolverIterations);
-    p.tolerance =
-        physics->GetNumber("tolerance", p.tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance));
-    p.condim = physics->GetInt("condim", p.condim, 3, 6);
-    if (p.condim == 5) physics->Fail("condim", "must be 3, 4 or 6");
-    p.gravity_m_s2 =
-        physics->GetNumber("gravity_m_s2", p.gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2));
-    p.table = physics->GetBool("table", p.table);
-    physics->RejectUnknownKeys();
-  }
-  map.RejectUnknownKeys();
-  // Cross-field rules (time constant vs timestep) are checked here with the file name in front.
-  try {
-    scene.Validate();
-  } catch (const std::invalid_argument& error) {
-    throw common::ConfigError(map.file() + ": " + error.what());
-  }
+  SceneConfigFields().Load(map, &scene);
   return scene;
 }
 

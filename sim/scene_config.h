@@ -12,6 +12,7 @@
 #include <limits>
 #include <string>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 
 namespace graspbed::sim {
@@ -226,14 +227,25 @@ struct SceneConfig {
   /// Thumb opposition in use [rad].
   double ThumbOppositionRad() const;
 
-  /// Throws std::invalid_argument naming the field and value.
+  /// Checks every field against SceneConfigFields() and the cross-field rules (time constant vs
+  /// timestep, pre-shape wider than the object).
+  /// @throws common::ConfigError "scene.SECTION.KEY = VALUE: reason".
   void Validate() const;
 };
 
+/// The field tables of the scene's sections (loader, Validate(), emitter and reference tables
+/// derive from them); SceneConfigFields() holds object, hand and physics as sections.
+const common::FieldTable<ObjectConfig>& ObjectConfigFields();
+const common::FieldTable<HandConfig>& HandConfigFields();
+const common::FieldTable<PhysicsConfig>& PhysicsConfigFields();
+const common::FieldTable<SceneConfig>& SceneConfigFields();
+
 /// Reads a SceneConfig from a YAML map with optional sections object / hand (with motor) / physics;
 /// unknown keys are refused. Lengths in the file are in metres (keys end in _m).
+/// @throws common::ConfigError naming file, line, key and value.
 SceneConfig LoadSceneConfig(const common::YamlMap& map);
 /// Loads a scene file (top-level map as above).
+/// @throws common::ConfigError as LoadSceneConfig, or when the file cannot be read.
 SceneConfig LoadSceneConfigFile(const std::string& path);
 
 }  // namespace graspbed::sim

@@ -15,37 +15,39 @@ constexpr double kTimeSlackPeriods = 1e-6;
 
 }  // namespace
 
+const common::FieldTable<SimBackendConfig>& SimBackendConfigFields() {
+  using Table = common::FieldTable<SimBackendConfig>;
+  using C = SimBackendConfig;
+  using common::NumberRule;
+  static const Table table(
+      "sim_backend",
+      {
+          Table::Number("sample_rate_hz", &C::sample_rate_hz, NumberRule::Between(1.0, 100000.0), "Hz",
+                        "frames per second of simulated time"),
+          Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, 10.0), "s",
+                        "sample -> available to Read()"),
+          Table::Number("drop_probability", &C::drop_probability, NumberRule::Between(0.0, 1.0), "-",
+                        "chance a sampled frame is lost (seeded)"),
+          Table::Custom("strain_model", "", "ideal paper unit", "section", "the strain model's config"),
+      },
+      [](const C& c) {
+        // Set by the runner from the script (add_latency), never read from a file.
+        common::Require(c.max_latency_s >= 0.0 && c.max_latency_s <= 10.0, "max_latency_s", c.max_latency_s,
+                        "must be in [0, 10]");
+      });
+  return table;
+}
+
 void SimBackendConfig::Validate() const {
-  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw std::invalid_argument("sim backend sample_rate_hz = " + std::to_string(sample_rate_hz) +
-                                ": must be > 0");
-  }
-  if (!(latency_s >= 0.0) || latency_s > 10.0) {
-    throw std::invalid_argument("sim backend latency_s = " + std::to_string(latency_s) +
-                                ": must be in [0, 10]");
-  }
-  if (!(max_latency_s >= 0.0) || max_latency_s > 10.0) {
-    throw std::invalid_argument("sim backend max_latency_s = " + std::to_string(max_latency_s) +
-                                ": must be in [0, 10]");
-  }
-  if (!(drop_probability >= 0.0 && drop_probability <= 1.0)) {
-    throw std::invalid_argument("sim backend drop_probability = " + std::to_string(drop_probability) +
-                                ": must be in [0, 1]");
-  }
+  SimBackendConfigFields().Validate(*this);
   strain_model.Validate();
 }
 
 SimBackendConfig LoadSimBackendConfig(const common::YamlMap& map, int unit_count) {
-  using common::NumberRule;
   SimBackendConfig config;
-  config.sample_rate_hz =
-      map.GetNumber("sample_rate_hz", config.sample_rate_hz, NumberRule::Between(1.0, 100000.0));
-  config.latency_s = map.GetNumber("latency_s", config.latency_s, NumberRule::Between(0.0, 10.0));
-  config.drop_probability =
-      map.GetNumber("drop_probability", config.drop_probability, NumberRule::Between(0.0, 1.0));
+  SimBackendConfigFields().Load(map, &config);
   if (auto strain = map.GetMap("strain_model"))
     config.strain_model = sensor::LoadStrainModelConfig(*strain, unit_count);
-  map.RejectUnknownKeys();
   return config;
 }
 

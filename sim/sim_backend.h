@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "sensor/raw_frame.h"
 #include "sensor/strain_model.h"
@@ -35,11 +36,17 @@ struct SimBackendConfig {
   double drop_probability = 0.0;
   sensor::StrainModelConfig strain_model;
 
-  /// Throws std::invalid_argument naming the field and value.
+  /// Checks the fields against SimBackendConfigFields() and the strain model.
+  /// @throws common::ConfigError naming the field and value.
   void Validate() const;
 };
 
+/// The fields of SimBackendConfig (loader and Validate() derive from it; max_latency_s is set by
+/// the runner and only validated).
+const common::FieldTable<SimBackendConfig>& SimBackendConfigFields();
+
 /// Reads a SimBackendConfig (keys sample_rate_hz, latency_s, drop_probability, strain_model).
+/// @throws common::ConfigError naming file, line, key and value.
 SimBackendConfig LoadSimBackendConfig(const common::YamlMap& map, int unit_count);
 
 /// The simulated tactile backend. Holds a reference to the Simulation, which must outlive it.

@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include "common/config_error.h"
 #include "sim/scene_check.h"
 
 namespace graspbed::sim {
@@ -13,9 +14,8 @@ void SimRigConfig::Validate() const {
   scene.Validate();
   backend.Validate();
   loop.Validate();
-  if (!(control_rate_hz > 0.0) || !std::isfinite(control_rate_hz)) {
-    throw std::invalid_argument("control_rate_hz = " + std::to_string(control_rate_hz) + ": must be > 0");
-  }
+  common::Require(control_rate_hz > 0.0 && std::isfinite(control_rate_hz), "control_rate_hz", control_rate_hz,
+                  "must be > 0");
 }
 
 SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibration,

@@ -25,7 +25,7 @@ struct SimRigConfig {
   double control_rate_hz = 1000.0;  ///< ControlLoop::Tick() rate on the simulated clock [Hz]
   uint64_t seed = 1;                ///< seeds the sensor model and frame drops
 
-  /// Throws std::invalid_argument naming the field and value.
+  /// @throws common::ConfigError naming the field (key path) and value.
   void Validate() const;
 };
 

@@ -7,9 +7,9 @@
 /// brace feet). The frame is an inverted U: two braces standing on fixed feet carry the beam, whose
 /// underside holds the gauge; the mesa sits on top of the beam centre and takes the load.
 
-#include <optional>
 #include <string>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 
 namespace graspbed::fea {
@@ -72,27 +72,24 @@ struct FeaConfig {
   LoadConfig load;
   ReferenceConfig reference;
 
-  /// Throws std::invalid_argument "key = value: reason" for the first problem FindConfigIssue finds.
+  /// Checks every field against FeaConfigFields() and the geometry and mesh cross-checks
+  /// (braces that leave no span, a mesa or resistor outside the span, a mesh too coarse to put one
+  /// element through the beam's thickness or so fine it would not fit in memory).
+  /// @throws common::ConfigError "key = value: reason" (key from the file's top, e.g.
+  ///   "mesh.element_size_mm") for the first problem.
   void Validate() const;
 };
 
-/// One problem found in a config: the dotted key at fault (e.g. "mesh.element_size_mm"), its value
-/// and why it is refused.
-struct ConfigIssue {
-  std::string key;
-  double value = 0.0;
-  std::string message;
-};
+/// The fields of FeaConfig, its sections and cross-checks: the loader, Validate() and the report's
+/// fea_config_used.yaml derive from it.
+const common::FieldTable<FeaConfig>& FeaConfigFields();
 
-/// First problem with `config`, or none: non-positive sizes, braces that leave no span, a mesa or
-/// resistor outside the span, a mesh too coarse to put one element through the beam's thickness or
-/// so fine it would not fit in memory, a bad sweep.
-std::optional<ConfigIssue> FindConfigIssue(const FeaConfig& config);
-
-/// Reads a config from YAML (every key optional, defaults as above, unknown keys refused). Errors,
-/// including FindConfigIssue's cross-checks, name the file, line, key and value.
+/// Reads a config from YAML (every key optional, defaults as above, unknown keys refused).
+/// @throws common::ConfigError naming the file, line, key and value, the cross-checks included
+///   (a check on a key the file leaves at its default names no line and marks the value "(default)").
 FeaConfig FeaConfigFromYaml(const common::YamlMap& root);
-/// Loads and validates the YAML file at `path`; throws common::ConfigError.
+/// Loads and validates the YAML file at `path`.
+/// @throws common::ConfigError as FeaConfigFromYaml, or when the file cannot be read.
 FeaConfig LoadFeaConfig(const std::string& path);
 /// Path of the shipped default config, sensor/fea/unit_fea.yaml under common::DataDir().
 std::string DefaultFeaConfigPath();

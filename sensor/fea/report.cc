@@ -168,35 +168,7 @@ std::string SummaryJson(const FeaResults& results, const FeaConfig& config) {
   return json.dump(2) + "\n";
 }
 
-std::string ConfigYaml(const FeaConfig& config) {
-  std::ostringstream out;
-  out << std::setprecision(12);
-  const MaterialConfig& m = config.material;
-  const GeometryConfig& g = config.geometry;
-  out << "material:\n"
-      << "  youngs_modulus_gpa: " << m.youngs_modulus_gpa << "\n"
-      << "  poisson_ratio: " << m.poisson_ratio << "\n"
-      << "geometry:\n"
-      << "  beam_length_mm: " << g.beam_length_mm << "\n"
-      << "  beam_thickness_mm: " << g.beam_thickness_mm << "\n"
-      << "  width_mm: " << g.width_mm << "\n"
-      << "  brace_thickness_mm: " << g.brace_thickness_mm << "\n"
-      << "  brace_height_mm: " << g.brace_height_mm << "\n"
-      << "  mesa_length_mm: " << g.mesa_length_mm << "\n"
-      << "  mesa_height_mm: " << g.mesa_height_mm << "\n"
-      << "mesh:\n"
-      << "  element_size_mm: " << config.mesh.element_size_mm << "\n"
-      << "gauge:\n"
-      << "  r1: {start_mm: " << config.gauge.r1.start_mm << ", end_mm: " << config.gauge.r1.end_mm << "}\n"
-      << "  r2: {start_mm: " << config.gauge.r2.start_mm << ", end_mm: " << config.gauge.r2.end_mm << "}\n"
-      << "load:\n"
-      << "  max_force_n: " << config.load.max_force_n << "\n"
-      << "  steps: " << config.load.steps << "\n"
-      << "reference:\n"
-      << "  kn_per_n: " << config.reference.kn_per_n << "\n"
-      << "  kt_per_n: " << config.reference.kt_per_n << "\n";
-  return out.str();
-}
+std::string ConfigYaml(const FeaConfig& config) { return FeaConfigFields().EmitYaml(config); }
 
 std::vector<std::string> WriteReport(const FeaResults& results, const FeaConfig& config,
                                      const std::string& directory) {

@@ -21,6 +21,7 @@ namespace graspbed::scenario {
 namespace {
 
 using common::ConfigError;
+using common::FormatNumber;
 using common::NumberRule;
 using common::YamlMap;
 
@@ -76,14 +77,6 @@ ScriptEvent EventFromName(const std::string& name) {
     if (name == entry.name) return entry.event;
   }
   throw std::logic_error("unvalidated event name " + name);
-}
-
-std::string FormatDouble(double value) {
-  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  if (std::isnan(value)) return ".nan";
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
 }
 
 std::string FileStem(const std::string& path) {
@@ -226,74 +219,39 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
   return action;
 }
 
-std::optional<double> OptionalNumber(const YamlMap& map, std::string_view key, NumberRule rule) {
-  if (!map.Has(key)) {
-    map.GetNumber(key, 0.0);  // marks the key as valid for RejectUnknownKeys
-    return std::nullopt;
-  }
-  return map.GetNumber(key, 0.0, rule);
-}
-
-std::optional<bool> OptionalBool(const YamlMap& map, std::string_view key) {
-  if (!map.Has(key)) {
-    map.GetBool(key, false);
-    return std::nullopt;
-  }
-  return map.GetBool(key, false);
-}
-
 Expectations LoadExpectations(const YamlMap& map, const ScenarioConfig& config) {
   Expectations e;
-  e.not_dropped = OptionalBool(map, "not_dropped");
-  e.max_slip_mm = OptionalNumber(map, "max_slip_mm", NumberRule::NonNegative());
-  e.max_peak_grip_n = OptionalNumber(map, "max_peak_grip_n", NumberRule::Positive());
-  e.not_crushed = OptionalBool(map, "not_crushed");
+  ExpectationsFields().Load(map, &e);
+  // Needs the scene: the one rule the table cannot state.
   if (e.not_crushed.value_or(false) && config.scene.object.crush_limit_n <= 0.0) {
     map.Fail("not_crushed", "needs object.crush_limit_n > 0 (the object is not fragile)");
   }
-  e.slip_detected_within_ms = OptionalNumber(map, "slip_detected_within_ms", NumberRule::NonNegative());
-  e.max_estimation_error_n = OptionalNumber(map, "max_estimation_error_n", NumberRule::NonNegative());
-  e.stable_within_s = OptionalNumber(map, "stable_within_s", NumberRule::NonNegative());
-  e.max_false_slip_per_min = OptionalNumber(map, "max_false_slip_per_min", NumberRule::NonNegative());
-  map.RejectUnknownKeys();
   return e;
 }
 
 MetricsConfig LoadMetricsConfig(const YamlMap& map) {
   MetricsConfig m;
-  m.creep_speed_m_s = map.GetNumber("creep_speed_m_s", m.creep_speed_m_s, {0.0, kMaxSpeedMS, true});
-  m.slip_speed_m_s = map.GetNumber("slip_speed_m_s", m.slip_speed_m_s, {0.0, kMaxSpeedMS, true});
+  MetricsConfigFields().Load(map, &m);
+  // The one cross-field rule, checked here rather than in the table: the message names the key the
+  // file actually set (an absent one would print its default).
   if (m.slip_speed_m_s < m.creep_speed_m_s) {
-    // Name the key the file actually set: an absent one would print as "= null".
-    char limit[64];
     if (map.Has("slip_speed_m_s")) {
-      std::snprintf(limit, sizeof(limit), "%g", m.creep_speed_m_s);
-      map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s (" + std::string(limit) + ")");
+      map.Fail("slip_speed_m_s", "must be >= creep_speed_m_s (" + FormatNumber(m.creep_speed_m_s) + ")");
     }
-    std::snprintf(limit, sizeof(limit), "%g", m.slip_speed_m_s);
-    map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + std::string(limit) + ")");
+    map.Fail("creep_speed_m_s", "must be <= slip_speed_m_s (default " + FormatNumber(m.slip_speed_m_s) + ")");
   }
-  m.slip_event_gap_s = map.GetNumber("slip_event_gap_s", m.slip_event_gap_s, kDuration);
-  m.early_detection_window_s =
-      map.GetNumber("early_detection_window_s", m.early_detection_window_s, kDuration);
-  m.grasp_force_n = map.GetNumber("grasp_force_n", m.grasp_force_n, {0.0, sim::kMaxForceN, true});
-  m.seating_s = map.GetNumber("seating_s", m.seating_s, kDuration);
-  m.drop_distance_m = map.GetNumber("drop_distance_m", m.drop_distance_m, {0.0, sim::kMaxPositionM, true});
-  m.stable_window_s = map.GetNumber("stable_window_s", m.stable_window_s, kPositiveDuration);
-  m.stable_force_band = map.GetNumber("stable_force_band", m.stable_force_band, NumberRule{0.0, 1.0, true});
-  map.RejectUnknownKeys();
   return m;
 }
 
-// Wraps a std::invalid_argument from a loader that only knows field names into a file:line message.
+// A check that runs after loading (ScenarioConfig::Validate) throws ConfigError with a key path
+// relative to `map`; this puts it at that key's line in the file.
 template <typename Fn>
 void AtMap(const YamlMap& map, Fn&& fn) {
   try {
     fn();
-  } catch (const ConfigError&) {
-    throw;
-  } catch (const std::invalid_argument& error) {
-    map.FailHere(error.what());
+  } catch (const ConfigError& error) {
+    if (!error.file().empty()) throw;
+    map.FailAt(error);
   }
 }
 
@@ -308,7 +266,9 @@ bool IsShippedLayout(const std::string& name) {
 
 SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_file, int* unit_count) {
   SensorOptions s;
-  s.layout = map.GetString("layout", s.layout);
+  // The plain fields (numbers, names, paths as written); the paths, the profile and the three
+  // sections are resolved below.
+  SensorOptionsFields().Load(map, &s);
   if (!IsShippedLayout(s.layout)) {
     std::filesystem::path path(s.layout);
     if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
@@ -321,16 +281,11 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   }
   const std::string layout_path = IsShippedLayout(s.layout) ? ShippedLayoutPath(s.layout) : s.layout;
   *unit_count = sensor::LoadLayout(layout_path).unit_count();
-  s.sample_rate_hz = map.GetNumber("sample_rate_hz", s.sample_rate_hz, NumberRule::Between(1.0, kMaxRateHz));
-  s.latency_s = map.GetNumber("latency_s", s.latency_s, NumberRule::Between(0.0, 1.0));
-  s.drop_probability = map.GetNumber("drop_probability", s.drop_probability, NumberRule::Between(0.0, 1.0));
   // Nominal constants first (explicit keys, then the FEA's kn and kt), then the profile resolved
   // against them, then every explicit key again on top of the profile.
   if (auto sub = map.GetMap("strain_model")) {
     s.strain_model = sensor::LoadStrainModelConfig(*sub, *unit_count);
   }
-  s.sensitivities = map.GetString("sensitivities", s.sensitivities, {"paper", "fea"});
-  s.fea_config = map.GetString("fea_config", s.fea_config);
   if (!s.fea_config.empty()) {
     std::filesystem::path path(s.fea_config);
     if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
@@ -357,7 +312,6 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     s.strain_model.nominal.kn_per_n = analysed.kn_per_n;
     s.strain_model.nominal.kt_per_n = analysed.kt_per_n;
   }
-  s.profile = map.GetString("profile", s.profile, sensor::SensorProfileNames());
   const sensor::SensorProfile& profile = sensor::FindSensorProfile(s.profile);
   sensor::ReadoutConfig readout_defaults;
   if (!profile.ideal) {
@@ -380,11 +334,134 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     s.readout = readout_defaults;
   }
   if (auto sub = map.GetMap("inversion")) s.inversion = sensor::LoadInversionConfig(*sub);
-  map.RejectUnknownKeys();
   return s;
 }
 
 }  // namespace
+
+const common::FieldTable<Expectations>& ExpectationsFields() {
+  using Table = common::FieldTable<Expectations>;
+  using C = Expectations;
+  static const Table table(
+      "expectations",
+      {
+          Table::OptionalBool("not_dropped", &C::not_dropped,
+                              "passes when `true`: the object was grasped and never left the hand while held "
+                              "(`false` asks for a drop)"),
+          Table::OptionalNumber("max_slip_mm", &C::max_slip_mm, NumberRule::NonNegative(), "mm",
+                                "passes when `max_slip_mm` <= limit"),
+          Table::OptionalNumber("max_peak_grip_n", &C::max_peak_grip_n, NumberRule::Positive(), "N",
+                                "passes when `peak_grip_n` <= limit"),
+          Table::OptionalBool("not_crushed", &C::not_crushed, "passes when `peak_grip_n` <= crush limit")
+              .Note("true needs `object.crush_limit_n` > 0"),
+          Table::OptionalNumber(
+              "slip_detected_within_ms", &C::slip_detected_within_ms, NumberRule::NonNegative(), "ms",
+              "passes when every slip event was flagged by the controller, the latest within the limit; no "
+              "slip event at all passes (note \"no slip event occurred\")"),
+          Table::OptionalNumber(
+              "max_estimation_error_n", &C::max_estimation_error_n, NumberRule::NonNegative(), "N",
+              "passes when max(`fn_rmse_n`, `ft_rmse_n`) <= limit; fails when no unit was ever in contact"),
+          Table::OptionalNumber("stable_within_s", &C::stable_within_s, NumberRule::NonNegative(), "s",
+                                "passes when `time_to_stable_s` exists and <= limit"),
+          Table::OptionalNumber("max_false_slip_per_min", &C::max_false_slip_per_min,
+                                NumberRule::NonNegative(), "1/min",
+                                "passes when `false_slip_per_min` <= limit"),
+      });
+  return table;
+}
+
+const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
+  using Table = common::FieldTable<MetricsConfig>;
+  using C = MetricsConfig;
+  static const Table table(
+      "metrics",
+      {
+          Table::Number("creep_speed_m_s", &C::creep_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
+                        "relative object/fingertip speed below which motion is soft-contact creep, not slip"),
+          Table::Number("slip_speed_m_s", &C::slip_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
+                        "relative speed above which a slip event starts")
+              .Note(">= `creep_speed_m_s`"),
+          Table::Number("slip_event_gap_s", &C::slip_event_gap_s, kDuration, "s",
+                        "a slip event ends after the speed stays below slip_speed_m_s this long"),
+          Table::Number("early_detection_window_s", &C::early_detection_window_s, kDuration, "s",
+                        "a controller slip flag up to this long before a ground-truth onset detects it"),
+          Table::Number("grasp_force_n", &C::grasp_force_n, {0.0, sim::kMaxForceN, true}, "N",
+                        "finger normal force above which the object counts as grasped"),
+          Table::Number("seating_s", &C::seating_s, kDuration, "s",
+                        "after a grasp is established the pads settle this long: motion opens no slip "
+                        "event, flags are not false"),
+          Table::Number("drop_distance_m", &C::drop_distance_m, {0.0, sim::kMaxPositionM, true}, "m",
+                        "object displacement relative to the wrist, from where it was grasped, that counts "
+                        "as dropped"),
+          Table::Number("stable_window_s", &C::stable_window_s, kPositiveDuration, "s",
+                        "stable grasp: no slip event and the squeeze within the band over this window"),
+          Table::Number("stable_force_band", &C::stable_force_band, {0.0, 1.0, true}, "-",
+                        "relative band for the stable squeeze"),
+      });
+  return table;
+}
+
+const common::FieldTable<SensorOptions>& SensorOptionsFields() {
+  using Table = common::FieldTable<SensorOptions>;
+  using C = SensorOptions;
+  static const Table table(
+      "sensor",
+      {
+          Table::Text("layout", &C::layout, {}, "sensing units; unit indices in actions refer to it")
+              .Note("`default_20`, `paper_3x3` or a layout file path (relative to the scenario file)"),
+          Table::Number("sample_rate_hz", &C::sample_rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
+                        "sensor frames per second"),
+          Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, kMaxLatencyS), "s",
+                        "sampling to delivery")
+              .Note("with the `add_latency` actions at most 1 in total"),
+          Table::Number("drop_probability", &C::drop_probability, NumberRule::Between(0.0, 1.0), "-",
+                        "chance each frame is lost on the link (seeded)"),
+          Table::Text(
+              "sensitivities", &C::sensitivities, {"paper", "fea"},
+              "where kn, kt come from: `strain_model.kn_per_n/kt_per_n`, or graspbed's FEA of the unit "
+              "(docs/fea.md; setting `kn_per_n`/`kt_per_n` as well is refused; the resolved "
+              "config.yaml shows the analysed values as a comment). The host's inversion uses the "
+              "same nominal constants"),
+          Table::Text("fea_config", &C::fea_config, {},
+                      "FEA config for `sensitivities: fea` (relative to the scenario file); \"\" = the "
+                      "shipped unit"),
+          Table::Text("profile", &C::profile, sensor::SensorProfileNames(),
+                      "a whole readout chain (docs/sensor.md, \"Sensor profiles\"), resolved against the "
+                      "sensitivities above; it sets `strain_model` and `readout` values, keys given there "
+                      "explicitly override it"),
+          Table::Custom("strain_model", "", "ideal paper unit", "section", "below"),
+          Table::Custom("readout", "", "the profile's", "section", "below"),
+          Table::Custom("inversion", "", "paper unit", "section", "below"),
+      });
+  return table;
+}
+
+const common::FieldTable<ControllerOptions>& ControllerOptionsFields() {
+  using Table = common::FieldTable<ControllerOptions>;
+  using C = ControllerOptions;
+  static const Table table(
+      "controller",
+      {
+          Table::Custom("name", "", "`open_loop`", "`open_loop`, `grip_slip`, or `plugin:LIBRARY`",
+                        "the controller under test (docs/controllers.md for plugins)"),
+          Table::Custom("plugin", "", "none",
+                        "a library path (relative to this file) or a bare name on the plugin "
+                        "search path",
+                        "the same as `name: plugin:LIBRARY`; not together with `name`"),
+          Table::Custom("params", "", "the controller's defaults",
+                        "the controller's declared parameters and ranges",
+                        "`open_loop`: `close_effort` 0.5, `open_effort` 0.5 (0 .. 1); `grip_slip`: "
+                        "docs/controller.md, \"Parameters\""),
+          Table::Number("grip_ceiling_n", &C::grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN), "N",
+                        "task grip ceiling handed to the controller (fragile objects); 0 = none"),
+          Table::Number("rate_hz", &C::rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
+                        "control ticks per second"),
+          Table::Number("stale_timeout_s", &C::stale_timeout_s, {0.0, kMaxStaleTimeoutS, true}, "s",
+                        "no frame for this long: state stale, the controller holds")
+              .Note(">= 1 / `sensor.sample_rate_hz`"),
+      });
+  return table;
+}
 
 ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& default_name) {
   ControllerOptions c;
@@ -420,15 +497,18 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
           params->GetNumber(key, match->default_value, NumberRule::Between(match->min, match->max));
     }
   }
-  c.grip_ceiling_n =
-      map.GetNumber("grip_ceiling_n", c.grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN));
-  c.rate_hz = map.GetNumber("rate_hz", c.rate_hz, NumberRule::Between(1.0, kMaxRateHz));
-  c.stale_timeout_s = map.GetNumber("stale_timeout_s", c.stale_timeout_s, {0.0, kMaxStaleTimeoutS, true});
-  map.RejectUnknownKeys();
+  ControllerOptionsFields().Load(map, &c);
   // Each value is in its range; what is left are the controller's cross-field checks (e.g. min_grip_n
-  // <= max_grip_n). Build it once and blame the parameter its message names.
+  // <= max_grip_n). Build it once and blame the parameter the error names: as data when the
+  // controller throws a ConfigError keyed by the parameter, else (controllers that throw a plain
+  // std::invalid_argument, as grip_slip does today) the parameter its message names.
   try {
     controller::MakeController(c.name, c.params);
+  } catch (const ConfigError& error) {
+    const auto params = map.GetMap("params");
+    if (params && !error.key().empty() && params->Has(error.key()))
+      params->Fail(error.key(), error.message());
+    map.Fail(params ? "params" : name_key, error.what());
   } catch (const std::invalid_argument& error) {
     const std::string message = error.what();
     if (auto params = map.GetMap("params")) {
@@ -513,9 +593,9 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
     latency_s += action.latency_s;
     if (latency_s > kMaxLatencyS) {
       throw ConfigError(
-          file + ":" + std::to_string(action.line) + ": add_latency at_s = " + FormatDouble(action.at_s) +
-          ": sensor.latency_s plus the add_latency actions up to here = " + FormatDouble(latency_s) +
-          " s: must be <= " + FormatDouble(kMaxLatencyS) + " s");
+          file + ":" + std::to_string(action.line) + ": add_latency at_s = " + FormatNumber(action.at_s) +
+          ": sensor.latency_s plus the add_latency actions up to here = " + FormatNumber(latency_s) +
+          " s: must be <= " + FormatNumber(kMaxLatencyS) + " s");
     }
   }
   // The signals are reserved before the run (one row per control tick, at most one per step).
@@ -523,9 +603,9 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   const double row_bytes = 8.0 * (40.0 + 7.0 * unit_count);
   const double signal_bytes = std::ceil(config.duration_s * ticks_per_s) * row_bytes;
   if (signal_bytes > kMaxSignalBytes) {
-    map.Fail("duration_s", "with controller.rate_hz = " + FormatDouble(config.controller.rate_hz) +
-                               " the run keeps " + FormatDouble(std::round(signal_bytes / 1e6)) +
-                               " MB of signals (at most " + FormatDouble(kMaxSignalBytes / 1e6) +
+    map.Fail("duration_s", "with controller.rate_hz = " + FormatNumber(config.controller.rate_hz) +
+                               " the run keeps " + FormatNumber(std::round(signal_bytes / 1e6)) +
+                               " MB of signals (at most " + FormatNumber(kMaxSignalBytes / 1e6) +
                                " MB): shorten duration_s or lower controller.rate_hz");
   }
   return config;
@@ -575,26 +655,26 @@ std::vector<PathStep> ParsePath(const std::string& key) {
     PathStep step;
     const size_t bracket = part.find('[');
     step.key = part.substr(0, bracket);
-    if (step.key.empty()) throw std::invalid_argument("--set " + key + ": empty key in the path");
+    if (step.key.empty()) throw ConfigError("--set " + key + ": empty key in the path");
     size_t position = bracket;
     while (position != std::string::npos) {
       const size_t close = part.find(']', position);
-      if (close == std::string::npos) throw std::invalid_argument("--set " + key + ": missing ']'");
+      if (close == std::string::npos) throw ConfigError("--set " + key + ": missing ']'");
       const std::string digits = part.substr(position + 1, close - position - 1);
       int index = 0;
       const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
       if (error != std::errc() || end != digits.data() + digits.size() || digits.empty() || index < 0) {
-        throw std::invalid_argument("--set " + key + ": bad list index '" + digits + "'");
+        throw ConfigError("--set " + key + ": bad list index '" + digits + "'");
       }
       step.indices.push_back(index);
       position = close + 1 < part.size() ? close + 1 : std::string::npos;
       if (position != std::string::npos && part[position] != '[') {
-        throw std::invalid_argument("--set " + key + ": unexpected text after ']'");
+        throw ConfigError("--set " + key + ": unexpected text after ']'");
       }
     }
     steps.push_back(step);
   }
-  if (steps.empty()) throw std::invalid_argument("--set: empty key");
+  if (steps.empty()) throw ConfigError("--set: empty key");
   return steps;
 }
 
@@ -602,156 +682,40 @@ void EnsureMap(YAML::Node& node, const std::string& what) {
   if (!node.IsDefined() || node.IsNull()) {
     node = YAML::Node(YAML::NodeType::Map);
   } else if (!node.IsMap()) {
-    throw std::invalid_argument("--set " + what + ": not a mapping in the scenario");
+    throw ConfigError("--set " + what + ": not a mapping in the scenario");
   }
 }
 
 void EmitNumber(YAML::Emitter& out, const char* key, double value) {
-  out << YAML::Key << key << YAML::Value << FormatDouble(value);
+  out << YAML::Key << key << YAML::Value << FormatNumber(value);
 }
 
 template <size_t N>
 void EmitVector(YAML::Emitter& out, const char* key, const std::array<double, N>& values) {
   out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (double value : values) out << FormatDouble(value);
+  for (double value : values) out << FormatNumber(value);
   out << YAML::EndSeq;
-}
-
-void EmitIntList(YAML::Emitter& out, const char* key, const std::vector<int>& values) {
-  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (int value : values) out << value;
-  out << YAML::EndSeq;
-}
-
-void EmitScene(YAML::Emitter& out, const sim::SceneConfig& scene) {
-  const sim::ObjectConfig& o = scene.object;
-  out << YAML::Key << "object" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "shape" << YAML::Value << sim::ToString(o.shape);
-  EmitVector(out, "size_m", o.size_m);
-  EmitNumber(out, "mass_kg", o.mass_kg);
-  EmitNumber(out, "friction", o.friction);
-  EmitNumber(out, "torsional_friction", o.torsional_friction);
-  EmitNumber(out, "solref_timeconst_s", o.solref_timeconst_s);
-  EmitNumber(out, "solref_dampratio", o.solref_dampratio);
-  EmitVector(out, "solimp", o.solimp);
-  EmitVector(out, "initial_position_m", o.initial_position_m);
-  EmitNumber(out, "initial_yaw_rad", o.initial_yaw_rad);
-  EmitNumber(out, "crush_limit_n", o.crush_limit_n);
-  out << YAML::EndMap;
-
-  const sim::HandConfig& h = scene.hand;
-  out << YAML::Key << "hand" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "model" << YAML::Value << sim::ToString(h.model);
-  out << YAML::Key << "grasp" << YAML::Value << sim::ToString(h.grasp);
-  // NaN means "follows the object"; left out so the loader derives it again.
-  if (!std::isnan(h.open_gap_m)) EmitNumber(out, "open_gap_m", h.open_gap_m);
-  EmitNumber(out, "preshape_clearance_m", h.preshape_clearance_m);
-  EmitNumber(out, "palm_mass_kg", h.palm_mass_kg);
-  EmitNumber(out, "digit_mass_kg", h.digit_mass_kg);
-  EmitNumber(out, "friction", h.friction);
-  // NaN entries mean "automatic pre-grasp pose"; they are left out so the loader picks them again.
-  if (std::none_of(h.initial_wrist_position_m.begin(), h.initial_wrist_position_m.end(),
-                   [](double v) { return std::isnan(v); })) {
-    EmitVector(out, "initial_wrist_position_m", h.initial_wrist_position_m);
-  }
-  EmitNumber(out, "wrist_stiffness_n_m", h.wrist_stiffness_n_m);
-  EmitNumber(out, "wrist_damping_n_s_m", h.wrist_damping_n_s_m);
-  out << YAML::Key << "motor" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "stall_force_n", h.motor.stall_force_n);
-  EmitNumber(out, "no_load_speed_m_s", h.motor.no_load_speed_m_s);
-  EmitNumber(out, "armature_kg", h.motor.armature_kg);
-  EmitNumber(out, "damping_n_s_m", h.motor.damping_n_s_m);
-  out << YAML::EndMap;
-  out << YAML::Key << "finger" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "proximal_length_m", h.finger.proximal_length_m);
-  EmitNumber(out, "middle_length_m", h.finger.middle_length_m);
-  EmitNumber(out, "pip_mcp_ratio", h.finger.pip_mcp_ratio);
-  EmitNumber(out, "dip_flexion_rad", h.finger.dip_flexion_rad);
-  EmitNumber(out, "mcp_rest_angle_rad", h.finger.mcp_rest_angle_rad);
-  out << YAML::EndMap;
-  out << YAML::Key << "thumb" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "proximal_length_m", h.thumb.proximal_length_m);
-  EmitNumber(out, "distal_length_m", h.thumb.distal_length_m);
-  EmitNumber(out, "tip_radius_m", h.thumb.tip_radius_m);
-  EmitNumber(out, "ip_flexion_rad", h.thumb.ip_flexion_rad);
-  if (!std::isnan(h.thumb.opposition_rad)) EmitNumber(out, "opposition_rad", h.thumb.opposition_rad);
-  out << YAML::EndMap;
-  out << YAML::Key << "digit_motor" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "stall_pinch_force_n", h.digit_motor.stall_pinch_force_n);
-  EmitNumber(out, "no_load_speed_rad_s", h.digit_motor.no_load_speed_rad_s);
-  EmitNumber(out, "armature_kg_m2", h.digit_motor.armature_kg_m2);
-  EmitNumber(out, "damping_n_m_s", h.digit_motor.damping_n_m_s);
-  out << YAML::EndMap << YAML::EndMap;
-
-  const sim::PhysicsConfig& p = scene.physics;
-  out << YAML::Key << "physics" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "timestep_s", p.timestep_s);
-  out << YAML::Key << "elliptic_cones" << YAML::Value << p.elliptic_cones;
-  EmitNumber(out, "impratio", p.impratio);
-  out << YAML::Key << "noslip_iterations" << YAML::Value << p.noslip_iterations;
-  out << YAML::Key << "solver_iterations" << YAML::Value << p.solver_iterations;
-  EmitNumber(out, "tolerance", p.tolerance);
-  out << YAML::Key << "condim" << YAML::Value << p.condim;
-  EmitNumber(out, "gravity_m_s2", p.gravity_m_s2);
-  out << YAML::Key << "table" << YAML::Value << p.table;
-  out << YAML::EndMap;
 }
 
 void EmitSensor(YAML::Emitter& out, const SensorOptions& s) {
   out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "layout" << YAML::Value << s.layout;
-  EmitNumber(out, "sample_rate_hz", s.sample_rate_hz);
-  EmitNumber(out, "latency_s", s.latency_s);
-  EmitNumber(out, "drop_probability", s.drop_probability);
-  out << YAML::Key << "sensitivities" << YAML::Value << s.sensitivities;
-  out << YAML::Key << "profile" << YAML::Value << s.profile;
-  if (!s.fea_config.empty()) out << YAML::Key << "fea_config" << YAML::Value << s.fea_config;
+  SensorOptionsFields().Emit(s, out);
   const sensor::StrainModelConfig& m = s.strain_model;
   out << YAML::Key << "strain_model" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "r0_ohm", m.nominal.r0_ohm);
-  EmitNumber(out, "gauge_factor", m.nominal.gauge_factor);
   if (s.sensitivities == "fea") {
     // Derived, not set: reloading this file runs the analysis again (and refuses explicit values).
-    out << YAML::Comment("kn_per_n " + FormatDouble(m.nominal.kn_per_n) + ", kt_per_n " +
-                         FormatDouble(m.nominal.kt_per_n) + " /N from the FEA");
+    out << YAML::Comment("kn_per_n " + FormatNumber(m.nominal.kn_per_n) + ", kt_per_n " +
+                         FormatNumber(m.nominal.kt_per_n) + " /N from the FEA");
+    sensor::EmitStrainModelConfig(m, out, {"kn_per_n", "kt_per_n"});
   } else {
-    EmitNumber(out, "kn_per_n", m.nominal.kn_per_n);
-    EmitNumber(out, "kt_per_n", m.nominal.kt_per_n);
+    sensor::EmitStrainModelConfig(m, out);
   }
-  EmitNumber(out, "rated_force_n", m.nominal.rated_force_n);
-  EmitNumber(out, "r0_spread_fraction", m.r0_spread_fraction);
-  EmitNumber(out, "sensitivity_spread_fraction", m.sensitivity_spread_fraction);
-  EmitNumber(out, "noise_ohm", m.noise_ohm);
-  out << YAML::Key << "adc_bits" << YAML::Value << m.adc_bits;
-  EmitNumber(out, "adc_full_scale_ohm", m.adc_full_scale_ohm);
-  EmitNumber(out, "adc_min_ohm", m.adc_min_ohm);
-  EmitNumber(out, "temperature_coefficient_per_k", m.temperature_coefficient_per_k);
-  EmitNumber(out, "temperature_offset_k", m.temperature_offset_k);
-  EmitNumber(out, "temperature_ramp_k_per_s", m.temperature_ramp_k_per_s);
-  EmitNumber(out, "saturation_force_n", m.saturation_force_n);
-  EmitNumber(out, "cross_talk_shear_fraction", m.cross_talk_shear_fraction);
-  EmitNumber(out, "cross_talk_offset_per_mm", m.cross_talk_offset_per_mm);
-  EmitIntList(out, "dead_units", m.dead_units);
-  EmitIntList(out, "shorted_units", m.shorted_units);
   out << YAML::EndMap;
-  const sensor::ReadoutConfig& r = s.readout;
   out << YAML::Key << "readout" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "baseline_frames" << YAML::Value << r.baseline_frames;
-  EmitNumber(out, "short_circuit_ohm", r.short_circuit_ohm);
-  EmitNumber(out, "open_circuit_ohm", r.open_circuit_ohm);
-  EmitNumber(out, "min_plausible_fraction", r.min_plausible_fraction);
-  EmitNumber(out, "max_plausible_fraction", r.max_plausible_fraction);
-  EmitNumber(out, "max_baseline_deviation_fraction", r.max_baseline_deviation_fraction);
-  EmitNumber(out, "min_mean_dr_rel", r.min_mean_dr_rel);
-  EmitNumber(out, "max_abs_dr_rel", r.max_abs_dr_rel);
-  EmitNumber(out, "adc_full_scale_ohm", r.adc_full_scale_ohm);
-  EmitNumber(out, "adc_min_ohm", r.adc_min_ohm);
+  sensor::ReadoutConfigFields().Emit(s.readout, out);
   out << YAML::EndMap;
-  const sensor::InversionConfig& i = s.inversion;
   out << YAML::Key << "inversion" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "contact_threshold_n", i.contact_threshold_n);
-  EmitNumber(out, "rated_force_n", i.rated_force_n);
-  EmitNumber(out, "out_of_range_margin_fraction", i.out_of_range_margin_fraction);
+  sensor::InversionConfigFields().Emit(s.inversion, out);
   out << YAML::EndMap;
   out << YAML::EndMap;
 }
@@ -866,41 +830,53 @@ bool Expectations::empty() const {
 
 void ScenarioConfig::Validate() const {
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) {
-    throw std::invalid_argument("duration_s = " + FormatDouble(duration_s) + ": must be > 0");
+    throw ConfigError("", 0, "duration_s", FormatNumber(duration_s), "must be > 0");
   }
-  scene.Validate();
-  sensor.strain_model.Validate();
-  sensor.readout.Validate();
-  sensor.inversion.Validate();
+  // The sections' own checks name their keys relative to the section; here they get its path.
+  const auto in_section = [](const std::string& path, auto&& check) {
+    try {
+      check();
+    } catch (const ConfigError& error) {
+      // Validate() prefixed its table's name ("scene.", "strain_model."); the file path replaces it.
+      const std::string key = error.key();
+      const size_t dot = key.find('.');
+      throw ConfigError("", 0, path.empty() ? key.substr(dot + 1) : path + key.substr(dot), error.value(),
+                        error.message());
+    }
+  };
+  in_section("", [&] { scene.Validate(); });
+  in_section("sensor.strain_model", [&] { sensor.strain_model.Validate(); });
+  in_section("sensor.readout", [&] { sensor.readout.Validate(); });
+  in_section("sensor.inversion", [&] { sensor.inversion.Validate(); });
   if (controller.stale_timeout_s < 1.0 / sensor.sample_rate_hz) {
-    throw std::invalid_argument("controller.stale_timeout_s = " + FormatDouble(controller.stale_timeout_s) +
-                                ": must be >= one sensor period (1 / sensor.sample_rate_hz = " +
-                                FormatDouble(1.0 / sensor.sample_rate_hz) + " s)");
+    throw ConfigError("", 0, "controller.stale_timeout_s", FormatNumber(controller.stale_timeout_s),
+                      "must be >= one sensor period (1 / sensor.sample_rate_hz = " +
+                          FormatNumber(1.0 / sensor.sample_rate_hz) + " s)");
   }
   for (const Action& action : script) {
+    // The script is sorted by time, so an action is named by its kind and located by its own line.
+    const std::string key = "script action '" + std::string(ActionName(action.kind)) + "' ";
+    const auto fail = [&](const std::string& field, double value, const std::string& message) {
+      throw ConfigError(action.line > 0 ? source_file : "", action.line, key + field, FormatNumber(value),
+                        message);
+    };
     if (action.after != ScriptEvent::kNone) {
       // Built in code: the loader's checks again.
-      if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                    "' delay_s = " + FormatDouble(action.delay_s) + ": must be >= 0");
-      }
+      if (!(action.delay_s >= 0.0) || !std::isfinite(action.delay_s))
+        fail("delay_s", action.delay_s, "must be >= 0");
       if (!(action.timeout_s > 0.0) || !std::isfinite(action.timeout_s)) {
-        throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                    "' timeout_s = " + FormatDouble(action.timeout_s) + ": must be > 0");
+        fail("timeout_s", action.timeout_s, "must be > 0");
       }
       continue;
     }
-    if (action.at_s > duration_s) {
-      throw std::invalid_argument("script action '" + std::string(ActionName(action.kind)) +
-                                  "' at_s = " + FormatDouble(action.at_s) + ": after duration_s");
-    }
+    if (action.at_s > duration_s) fail("at_s", action.at_s, "after duration_s");
   }
 }
 
 Override ParseOverride(const std::string& text) {
   const size_t equals = text.find('=');
   if (equals == std::string::npos || equals == 0) {
-    throw std::invalid_argument("--set " + text + ": expected key=value, e.g. object.mass_kg=0.3");
+    throw ConfigError("--set " + text + ": expected key=value, e.g. object.mass_kg=0.3");
   }
   return {text.substr(0, equals), text.substr(equals + 1)};
 }
@@ -911,8 +887,8 @@ void ApplyOverride(YAML::Node& root, const Override& override_value) {
   try {
     value = WithoutMarks(YAML::Load(override_value.value));
   } catch (const YAML::Exception& error) {
-    throw std::invalid_argument("--set " + override_value.key + "=" + override_value.value +
-                                ": YAML syntax error: " + error.msg);
+    throw ConfigError("--set " + override_value.key + "=" + override_value.value +
+                      ": YAML syntax error: " + error.msg);
   }
   // Walk with explicit node handles; yaml-cpp's operator[] on a non-const node creates entries.
   YAML::Node node;
@@ -936,9 +912,9 @@ void ApplyOverride(YAML::Node& root, const Override& override_value) {
     list.reset(child);
     for (size_t i = 0; i < step.indices.size(); ++i) {
       if (!list.IsSequence() || step.indices[i] >= static_cast<int>(list.size())) {
-        throw std::invalid_argument("--set " + override_value.key + ": index " +
-                                    std::to_string(step.indices[i]) + " out of range (list has " +
-                                    std::to_string(list.IsSequence() ? list.size() : 0) + " entries)");
+        throw ConfigError("--set " + override_value.key + ": index " + std::to_string(step.indices[i]) +
+                          " out of range (list has " + std::to_string(list.IsSequence() ? list.size() : 0) +
+                          " entries)");
       }
       if (last_step && i + 1 == step.indices.size()) {
         list[step.indices[i]] = value;
@@ -973,7 +949,7 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
     try {
       config = LoadFromRoot(root, source_name);
     } catch (const ConfigError& error) {
-      throw ConfigError("--set " + latest.key + "=" + latest.value + ": " + error.what());
+      throw error.WithContext("--set " + latest.key + "=" + latest.value);
     }
   }
   return config;
@@ -1021,22 +997,12 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   EmitNumber(out, "duration_s", config.duration_s);
   out << YAML::Key << "backend" << YAML::Value << BackendName(config.backend);
   if (config.backend == Backend::kSerial) {
-    const hardware::HardwareConfig& h = config.serial;
     out << YAML::Key << "serial" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "port" << YAML::Value << h.port;
-    out << YAML::Key << "motor_port" << YAML::Value << h.motor_port;
-    out << YAML::Key << "baud" << YAML::Value << h.baud;
-    EmitNumber(out, "hello_timeout_s", h.hello_timeout_s);
-    EmitNumber(out, "stale_timeout_s", h.stale_timeout_s);
-    EmitNumber(out, "disconnect_timeout_s", h.disconnect_timeout_s);
-    EmitNumber(out, "reconnect_backoff_s", h.reconnect_backoff_s);
-    EmitNumber(out, "reconnect_backoff_max_s", h.reconnect_backoff_max_s);
-    EmitNumber(out, "poll_interval_s", h.poll_interval_s);
-    EmitNumber(out, "write_timeout_s", h.write_timeout_s);
+    hardware::HardwareConfigFields().Emit(config.serial, out);
     out << YAML::EndMap;
   }
   if (!config.log.empty()) out << YAML::Key << "log" << YAML::Value << config.log;
-  EmitScene(out, config.scene);
+  sim::SceneConfigFields().Emit(config.scene, out);
   EmitSensor(out, config.sensor);
 
   out << YAML::Key << "controller" << YAML::Value << YAML::BeginMap;
@@ -1044,38 +1010,19 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
   for (const auto& [key, value] : config.controller.params) EmitNumber(out, key.c_str(), value);
   out << YAML::EndMap;
-  EmitNumber(out, "grip_ceiling_n", config.controller.grip_ceiling_n);
-  EmitNumber(out, "rate_hz", config.controller.rate_hz);
-  EmitNumber(out, "stale_timeout_s", config.controller.stale_timeout_s);
+  ControllerOptionsFields().Emit(config.controller, out);
   out << YAML::EndMap;
 
   out << YAML::Key << "script" << YAML::Value << YAML::BeginSeq;
   for (const Action& action : config.script) EmitAction(out, action);
   out << YAML::EndSeq;
 
-  const Expectations& e = config.expectations;
   out << YAML::Key << "expectations" << YAML::Value << YAML::BeginMap;
-  if (e.not_dropped) out << YAML::Key << "not_dropped" << YAML::Value << *e.not_dropped;
-  if (e.max_slip_mm) EmitNumber(out, "max_slip_mm", *e.max_slip_mm);
-  if (e.max_peak_grip_n) EmitNumber(out, "max_peak_grip_n", *e.max_peak_grip_n);
-  if (e.not_crushed) out << YAML::Key << "not_crushed" << YAML::Value << *e.not_crushed;
-  if (e.slip_detected_within_ms) EmitNumber(out, "slip_detected_within_ms", *e.slip_detected_within_ms);
-  if (e.max_estimation_error_n) EmitNumber(out, "max_estimation_error_n", *e.max_estimation_error_n);
-  if (e.stable_within_s) EmitNumber(out, "stable_within_s", *e.stable_within_s);
-  if (e.max_false_slip_per_min) EmitNumber(out, "max_false_slip_per_min", *e.max_false_slip_per_min);
+  ExpectationsFields().Emit(config.expectations, out);
   out << YAML::EndMap;
 
-  const MetricsConfig& m = config.metrics;
   out << YAML::Key << "metrics" << YAML::Value << YAML::BeginMap;
-  EmitNumber(out, "creep_speed_m_s", m.creep_speed_m_s);
-  EmitNumber(out, "slip_speed_m_s", m.slip_speed_m_s);
-  EmitNumber(out, "slip_event_gap_s", m.slip_event_gap_s);
-  EmitNumber(out, "early_detection_window_s", m.early_detection_window_s);
-  EmitNumber(out, "grasp_force_n", m.grasp_force_n);
-  EmitNumber(out, "seating_s", m.seating_s);
-  EmitNumber(out, "drop_distance_m", m.drop_distance_m);
-  EmitNumber(out, "stable_window_s", m.stable_window_s);
-  EmitNumber(out, "stable_force_band", m.stable_force_band);
+  MetricsConfigFields().Emit(config.metrics, out);
   out << YAML::EndMap;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

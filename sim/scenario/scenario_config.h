@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/field_table.h"
 #include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "controller/control_loop.h"
@@ -136,6 +137,10 @@ struct Expectations {
   bool empty() const;
 };
 
+/// The fields of Expectations (loader, emitter and reference table derive from it; the loader adds
+/// not_crushed's need of a fragile object).
+const common::FieldTable<Expectations>& ExpectationsFields();
+
 /// Thresholds that define the metrics (docs/scenarios.md, "Metrics").
 struct MetricsConfig {
   /// Relative object/fingertip speed below which motion counts as soft-contact creep, not slip
@@ -163,6 +168,10 @@ struct MetricsConfig {
   double stable_force_band = 0.1;  ///< relative band for the stable squeeze [-]
 };
 
+/// The fields of MetricsConfig (loader, emitter and reference table derive from it; the loader adds
+/// slip_speed_m_s >= creep_speed_m_s).
+const common::FieldTable<MetricsConfig>& MetricsConfigFields();
+
 /// Sensor options of a scenario: which layout, how the simulated backend samples, the strain
 /// model's non-ideal effects, the readout and the inversion.
 struct SensorOptions {
@@ -189,6 +198,11 @@ struct SensorOptions {
   sensor::InversionConfig inversion;
 };
 
+/// The fields of SensorOptions: the plain ones load and emit through it; layout and fea_config
+/// paths, the profile's resolution and the strain_model / readout / inversion sections (custom
+/// fields) are the scenario loader's.
+const common::FieldTable<SensorOptions>& SensorOptionsFields();
+
 /// The controller under test.
 struct ControllerOptions {
   /// A built-in controller ("grip_slip", "open_loop") or "plugin:LIBRARY" (controller/plugin_loader.h;
@@ -203,11 +217,16 @@ struct ControllerOptions {
   double stale_timeout_s = 0.02;  ///< no frame for this long: state stale, controller holds [s]
 };
 
+/// The fields of ControllerOptions: grip_ceiling_n, rate_hz and stale_timeout_s load and emit
+/// through it; name, plugin and params (custom fields) are LoadControllerOptions' own.
+const common::FieldTable<ControllerOptions>& ControllerOptionsFields();
+
 /// Reads a controller section (name or plugin, params, grip_ceiling_n, rate_hz, stale_timeout_s; the
 /// same in a scenario and in `graspbed hw --config`). `plugin: LIBRARY` stands for
 /// `name: plugin:LIBRARY`; a relative library path is taken relative to the file, and a plugin that
 /// does not load is refused at that key. Unknown keys, names and parameters, out-of-range values
 /// and the controller's own cross-field checks are refused at the offending key with file and line.
+/// @throws common::ConfigError naming file, line, key and value.
 ControllerOptions LoadControllerOptions(const common::YamlMap& map,
                                         const std::string& default_name = "open_loop");
 
@@ -241,7 +260,9 @@ struct ScenarioConfig {
   /// the recording to replay (a run's signals.csv or a frame log; required). `graspbed run --log`.
   std::string log;
 
-  /// Throws std::invalid_argument naming the field and value (cross-field checks).
+  /// Checks the sections (scene, strain model, readout, inversion) and the cross-field rules.
+  /// @throws common::ConfigError with the key's path in a scenario file ("sensor.readout.adc_min_ohm",
+  ///   "controller.stale_timeout_s") and its value.
   void Validate() const;
 };
 
@@ -251,12 +272,13 @@ struct Override {
   std::string value;
 };
 
-/// Parses "key=value"; throws std::invalid_argument for text without '=' or an empty key.
+/// Parses "key=value".
+/// @throws common::ConfigError for text without '=' or an empty key.
 Override ParseOverride(const std::string& text);
 
-/// Loads and validates a scenario file, applying `overrides` in order. Errors in the file are
-/// common::ConfigError "file:line: key = value: reason"; errors caused by an override are
-/// "--set key=value: key = value: reason".
+/// Loads and validates a scenario file, applying `overrides` in order.
+/// @throws common::ConfigError: errors in the file "file:line: key = value: reason"; errors caused by
+///   an override carry the context "--set key=value" (ConfigError::context()) in front.
 ScenarioConfig LoadScenario(const std::string& path, const std::vector<Override>& overrides = {});
 /// Like LoadScenario, from YAML text; `source_name` stands for the file name in messages and
 /// relative layout paths are resolved from its directory.
@@ -264,7 +286,8 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
                                       const std::vector<Override>& overrides = {});
 
 /// Sets `key` (dotted path, list indices as [i]) in `root` to the YAML value `value`, creating
-/// maps on the way. Throws std::invalid_argument for a malformed path or an index out of range.
+/// maps on the way.
+/// @throws common::ConfigError for a malformed path, a value that is not YAML or an index out of range.
 void ApplyOverride(YAML::Node& root, const Override& override_value);
 
 /// The fully resolved configuration as YAML (every default filled in; loadable by LoadScenario

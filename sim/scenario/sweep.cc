@@ -304,7 +304,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
     try {
       configs.push_back(LoadScenario(spec.scenario_path, run.overrides));
     } catch (const ConfigError& error) {
-      throw ConfigError(spec.source_file + ": run " + std::to_string(run.index) + ": " + error.what());
+      throw error.WithContext(spec.source_file + ": run " + std::to_string(run.index));
     }
   }
 

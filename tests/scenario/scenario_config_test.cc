@@ -309,7 +309,9 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
       {"sensor: {layout: paper_3x3}\nscript:\n  - {at_s: 0.1, action: dead_unit, unit: 9}\n",
        "test.yaml:3: script[0].unit = 9: must be <= 8"},
       {"sensor:\n  sample_rate_hz: 0\n", "test.yaml:2: sensor.sample_rate_hz = 0: must be >= 1"},
-      {"sensor:\n  sample_rate_hz: 10\n", "stale_timeout_s = 0.02: must be >= one sensor period"},
+      // The blamed key is not in the file: no line to point at, the value marked as a default.
+      {"sensor:\n  sample_rate_hz: 10\n",
+       "test.yaml: controller.stale_timeout_s = 0.02 (default): must be >= one sensor period"},
       {"metrics:\n  creep_speed_m_s: 0.01\n",
        "test.yaml:2: metrics.creep_speed_m_s = 0.01: must be <= slip_speed_m_s (default 0.002)"},
       {"metrics:\n  creep_speed_m_s: 0.01\n  slip_speed_m_s: 0.005\n",

@@ -174,6 +174,50 @@ TEST(ReadoutConfigTest, LoadsAndRejectsBadInput) {
               HasSubstr("nominal_r0_ohm = -3400: must be finite and > 0"));
 }
 
+// The loader and Validate() once held min_plausible_fraction and min_mean_dr_rel to different
+// bounds (0.999 vs < 1, -1e-9 vs < 0); one field table now gives both the same rule and message.
+TEST(ReadoutConfigTest, LoadingAndValidatingApplyTheSameRules) {
+  TempDir dir;
+  const auto load_error = [&](const std::string& text) {
+    const std::string path = dir.Write("r.yaml", text);
+    return ErrorOf([&] { LoadReadoutConfig(common::YamlMap::LoadFile(path)); });
+  };
+  ReadoutConfig config;
+  config.min_plausible_fraction = 0.9995;
+  EXPECT_EQ(ErrorOf([&] { config.Validate(); }), "readout.min_plausible_fraction = 0.9995: must be <= 0.999");
+  EXPECT_EQ(load_error("min_plausible_fraction: 0.9995\n"),
+            dir.Path("r.yaml") + ":1: min_plausible_fraction = 0.9995: must be <= 0.999");
+  config = ReadoutConfig{};
+  config.min_mean_dr_rel = 0.0;
+  EXPECT_EQ(ErrorOf([&] { config.Validate(); }), "readout.min_mean_dr_rel = 0: must be <= -1e-09");
+  EXPECT_EQ(load_error("min_mean_dr_rel: 0\n"),
+            dir.Path("r.yaml") + ":1: min_mean_dr_rel = 0: must be <= -1e-09");
+  // A cross-field rule: at the blamed key's line when the file sets it, else as a default.
+  config = ReadoutConfig{};
+  config.open_circuit_ohm = 0.5;
+  EXPECT_EQ(ErrorOf([&] { config.Validate(); }),
+            "readout.open_circuit_ohm = 0.5: must be > short_circuit_ohm");
+  EXPECT_EQ(load_error("short_circuit_ohm: 10\nopen_circuit_ohm: 5\n"),
+            dir.Path("r.yaml") + ":2: open_circuit_ohm = 5: must be > short_circuit_ohm");
+  EXPECT_EQ(load_error("short_circuit_ohm: 2e6\n"),
+            dir.Path("r.yaml") + ":1: short_circuit_ohm = 2e6: must be <= 1e+06");
+}
+
+TEST(ReadoutConfigTest, EmittedConfigLoadsBackTheSame) {
+  ReadoutConfig config;
+  config.baseline_frames = 37;
+  config.min_plausible_fraction = 0.123456789;
+  config.adc_full_scale_ohm = 6000;
+  config.adc_min_ohm = 1500;
+  TempDir dir;
+  const std::string path = dir.Write("r.yaml", ReadoutConfigFields().EmitYaml(config));
+  const ReadoutConfig again = LoadReadoutConfig(common::YamlMap::LoadFile(path));
+  EXPECT_EQ(again.baseline_frames, 37);
+  EXPECT_EQ(again.min_plausible_fraction, 0.123456789);
+  EXPECT_EQ(again.adc_min_ohm, 1500);
+  EXPECT_EQ(ReadoutConfigFields().EmitYaml(again), ReadoutConfigFields().EmitYaml(config));
+}
+
 // The readout's noise estimate (TactileState::r1_noise_ohm .. ft_noise_n) against noise injected by
 // the strain model: within 10 %, from the default 100-frame tare (median over the 40 channels) and
 // from a 1000-frame tare (every channel).

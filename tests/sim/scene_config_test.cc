@@ -51,5 +51,28 @@ TEST(SceneConfigTest, BadValuesNameFileLineKeyAndValue) {
   EXPECT_NE(condim.find("physics.condim = 5"), std::string::npos) << condim;
 }
 
+// Cross-field rules are the scene's field table's: loading places them at the blamed key's line
+// (or its section's, when the file leaves the key at its default); Validate() names the key path.
+TEST(SceneConfigTest, CrossFieldRulesNameTheLineOfTheKeyTheyBlame) {
+  EXPECT_EQ(ErrorOf("object:\n  mass_kg: 0.2\n  solref_timeconst_s: 0.0005\n"),
+            "scene.yaml:3: object.solref_timeconst_s = 0.0005: must be >= 2 x physics.timestep_s");
+  EXPECT_EQ(ErrorOf("physics:\n  timestep_s: 0.002\n"),
+            "scene.yaml: object.solref_timeconst_s = 0.002 (default): must be >= 2 x physics.timestep_s");
+  EXPECT_EQ(ErrorOf("object:\n  size_m: [0.05, 0.0005, 0.08]\n"),
+            "scene.yaml:2: object.size_m[1] = 0.0005: must be in [0.001, 0.3]");
+  EXPECT_EQ(
+      ErrorOf("hand:\n  open_gap_m: 0.02\n").rfind("scene.yaml:2: hand.open_gap_m = 0.02: the pre-shape", 0),
+      0u);
+  SceneConfig scene;
+  scene.object.mass_kg = 20.0;
+  try {
+    scene.Validate();
+    FAIL() << "no error";
+  } catch (const common::ConfigError& error) {
+    EXPECT_EQ(error.key(), "scene.object.mass_kg");
+    EXPECT_STREQ(error.what(), "scene.object.mass_kg = 20: must be <= 10");
+  }
+}
+
 }  // namespace
 }  // namespace graspbed::sim
