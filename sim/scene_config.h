@@ -199,8 +199,8 @@ struct HandConfig {
 
 /// Solver and contact options (MuJoCo <option>); defaults chosen for grasping, docs/simulation.md.
 struct PhysicsConfig {
-  double timestep_s = 0.0005;   ///< physics step [s]
-  bool elliptic_cones = true;   ///< elliptic friction cones (pyramidal drops held objects)
+  double timestep_s = 0.0005;  ///< physics step [s]
+  bool elliptic_cones = true;  ///< elliptic friction cones (pyramidal drops held objects)
   /// Friction-to-normal impedance ratio: 1000 keeps soft-contact creep near 1 um/s without noslip.
   double impratio = 1000.0;
   /// Post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step).

@@ -27,10 +27,10 @@ using test_support::Signals;
 constexpr double kPositionTolM = 1.5e-3;  // wrist servo tracking and object settling
 constexpr double kForceTolN = 1e-6;       // script force/mass columns are set exactly
 constexpr double kMassTolKg = 1e-6;
-constexpr double kLiftHeightM = 0.05;     // HeldBoxScenario's lift
-constexpr double kGripFloorN = 5.0;       // the open-loop default effort squeezes about 10 N
-constexpr double kReleasedN = 0.5;        // squeeze left after opening
-constexpr double kR0Ohm = 3400.0;         // paper R0, unloaded reading of an ideal unit
+constexpr double kLiftHeightM = 0.05;  // HeldBoxScenario's lift
+constexpr double kGripFloorN = 5.0;    // the open-loop default effort squeezes about 10 N
+constexpr double kReleasedN = 0.5;     // squeeze left after opening
+constexpr double kR0Ohm = 3400.0;      // paper R0, unloaded reading of an ideal unit
 const double kPhysicsStepS = sim::PhysicsConfig{}.timestep_s;  // the default physics step [s]
 
 // Minimum and maximum of `column` over rows with time in [t0, t1].

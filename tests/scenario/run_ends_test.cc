@@ -46,8 +46,8 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
 constexpr int kExitBadInput = 2;
 const double kStepS = sim::PhysicsConfig{}.timestep_s;  // the default physics step [s]
-constexpr double kTimeTolS = 1e-9;  // sums of timesteps
-constexpr double kInjectAtS = 0.3;  // mid-run: the object is held and being lifted
+constexpr double kTimeTolS = 1e-9;                      // sums of timesteps
+constexpr double kInjectAtS = 0.3;                      // mid-run: the object is held and being lifted
 // A run that ends at its fault takes a fraction of a second; without the fix it spun forever. The
 // bound only has to tell the two apart on a loaded 2-core machine.
 constexpr double kPromptWallS = 20.0;

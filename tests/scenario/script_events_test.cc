@@ -32,9 +32,9 @@ using test_support::RunScenarioText;
 using test_support::ScenarioRun;
 using test_support::Signals;
 
-constexpr double kControlTickS = 0.001;   // default controller.rate_hz
+constexpr double kControlTickS = 0.001;                        // default controller.rate_hz
 const double kPhysicsStepS = sim::PhysicsConfig{}.timestep_s;  // the default physics step [s]
-constexpr double kGraspForceN = 0.3;      // default metrics.grasp_force_n
+constexpr double kGraspForceN = 0.3;                           // default metrics.grasp_force_n
 constexpr double kLiftHeightM = 0.05;
 
 std::string LoadError(const std::string& text) {
