@@ -75,13 +75,11 @@ class CompiledModels {
   // A private copy of the model compiled from `mjcf`, compiling it on first use. Throws
   // std::runtime_error with MuJoCo's message when it does not compile.
   mjModel* Copy(const std::string& mjcf) {
-    // MuJoCo's XML parser keeps global state while it loads: one model at a time, process-wide
-    // (the same lock covers the cache). Runs then step in parallel on their own mjModel/mjData.
     std::lock_guard<std::mutex> lock(mutex_);
     auto found =
         std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.mjcf == mjcf; });
     if (found == entries_.end()) {
-      entries_.push_front({mjcf, Compile(mjcf)});
+      entries_.push_front({mjcf, std::unique_ptr<mjModel, ModelFree>(CompileMjcf(mjcf))});
       if (entries_.size() > kCapacity) entries_.pop_back();
       found = entries_.begin();
     } else if (found != entries_.begin()) {
@@ -100,33 +98,39 @@ class CompiledModels {
     std::unique_ptr<mjModel, ModelFree> model;
   };
 
-  static std::unique_ptr<mjModel, ModelFree> Compile(const std::string& mjcf) {
-    auto vfs = std::make_unique<mjVFS>();
-    mj_defaultVFS(vfs.get());
-    constexpr const char* kFileName = "graspbed_scene.xml";
-    if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf.size())) != 0) {
-      throw std::runtime_error("cannot create the in-memory model file");
-    }
-    const int file = mj_findFileVFS(vfs.get(), kFileName);
-    std::memcpy(vfs->filedata[file], mjcf.data(), mjcf.size());
-    char error[1000] = {0};
-    std::unique_ptr<mjModel, ModelFree> model(mj_loadXML(kFileName, vfs.get(), error, sizeof(error)));
-    mj_deleteVFS(vfs.get());
-    if (model == nullptr)
-      throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
-    return model;
-  }
-
   std::mutex mutex_;
   std::list<Entry> entries_;
 };
 
 }  // namespace
 
+mjModel* CompileMjcf(const std::string& mjcf) {
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  constexpr const char* kFileName = "graspbed_scene.xml";
+  if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf.size())) != 0) {
+    throw std::runtime_error("cannot create the in-memory model file");
+  }
+  const int file = mj_findFileVFS(vfs.get(), kFileName);
+  std::memcpy(vfs->filedata[file], mjcf.data(), mjcf.size());
+  char error[1000] = {0};
+  mjModel* model = nullptr;
+  {
+    // MuJoCo's XML parser keeps global state while it loads: one model at a time, process-wide.
+    // Runs then step in parallel on their own mjModel/mjData.
+    static std::mutex xml_loader;
+    std::lock_guard<std::mutex> lock(xml_loader);
+    model = mj_loadXML(kFileName, vfs.get(), error, sizeof(error));
+  }
+  mj_deleteVFS(vfs.get());
+  if (model == nullptr)
+    throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+  return model;
+}
+
 Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     : layout_(layout), scene_(scene) {
   InstallHandlers();
-  mjcf_ = GenerateMjcf(layout_, scene_);
   // The object's mass and friction are set after loading, so runs that differ only in them (mass
   // and friction sweeps, a scorecard's variations, a suite's repeated scenes) share one compiled
   // model instead of parsing and compiling the same MJCF again.

@@ -87,6 +87,12 @@ struct GroundTruth {
   int thumb_contacts = 0;   ///< contacts between the object and the thumb
 };
 
+/// Compiles MJCF text (e.g. GenerateMjcf's) with MuJoCo's XML loader, one load at a time
+/// process-wide. The caller owns the model (mj_deleteModel). Simulation compiles through a
+/// per-process cache on top of it; tests and tools that need a model compiled directly call it.
+/// @throws std::runtime_error with MuJoCo's message when the text does not load.
+mjModel_* CompileMjcf(const std::string& mjcf);
+
 /// The scene in MuJoCo. Owns mjModel/mjData; not copyable, not movable.
 class Simulation {
  public:
@@ -143,8 +149,6 @@ class Simulation {
   const sensor::Layout& layout() const { return layout_; }
   const SceneConfig& scene() const { return scene_; }
   int unit_count() const { return layout_.unit_count(); }
-  /// The MJCF text the model was loaded from.
-  const std::string& mjcf() const { return mjcf_; }
 
   /// Raw MuJoCo handles, for sim/ internals and sim tests only (controllers never see them).
   const mjModel_* model() const { return model_.get(); }
@@ -159,7 +163,6 @@ class Simulation {
 
   sensor::Layout layout_;
   SceneConfig scene_;
-  std::string mjcf_;
   struct ModelDeleter {
     void operator()(mjModel_* model) const;
   };

@@ -56,14 +56,7 @@ TEST_F(ModelTest, TheObjectsMassAndFrictionSetAfterLoadingGiveTheModelCompiledWi
   scene.object.mass_kg = 0.237;
   scene.object.friction = 0.43;
   const std::string mjcf = GenerateMjcf(DefaultLayout(), scene);
-  char error[1000] = {0};
-  mjVFS vfs;
-  mj_defaultVFS(&vfs);
-  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "scene.xml", static_cast<int>(mjcf.size())), 0);
-  std::copy(mjcf.begin(), mjcf.end(), static_cast<char*>(vfs.filedata[mj_findFileVFS(&vfs, "scene.xml")]));
-  mjModel* direct = mj_loadXML("scene.xml", &vfs, error, sizeof(error));
-  mj_deleteVFS(&vfs);
-  ASSERT_NE(direct, nullptr) << error;
+  mjModel* direct = CompileMjcf(mjcf);
   const Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
   const mjModel* patched = simulation.model();
   ASSERT_EQ(patched->nbody, direct->nbody);
