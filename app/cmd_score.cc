@@ -26,6 +26,7 @@ struct ScoreCommandOptions {
   int limit = 0;
   std::string out_dir = "out/scorecard";
   std::string runs_dir;  ///< empty: no per-run outputs
+  std::vector<std::string> sets;
 };
 
 void ScoreCommand(const ScoreCommandOptions& options) {
@@ -42,6 +43,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   score.jobs = options.jobs;
   score.limit = options.limit;
   score.runs_dir = options.runs_dir;
+  for (const std::string& text : options.sets) score.overrides.push_back(scenario::ParseOverride(text));
   score.stop = &StopRequested();
   const bool terminal = ::isatty(STDERR_FILENO) == 1;
   score.on_finished = [terminal](int done, int total) {
@@ -83,6 +85,12 @@ void AddScoreCommand(CLI::App& root) {
   command->add_option("--runs-out", options->runs_dir,
                       "also keep every run's outputs (signals.csv, summary.json, config.yaml; no plots) "
                       "in DIR/<run>@<controller>/, to trace the figures back to their runs");
+  command
+      ->add_option("--set", options->sets,
+                   "override a key in every run, after the set's own (repeatable; the figures are then "
+                   "not the set's)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->callback([options] { ScoreCommand(*options); });
 }
 

@@ -56,6 +56,12 @@ struct GroundTruth {
   double slip_speed_m_s = 0.0;
   /// Same, normal-force weighted mean over the finger/thumb contacts [m/s].
   double mean_slip_speed_m_s = 0.0;
+  /// Largest relative tangential speed at a finger/thumb contact with the object whose friction
+  /// force is at the edge of its cone, |Ft| >= sliding_friction_fraction() x mu x Fn: Coulomb
+  /// sliding, what the slip metrics count. Soft contacts also move inside the cone (MuJoCo's
+  /// friction is a soft velocity constraint: under a shake the object rocks against the pads at a
+  /// third of the friction limit); that is excluded here [m/s].
+  double sliding_speed_m_s = 0.0;
   /// Total contact normal force on the sensorised finger (holder, mesas, fingertip, phalanges) from anything
   /// outside the hand [N]; on the thumb (pad, link) [N].
   double finger_normal_force_n = 0.0;
@@ -134,6 +140,11 @@ class Simulation {
   double object_mass_kg() const;
   /// Changes the friction coefficient of every object contact (> 0).
   void SetObjectFriction(double friction);
+  /// A contact counts as sliding in GroundTruth::sliding_speed_m_s when its friction force is at
+  /// least this fraction of mu x its normal force (in (0, 1]; 0.95 by default: the cone's edge
+  /// within MuJoCo's regularisation, where a ramped pull starts to slide at 0.9998 x Coulomb).
+  void set_sliding_friction_fraction(double fraction) { sliding_friction_fraction_ = fraction; }
+  double sliding_friction_fraction() const { return sliding_friction_fraction_; }
 
   /// Current load on every unit, unit frames, layout order (`loads.size()` == unit count):
   /// Fn along the inward normal (+ pressing in), Ft along the beam axis, cross-axis shear, offset of
@@ -182,6 +193,7 @@ class Simulation {
   int finger_pad_site_ = -1;
   int thumb_pad_site_ = -1;
   double initial_aperture_m_ = 0.0;  ///< pad-to-thumb site distance at the start [m]
+  double sliding_friction_fraction_ = 0.95;
   /// One per grip motor (jaw: 1, prosthetic: index and thumb), in GripMotorNames order.
   struct GripDrive {
     int actuator = -1;

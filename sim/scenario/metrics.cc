@@ -131,7 +131,7 @@ void MetricsTracker::Update(const TickSample& sample) {
   if (rising_flag) last_rise_s_ = t;
   previous_flag_ = flag;
   if (holding_) {
-    const double speed = truth.slip_speed_m_s;
+    const double speed = truth.sliding_speed_m_s;
     if (speed > config_.creep_speed_m_s) {
       slip_distance_m_ += speed * dt;
       if (event_open_) current_.distance_m += speed * dt;

@@ -95,6 +95,8 @@ enum Col : size_t {
   kTrueThumbFn,
   kTrueSqueeze,
   kSlipSpeed,
+  kSlidingSpeed,
+  kNeededGrip,
   kObjectX,
   kObjectY,
   kObjectZ,
@@ -115,7 +117,7 @@ enum Col : size_t {
 };
 
 constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
-    {"true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",    "true_squeeze_n",  "slip_speed_mm_s",
+    {"true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",    "true_squeeze_n",  "slip_speed_mm_s", "sliding_speed_mm_s", "needed_grip_n",
      "object_x_m",         "object_y_m",         "object_z_m",         "object_height_m", "wrist_x_m",
      "wrist_y_m",          "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",  "object_mass_kg",
      "external_force_x_n", "external_force_y_n", "external_force_z_n", "holding",         "slip_event",
@@ -205,7 +207,8 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   plot::Figure slip;
   slip.title = title + ": slip";
   plot::Chart speed = MakeChart("Relative speed object / fingertips (truth)", "time [s]", "speed [mm/s]");
-  speed.series = {Line(log, time, "slip_speed_mm_s", "slip speed")};
+  speed.series = {Line(log, time, "slip_speed_mm_s", "fastest contact point"),
+                  Line(log, time, "sliding_speed_mm_s", "sliding (at the friction limit)")};
   speed.series.push_back(HorizontalLine("slip threshold", time.front(), time.back(),
                                         result.config.metrics.slip_speed_m_s * 1e3));
   for (const SlipEvent& event : result.metrics.events) speed.markers.push_back({event.onset_s, "slip"});
@@ -286,6 +289,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   player.Start(*rig);
   MetricsTracker tracker(config.metrics, config.scene.object.crush_limit_n,
                          config.sensor.inversion.contact_threshold_n);
+  rig->simulation().set_sliding_friction_fraction(config.metrics.sliding_friction_fraction);
 
   // Everything the loop writes is allocated here.
   // The loop ticks at most once per physics step (the loader bounds this storage, kMaxSignalBytes).
@@ -348,6 +352,8 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       row[kTrueThumbFn] = truth.thumb_normal_force_n;
       row[kTrueSqueeze] = truth.object_squeeze_n;
       row[kSlipSpeed] = truth.slip_speed_m_s * 1e3;
+      row[kSlidingSpeed] = truth.sliding_speed_m_s * 1e3;
+      row[kNeededGrip] = truth.required_grip_n;
       row[kObjectX] = truth.object_position_m[0];
       row[kObjectY] = truth.object_position_m[1];
       row[kObjectZ] = truth.object_position_m[2];

@@ -376,10 +376,13 @@ const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
   static const Table table(
       "metrics",
       {
+          Table::Number("sliding_friction_fraction", &C::sliding_friction_fraction, {0.0, 1.0, true}, "",
+                        "a contact slides (slip) when its friction force is at least this fraction of mu x "
+                        "its normal force; motion inside the cone is the soft contact's give"),
           Table::Number("creep_speed_m_s", &C::creep_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
-                        "relative object/fingertip speed below which motion is soft-contact creep, not slip"),
+                        "sliding speed below which motion is creep, not slip"),
           Table::Number("slip_speed_m_s", &C::slip_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
-                        "relative speed above which a slip event starts")
+                        "sliding speed above which a slip event starts")
               .Note(">= `creep_speed_m_s`"),
           Table::Number("slip_event_gap_s", &C::slip_event_gap_s, kDuration, "s",
                         "a slip event ends after the speed stays below slip_speed_m_s this long"),

@@ -143,10 +143,15 @@ const common::FieldTable<Expectations>& ExpectationsFields();
 
 /// Thresholds that define the metrics (docs/scenarios.md, "Metrics").
 struct MetricsConfig {
-  /// Relative object/fingertip speed below which motion counts as soft-contact creep, not slip
-  /// [m/s]; slip distance accumulates only above it.
+  /// Slip is relative object/fingertip motion at a contact whose friction force is at the edge of
+  /// its cone: at least this fraction of mu x its normal force (Coulomb sliding). Inside the cone
+  /// MuJoCo's soft friction lets the object rock against the pads (a shake at a third of the
+  /// friction limit moved it +-0.09 mm, 7 um net); that is not slip [-].
+  double sliding_friction_fraction = 0.95;
+  /// Sliding speed below which motion counts as creep, not slip [m/s]; slip distance accumulates
+  /// only above it.
   double creep_speed_m_s = 0.5e-3;
-  /// Relative speed above which a slip event starts [m/s].
+  /// Sliding speed above which a slip event starts [m/s].
   double slip_speed_m_s = 2e-3;
   /// A slip event ends after the speed stays below slip_speed_m_s this long [s].
   double slip_event_gap_s = 0.05;

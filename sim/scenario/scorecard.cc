@@ -272,6 +272,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
     for (const ScorecardRun& run : runs) {
       const bool custom = options.custom_controllers.contains(controller);
       std::vector<Override> overrides = run.overrides;
+      overrides.insert(overrides.end(), options.overrides.begin(), options.overrides.end());
       if (!custom) overrides.push_back({"controller.name", controller});
       ScenarioConfig config = LoadScenario(run.scenario_path, overrides);
       if (custom) config.controller.name = controller;

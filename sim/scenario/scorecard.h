@@ -105,6 +105,9 @@ struct ScorecardOptions {
   /// Non-empty: every run's outputs (signals.csv, summary.json, config.yaml; no plots) go to
   /// runs_dir/<run>@<controller>/, for reading a scorecard's figures back to their runs.
   std::string runs_dir;
+  /// Applied to every run after the set's own (`--set`): the same set under another option, e.g. a
+  /// sensor profile or a physics setting. Figures so taken are not the set's; quote them with these.
+  std::vector<Override> overrides;
   const std::atomic<bool>* stop = nullptr;
   /// Called (under a lock) after each run with (runs finished, total).
   std::function<void(int, int)> on_finished;

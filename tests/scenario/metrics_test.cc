@@ -193,12 +193,20 @@ class TrackerTest : public ::testing::Test {
     state_.fn_n[0] = 1.0;
   }
 
-  // Ticks from the current time up to `until_s` (exclusive) with the given slip speed and flag.
-  void Run(double until_s, double slip_speed_m_s, bool flag = false,
+  // Ticks from the current time up to `until_s` (exclusive) with the given sliding speed (at the
+  // friction limit; the fastest contact moves at least as fast) and flag.
+  void Run(double until_s, double sliding_speed_m_s, bool flag = false,
            controller::GraspIntent intent = controller::GraspIntent::kClose) {
+    RunContacts(until_s, sliding_speed_m_s, sliding_speed_m_s, flag, intent);
+  }
+
+  // The same with the fastest contact's speed given apart: motion inside the friction cone.
+  void RunContacts(double until_s, double contact_speed_m_s, double sliding_speed_m_s, bool flag = false,
+                   controller::GraspIntent intent = controller::GraspIntent::kClose) {
     while (time_s_ < until_s - kTimeTolS) {
       truth_.time_s = time_s_;
-      truth_.slip_speed_m_s = slip_speed_m_s;
+      truth_.slip_speed_m_s = contact_speed_m_s;
+      truth_.sliding_speed_m_s = sliding_speed_m_s;
       TickSample sample;
       sample.time_s = time_s_;
       sample.intent = intent;
@@ -263,6 +271,20 @@ TEST_F(TrackerTest, UnflaggedSlipIsMissedAndCreepIsNoSlip) {
   Expectations e;
   e.slip_detected_within_ms = 1000.0;
   EXPECT_FALSE(Passes(e, m, "slip_detected_within_ms"));
+}
+
+TEST_F(TrackerTest, ContactsMovingInsideTheFrictionConeAreNoSlip) {
+  // A shake rocks the object against the pads at 20 mm/s with the friction inside its cone (the
+  // soft contact's give): no event, no slip distance. The same speed at the cone's edge is slip.
+  Run(0.5, 0.0);
+  RunContacts(0.8, 0.02, 0.0);
+  Metrics m = tracker_.Finish(0.8, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 0);
+  EXPECT_EQ(m.max_slip_mm, 0.0);
+  RunContacts(0.9, 0.02, 0.02);
+  m = tracker_.Finish(0.9, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 1);
+  EXPECT_NEAR(m.max_slip_mm, 2.0, 0.05);  // 20 mm/s for 0.1 s
 }
 
 TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
