@@ -116,9 +116,10 @@ TEST_F(CliTest, RunExitsZeroWhenEveryExpectationHoldsAndWritesEveryOutput) {
     EXPECT_TRUE(summary.at("metrics").contains(key)) << key;
   }
   EXPECT_NEAR(summary.at("metrics").at("sim_s").get<double>(), 0.5, 1e-6);
-  // One row per control tick (1 kHz, ticks at 0, 1, ..., 500 ms) after the header.
+  // One row per control tick after the header: 1 kHz on 1 ms steps, one at the end of each step
+  // (1, 2, ..., 500 ms; the tick due at 0 runs at the end of the first step, with the one due then).
   const std::string csv = ReadText(out + "/signals.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 501);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 500);
   // PNG files start with the PNG signature.
   EXPECT_EQ(ReadText(out + "/grip.png").substr(1, 3), "PNG");
 }
@@ -579,7 +580,7 @@ TEST_F(CliTest, CtrlCDuringASuiteKeepsFinishedRunsAndMarksTheRestIncomplete) {
   EXPECT_EQ(a.at("passed"), true);
   EXPECT_FALSE(fs::exists(out + "/a_short/INCOMPLETE"));
   const std::string csv = ReadText(out + "/a_short/signals.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 201);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 200);  // 0.2 s at 1 kHz on 1 ms steps
   // The interrupted run says so: its marker stays and its summary is not complete.
   EXPECT_TRUE(fs::exists(out + "/b_long/INCOMPLETE"));
   const nlohmann::json b = ReadJson(out + "/b_long/summary.json");
