@@ -67,7 +67,11 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("release_time_s", release_time_s, 0.01, 10.0, "s",
                     "opening effort is applied this long after an open command, then 0"),
       GRASPBED_BIND("contact_unit_threshold_n", slip.contact_unit_threshold_n, 0.01, 5.0, "N",
-                    "a valid unit is in contact above this normal force (keep >= 5x the noise)"),
+                    "a valid unit is in contact above this normal force (and above contact_noise_sigmas x its reported noise)"),
+      GRASPBED_BIND("contact_noise_sigmas", slip.contact_noise_sigmas, 0.0, 20.0, "sigma",
+                    "with the readout's noise figures, a unit is in contact only above this many standard "
+                    "deviations of its normal-force noise too (and the contact's sum above as many of the "
+                    "summed noise); 0 = off"),
       GRASPBED_BIND("contact_min_units", contact_min_units, 1, 64, "units",
                     "units in contact that mean the hand touches the object"),
       GRASPBED_BIND("contact_confirm_frames", contact_confirm_frames, 1, 100, "frames",

@@ -49,6 +49,7 @@ void SlipDetectorConfig::Validate() const {
           "must be > 0");
   Require(grid_columns >= 1 && grid_columns <= sensor::kMaxUnits, "grid_columns", grid_columns,
           "must be in [1, 64]");
+  Require(contact_noise_sigmas >= 0.0, "contact_noise_sigmas", contact_noise_sigmas, "must be >= 0");
   Require(contact_unit_threshold_n > 0.0, "contact_unit_threshold_n", contact_unit_threshold_n,
           "must be > 0");
   Require(ratio_filter_s >= 0.0, "ratio_filter_s", ratio_filter_s, "must be >= 0");
@@ -132,6 +133,9 @@ void SlipDetector::Reset() {
   settle_threshold_n_ = 0.0;
   noise_known_seen_ = false;
   noise_generation_seen_ = 0;
+  unit_contact_threshold_n_.fill(config_.contact_unit_threshold_n);
+  contact_sum_threshold_n_ = kContactSumFactor * config_.contact_unit_threshold_n;
+  signals_.contact_threshold_n = config_.contact_unit_threshold_n;
   RestartContact();
 }
 
@@ -186,16 +190,25 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
   }
   restart_pending_ = false;
 
+  // The readout's own noise figure, RMS over the valid units: it changes only with a new tare or a
+  // unit changing validity.
+  const bool noise_changed =
+      state.noise_known != noise_known_seen_ || state.noise_generation != noise_generation_seen_;
+  if (noise_changed || validity_changed) {
+    noise_known_seen_ = state.noise_known;
+    noise_generation_seen_ = state.noise_generation;
+    UpdateSensorNoise(state);
+  }
+
   signals_.contact_units = 0;
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] == UnitValidity::kValid &&
-        state.fn_n[static_cast<size_t>(i)] > config_.contact_unit_threshold_n) {
+        state.fn_n[static_cast<size_t>(i)] > unit_contact_threshold_n_[static_cast<size_t>(i)]) {
       ++signals_.contact_units;
     }
   }
   // A light, broad contact may leave every unit below the threshold while the sum is clearly there.
-  signals_.in_contact =
-      signals_.contact_units > 0 || grip_n > kContactSumFactor * config_.contact_unit_threshold_n;
+  signals_.in_contact = signals_.contact_units > 0 || grip_n > contact_sum_threshold_n_;
 
   if (settle_remaining_ > 0) --settle_remaining_;
   if (settle_max_remaining_ > 0) --settle_max_remaining_;
@@ -208,16 +221,6 @@ const SlipSignals& SlipDetector::Update(const TactileState& state, double grip_n
     signals_.settled = settle_remaining_ == 0 && (quiet || settle_max_remaining_ == 0);
   }
   const bool live = armed && signals_.settled && signals_.in_contact;
-
-  // The readout's own noise figure, RMS over the valid units: it changes only with a new tare or a
-  // unit changing validity.
-  const bool noise_changed =
-      state.noise_known != noise_known_seen_ || state.noise_generation != noise_generation_seen_;
-  if (noise_changed || validity_changed) {
-    noise_known_seen_ = state.noise_known;
-    noise_generation_seen_ = state.noise_generation;
-    UpdateSensorNoise(state);
-  }
 
   UpdateRatio(state, grip_n, friction_estimate, live);
   // The contact's seating transient (armed, not yet settled) is not noise: the floor learns before
@@ -259,16 +262,26 @@ void SlipDetector::UpdateSensorNoise(const TactileState& state) {
   signals_.sensor_shear_noise_n = 0.0;
   signals_.sensor_normal_noise_n = 0.0;
   signals_.shear_blind = false;
+  unit_contact_threshold_n_.fill(config_.contact_unit_threshold_n);
+  contact_sum_threshold_n_ = kContactSumFactor * config_.contact_unit_threshold_n;
+  signals_.contact_threshold_n = config_.contact_unit_threshold_n;
   if (!state.noise_known) return;
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   double shear_sum = 0.0, normal_sum = 0.0;
   int valid = 0;
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
+    const double fn_noise = state.fn_noise_n[static_cast<size_t>(i)];
     shear_sum += state.ft_noise_n[static_cast<size_t>(i)] * state.ft_noise_n[static_cast<size_t>(i)];
-    normal_sum += state.fn_noise_n[static_cast<size_t>(i)] * state.fn_noise_n[static_cast<size_t>(i)];
+    normal_sum += fn_noise * fn_noise;
     ++valid;
+    double& threshold = unit_contact_threshold_n_[static_cast<size_t>(i)];
+    threshold = std::max(threshold, config_.contact_noise_sigmas * fn_noise);
+    signals_.contact_threshold_n = std::max(signals_.contact_threshold_n, threshold);
   }
+  // The summed normal force's noise: the units' noises add in quadrature.
+  contact_sum_threshold_n_ =
+      std::max(contact_sum_threshold_n_, config_.contact_noise_sigmas * std::sqrt(normal_sum));
   if (valid > 0) {
     signals_.sensor_shear_noise_n = std::sqrt(shear_sum / valid);
     signals_.sensor_normal_noise_n = std::sqrt(normal_sum / valid);
@@ -391,7 +404,7 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
     const double highpassed =
         shear_highpass_[static_cast<size_t>(i)].Update(state.ft_n[static_cast<size_t>(i)]);
-    if (state.fn_n[static_cast<size_t>(i)] < kReferenceFraction * config_.contact_unit_threshold_n) {
+    if (state.fn_n[static_cast<size_t>(i)] < kReferenceFraction * unit_contact_threshold_n_[static_cast<size_t>(i)]) {
       reference_square_sum += highpassed * highpassed;
       ++reference_units;
     }
@@ -462,9 +475,9 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
   double position_square_sum = 0.0;
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
-    const double weight = std::max(
-        state.fn_n[static_cast<size_t>(i)] - kCentroidDeadbandFraction * config_.contact_unit_threshold_n,
-        0.0);
+    const double weight = std::max(state.fn_n[static_cast<size_t>(i)] -
+                                       kCentroidDeadbandFraction * unit_contact_threshold_n_[static_cast<size_t>(i)],
+                                   0.0);
     if (weight <= 0.0) continue;
     const double row = i / config_.grid_columns;
     const double column = i % config_.grid_columns;

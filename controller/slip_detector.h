@@ -27,6 +27,12 @@ struct SlipDetectorConfig {
   int grid_columns = 4;                    ///< units per row in layout order (index = row * columns + column)
   bool even_units_axial = true;            ///< units with (row + column) even have an axial beam
   double contact_unit_threshold_n = 0.15;  ///< a unit is in contact above this normal force [N]
+  /// When the readout reports its noise (TactileState::noise_known), a unit is in contact only above
+  /// this many standard deviations of its own normal-force noise (fn_noise_n) as well, and the
+  /// contact's sum (a light broad contact) above that many of the summed noise; 0 = off. The FEA's
+  /// sensitivities behind the 12-bit divider give 0.17 N of Fn noise per unit, above the 0.15 N
+  /// threshold: noise alone read as contact and started the grasp's loading before the object.
+  double contact_noise_sigmas = 5.0;
 
   bool ratio_enabled = true;         ///< use the shear/normal ratio cue
   double ratio_filter_s = 0.01;      ///< low-pass time constant of the ratio [s]
@@ -143,6 +149,9 @@ struct SlipSignals {
   /// instead of the learned shear noise itself (an upper bound: k_t < k_n, 5x with the FEA's).
   double sensor_shear_noise_n = 0.0;
   double sensor_normal_noise_n = 0.0;
+  /// The largest per-unit contact threshold in force: contact_unit_threshold_n, or above it where
+  /// a unit's reported noise sets it (contact_noise_sigmas) [N].
+  double contact_threshold_n = 0.0;
   double centroid_row = 0.0;              ///< filtered normal-force centroid, row index (along the axis)
   double centroid_column = 0.0;           ///< filtered normal-force centroid, column index (around)
   double centroid_shift_units = 0.0;      ///< centroid movement over the window [unit pitches]
@@ -212,6 +221,10 @@ class SlipDetector {
   double ratio_axial_ = 0.0;   ///< filtered ratio components of the newest frame [-]
   double ratio_circumferential_ = 0.0;
   int vibration_frames_ = 0;  ///< consecutive frames with the vibration statistic above threshold
+  /// Per unit (layout order), the normal force above which it is in contact, and the same for the
+  /// contact's sum (UpdateSensorNoise) [N].
+  std::array<double, sensor::kMaxUnits> unit_contact_threshold_n_{};
+  double contact_sum_threshold_n_ = 0.0;
   bool restart_pending_ = true;
   std::array<bool, sensor::kMaxUnits> was_valid_{};
 

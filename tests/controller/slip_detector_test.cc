@@ -363,6 +363,40 @@ TEST(SlipDetectorTest, NoiseBurstOnEveryUnitRaisesNoVibrationFlag) {
   EXPECT_GT(without_reference, 0) << "the burst was meant to reach the vibration cue";
 }
 
+TEST(SlipDetectorTest, ContactThresholdFollowsTheReportedNormalNoise) {
+  // The FEA's sensitivities behind the 12-bit divider: 0.17 N of Fn noise per unit, above the
+  // 0.15 N contact threshold. With the noise in the state a unit needs 5 sigma (0.85 N) and the sum
+  // 5 sigma of the summed noise (3.8 N), so noise alone is no contact; an 8 N contact (the grip such
+  // a shear-blind readout holds) still is.
+  SyntheticTactile::Options noisy;
+  noisy.noise_fn_n = 0.17;
+  noisy.report_noise = true;
+  const auto count_contact_frames = [&](double contact_noise_sigmas, double grip_n) {
+    SlipDetectorConfig config = SquarePinch();
+    config.contact_noise_sigmas = contact_noise_sigmas;
+    Stream stream(config, noisy);
+    int contact_frames = 0;
+    for (int frame = 0; frame < 1000; ++frame) {
+      SyntheticContact contact;
+      contact.grip_n = grip_n;
+      const sensor::TactileState state = stream.sensor.Frame(contact, frame * kPeriodS);
+      const SlipSignals& signals = stream.detector.Update(state, state.total_fn_n, kFriction, false, true);
+      if (signals.in_contact) ++contact_frames;
+    }
+    EXPECT_NEAR(stream.detector.signals().contact_threshold_n, std::max(0.15, contact_noise_sigmas * 0.17), 1e-12);
+    return contact_frames;
+  };
+  const int noise_only = count_contact_frames(5.0, 0.0);
+  const int noise_only_fixed_threshold = count_contact_frames(0.0, 0.0);
+  const int real_contact = count_contact_frames(5.0, 8.0);
+  std::printf("[ measure ] noise alone read as contact: %d of 1000 frames at 5 sigma, %d at the fixed 0.15 N; "
+              "an 8 N contact: %d\n",
+              noise_only, noise_only_fixed_threshold, real_contact);
+  EXPECT_EQ(noise_only, 0);
+  EXPECT_GT(noise_only_fixed_threshold, 500);  // what the fixed threshold did
+  EXPECT_EQ(real_contact, 1000);
+}
+
 TEST(SlipDetectorTest, ConfigValidationNamesFieldAndValue) {
   SlipDetectorConfig config;
   config.vibration_highpass_hz = 600.0;
