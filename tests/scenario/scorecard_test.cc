@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <sstream>
@@ -227,6 +228,34 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   ASSERT_FALSE(reference.at("latency_p95_ms").is_null());
   EXPECT_LE(reference.at("latency_p95_ms").get<double>(), 50.0);
   EXPECT_EQ(reference.at("drops"), 0);
+}
+
+// The reference controller over the whole shipped set (37 runs, about 5 s on 2 cores), against the
+// targets of issue 12 that it meets: nothing dropped or crushed, every run finished without a
+// physics fault, the median peak / needed grip at most 2. The other targets (>= 95 % of slip events
+// flagged, p95 latency <= 50 ms, <= 1 false flag per minute held) are not met; the figures are
+// printed and docs/controller.md ("Scorecard") records them.
+TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndGripsAtMostTwiceTheNeed) {
+  ScorecardOptions options;
+  options.controllers = {"grip_slip"};
+  options.jobs = 2;
+  const Scorecard scorecard = RunScorecard(LoadScorecardSet(kShippedSet), options);
+  ASSERT_TRUE(scorecard.completed);
+  ASSERT_EQ(scorecard.scores.size(), 1u);
+  const ControllerScore& score = scorecard.scores[0];
+  std::printf("[ measure ] shipped set, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
+              "%.2f false flags/min held, grip ratio median %.2f\n",
+              score.runs, score.passed, score.slip_detected, score.slip_events, score.latency_p95_ms.value_or(-1.0),
+              score.false_per_min.value_or(-1.0), score.grip_ratio_median.value_or(-1.0));
+  EXPECT_EQ(score.errors, 0);
+  EXPECT_EQ(score.runs, scorecard.runs_per_controller);
+  EXPECT_EQ(score.physics_faults, 0);
+  EXPECT_EQ(score.drops, 0);
+  EXPECT_EQ(score.crushes, 0);
+  ASSERT_TRUE(score.grip_ratio_median.has_value());
+  EXPECT_LE(*score.grip_ratio_median, 2.0);
+  // The set does exercise slip: the figures above are over real events.
+  EXPECT_GT(score.slip_events, 10);
 }
 
 TEST(ScorecardCliTest, LimitTakesTheFirstRunsOfTheShippedSetForOneController) {
