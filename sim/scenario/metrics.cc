@@ -39,7 +39,6 @@ void MetricsTracker::OpenEvent(double time_s) {
   }
   // A flag shortly before the onset detected the slip early (incipient slip).
   const double window_start = time_s - config_.early_detection_window_s;
-  int kept = 0;
   for (int i = 0; i < pending_count_; ++i) {
     if (pending_flags_[i] >= window_start) {
       if (!current_.detected) {
@@ -47,10 +46,9 @@ void MetricsTracker::OpenEvent(double time_s) {
         current_.latency_s = 0.0;
       }
     } else {
-      pending_flags_[kept++] = pending_flags_[i];
+      JudgeUnmatchedFlag(i);  // older than the window: it matched nothing
     }
   }
-  false_flags_ += kept;  // older than the window: they matched nothing
   pending_count_ = 0;
 }
 
@@ -75,11 +73,21 @@ void MetricsTracker::OnControllerFlag(double time_s) {
     return;  // a repeated flag during an event is no false alarm
   }
   if (pending_count_ == static_cast<int>(pending_flags_.size())) {
-    ++false_flags_;  // window full of flags: the oldest cannot all be early detections
+    JudgeUnmatchedFlag(0);  // window full of flags: the oldest cannot all be early detections
     std::copy(pending_flags_.begin() + 1, pending_flags_.end(), pending_flags_.begin());
+    std::copy(pending_sliding_.begin() + 1, pending_sliding_.end(), pending_sliding_.begin());
     --pending_count_;
   }
+  pending_sliding_[pending_count_] = last_sliding_s_ >= time_s - config_.early_detection_window_s;
   pending_flags_[pending_count_++] = time_s;
+}
+
+void MetricsTracker::JudgeUnmatchedFlag(int pending_index) {
+  if (pending_sliding_[pending_index]) {
+    ++incipient_flags_;
+  } else {
+    ++false_flags_;
+  }
 }
 
 void MetricsTracker::Update(const TickSample& sample) {
@@ -149,15 +157,20 @@ void MetricsTracker::Update(const TickSample& sample) {
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
     }
+    // A contact sliding at the friction limit up to early_detection_window_s before a flag, too
+    // slowly for an event, makes it an incipient-slip flag rather than a false one. Sliding after
+    // the flag does not: the controller's own response (a grip step rolling the pad) could cause it.
+    if (!seating && speed > config_.creep_speed_m_s) last_sliding_s_ = t;
     if (rising_flag && !seating) OnControllerFlag(t);
     if (flag && !seating && !event_open_) false_flag_s_ += dt;
     // Flags that fell out of the early window can no longer match an event.
     int kept = 0;
     for (int i = 0; i < pending_count_; ++i) {
       if (pending_flags_[i] >= t - config_.early_detection_window_s) {
+        pending_sliding_[kept] = pending_sliding_[i];
         pending_flags_[kept++] = pending_flags_[i];
       } else {
-        ++false_flags_;
+        JudgeUnmatchedFlag(i);
       }
     }
     pending_count_ = kept;
@@ -206,7 +219,7 @@ void MetricsTracker::Update(const TickSample& sample) {
 Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_time_s) const {
   MetricsTracker copy = *this;  // closing the open event must not change the live tracker
   if (copy.event_open_) copy.CloseEvent();
-  copy.false_flags_ += copy.pending_count_;
+  for (int i = 0; i < copy.pending_count_; ++i) copy.JudgeUnmatchedFlag(i);
   copy.pending_count_ = 0;
 
   Metrics m;
@@ -226,6 +239,7 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
     m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
   m.controller_slip_flags = copy.flags_;
   m.false_slip_flags = copy.false_flags_;
+  m.incipient_slip_flags = copy.incipient_flags_;
   m.held_s = copy.held_s_;
   m.false_slip_per_min = copy.held_s_ > 0.0 ? copy.false_flags_ / (copy.held_s_ / 60.0) : 0.0;
   m.false_slip_flag_s = copy.false_flag_s_;

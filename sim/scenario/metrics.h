@@ -49,8 +49,15 @@ struct Metrics {
   int slip_events = 0;              ///< ground-truth slip events while held
   int missed_slip_events = 0;       ///< of those, never flagged by the controller
   int controller_slip_flags = 0;    ///< rising edges of the controller's slip flag while held
-  int false_slip_flags = 0;         ///< flags matching no slip event
+  /// Flags matching no slip event with no contact sliding at the friction limit (above creep speed)
+  /// in the early_detection_window_s before them: the contact was not slipping at all.
+  int false_slip_flags = 0;
   double false_slip_per_min = 0.0;  ///< false_slip_flags per minute held [1/min]
+  /// Flags matching no slip event but raised at most early_detection_window_s after a contact slid
+  /// at the friction limit faster than creep_speed_m_s (and slower than slip_speed_m_s): an
+  /// incipient or partial slip too slow to be an event (a load landing, a pull ending). Neither
+  /// detections nor false alarms; counted apart.
+  int incipient_slip_flags = 0;
   /// Time the controller's slip flag was up while held, outside slip events and seating [s]. A flag
   /// that stays up counts once in false_slip_flags; this is what it costs.
   double false_slip_flag_s = 0.0;
@@ -111,6 +118,8 @@ class MetricsTracker {
   void OpenEvent(double time_s);
   void CloseEvent();
   void OnControllerFlag(double time_s);
+  /// A flag that matched no event: false, or incipient when a contact slid near it.
+  void JudgeUnmatchedFlag(int pending_index);
 
   MetricsConfig config_;
   double crush_limit_n_ = 0.0;
@@ -140,9 +149,13 @@ class MetricsTracker {
   double last_rise_s_ = -1e9;  ///< time of the flag's latest rising edge [s]
   int flags_ = 0;
   int false_flags_ = 0;
+  int incipient_flags_ = 0;
+  double last_sliding_s_ = -1e9;  ///< latest held tick with a contact sliding above creep speed [s]
   double false_flag_s_ = 0.0;
   /// Flags not (yet) matched to an event, within the early-detection window of now.
   std::array<double, 64> pending_flags_{};
+  /// Per pending flag: a contact slid above creep speed within the early window before it.
+  std::array<bool, 64> pending_sliding_{};
   int pending_count_ = 0;
   int missed_ = 0;
   double worst_latency_s_ = -1.0;

@@ -497,6 +497,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"missed_slip_events", m.missed_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
       {"false_slip_flags", m.false_slip_flags},
+      {"incipient_slip_flags", m.incipient_slip_flags},
       {"estimation_samples", m.estimation_samples},
       {"physics_fault", m.physics_fault},
   };

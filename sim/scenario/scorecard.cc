@@ -228,6 +228,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
       if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
     }
     score.false_flags += metrics.false_slip_flags;
+    score.incipient_flags += metrics.incipient_slip_flags;
     score.held_min += metrics.held_s / 60.0;
     score.false_flag_min += metrics.false_slip_flag_s / 60.0;
     if (metrics.dropped) ++score.drops;
@@ -245,6 +246,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
   score.latency_p95_ms = Percentile(latencies_ms, 95.0);
   if (score.held_min > 0.0) {
     score.false_per_min = score.false_flags / score.held_min;
+    score.incipient_per_min = score.incipient_flags / score.held_min;
     score.false_flag_pct = 100.0 * score.false_flag_min / score.held_min;
   }
   score.grip_ratio_median = Percentile(grip_ratios, 50.0);
@@ -375,6 +377,13 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return OptionalJson(s.false_per_min); }},
       {"false flags", "false_flags", [](const ControllerScore& s) { return Int(s.false_flags); },
        [](const ControllerScore& s) { return nlohmann::json(s.false_flags); }},
+      {"incipient flags / min", "incipient_flags_per_min",
+       [](const ControllerScore& s) {
+         return OptionalText(s.incipient_per_min, "%.2f") + " (" + Int(s.incipient_flags) + ")";
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.incipient_per_min); }},
+      {"incipient-slip flags", "incipient_flags", [](const ControllerScore& s) { return Int(s.incipient_flags); },
+       [](const ControllerScore& s) { return nlohmann::json(s.incipient_flags); }},
       {"false flag up, % of held", "false_flag_pct",
        [](const ControllerScore& s) { return OptionalText(s.false_flag_pct, "%.1f %%"); },
        [](const ControllerScore& s) { return OptionalJson(s.false_flag_pct); }},
@@ -403,7 +412,7 @@ const std::vector<Figure>& Figures() {
 bool InTable(const Figure& figure) {
   const std::string column = figure.column;
   return column != "errors" && column != "slip_events" && column != "slip_detected" &&
-         column != "false_flags";
+         column != "false_flags" && column != "incipient_flags";
 }
 
 }  // namespace

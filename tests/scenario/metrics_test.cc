@@ -287,6 +287,26 @@ TEST_F(TrackerTest, ContactsMovingInsideTheFrictionConeAreNoSlip) {
   EXPECT_NEAR(m.max_slip_mm, 2.0, 0.05);  // 20 mm/s for 0.1 s
 }
 
+TEST_F(TrackerTest, AFlagAfterSlidingTooSlowForAnEventIsIncipientNotFalse) {
+  // A contact slides at the friction limit at 1 mm/s for 10 ms (above creep, below the 2 mm/s of an
+  // event: a load landing); a flag 20 ms later is an incipient-slip flag. A flag with no sliding
+  // before it is false, and so is one whose only sliding comes after it (the response's own).
+  Run(0.5, 0.0);
+  Run(0.51, 0.001);
+  Run(0.53, 0.0);
+  Run(0.54, 0.0, true);
+  Run(0.8, 0.0);
+  Run(0.81, 0.0, true);
+  Run(1.2, 0.0);
+  Run(1.21, 0.0, true);
+  Run(1.22, 0.001);
+  Run(1.5, 0.0);
+  const Metrics m = tracker_.Finish(1.5, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 0);
+  EXPECT_EQ(m.incipient_slip_flags, 1);
+  EXPECT_EQ(m.false_slip_flags, 2);
+}
+
 TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
   Run(0.2, 0.0);
   truth_.object_position_m = {0.0, 0.0, -0.025};  // 25 mm below where it was grasped
