@@ -119,7 +119,8 @@ struct CollectedSignals {
 };
 
 py::dict Run(const std::string& scenario_path, const std::vector<std::string>& overrides,
-             const py::object& controller, const std::string& out_dir, bool plots) {
+             const py::object& controller, const std::string& out_dir, bool plots, bool prompt_actions,
+             const std::string& intent_fifo) {
   ControllerChoice choice = ChooseController(controller, true);
   std::vector<scenario::Override> all = choice.overrides;
   for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
@@ -129,6 +130,8 @@ py::dict Run(const std::string& scenario_path, const std::vector<std::string>& o
   options.out_dir = out_dir;
   options.write_plots = plots;
   options.make_controller = choice.factory;
+  options.prompt_actions = prompt_actions;
+  options.intent_fifo = intent_fifo;
   CollectedSignals signals;
   options.on_signals = [&signals](const scenario::SignalLog& log) { signals.Collect(log); };
   scenario::RunResult result;
@@ -337,7 +340,7 @@ PYBIND11_MODULE(_graspbed, m) {
       });
 
   m.def("_run", &Run, py::arg("scenario"), py::arg("overrides"), py::arg("controller"), py::arg("out_dir"),
-        py::arg("plots"));
+        py::arg("plots"), py::arg("prompt_actions"), py::arg("intent_fifo"));
   m.def("_suite", &Suite, py::arg("files"), py::arg("overrides"), py::arg("controller"), py::arg("jobs"),
         py::arg("out_dir"), py::arg("plots"));
   m.def("_sweep", &Sweep, py::arg("spec"), py::arg("controller"), py::arg("jobs"), py::arg("out_dir"),

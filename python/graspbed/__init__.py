@@ -59,7 +59,8 @@ def scenario_path(name):
     return os.path.join(data_dir(), "scenarios", name if name.endswith(".yaml") else name + ".yaml")
 
 
-def run(scenario, controller=None, overrides=None, seed=None, out_dir=None, plots=False):
+def run(scenario, controller=None, overrides=None, seed=None, out_dir=None, plots=False,
+        prompt_actions=False, intent_fifo=None):
     """Runs one scenario file.
 
     controller: None (the file's), a name ("grip_slip", "plugin:path/libmine.so"), a Python controller
@@ -68,8 +69,15 @@ def run(scenario, controller=None, overrides=None, seed=None, out_dir=None, plot
     plots=True) there. Returns {"summary": dict (summary.json), "signals": {column: numpy array}}.
     Raises graspbed.ConfigError (a ValueError) on bad input, graspbed.ControllerError when a Python
     controller fails.
+
+    On the hand: overrides {"backend": "serial", "serial.port": "/dev/ttyACM0"} (or a `graspbed
+    emulate` link) run the same loop over the serial link, as `graspbed run --backend serial`;
+    prompt_actions=True announces the script's simulator-only actions (lift, pull, ...) on stderr
+    for a person at the bench instead of refusing them, intent_fifo="PATH" takes live close / open /
+    idle / quit lines from a FIFO (docs/hardware.md).
     """
-    return _graspbed_run(str(scenario), _overrides(overrides, seed), controller, out_dir or "", plots)
+    return _graspbed_run(str(scenario), _overrides(overrides, seed), controller, out_dir or "", plots,
+                         prompt_actions, intent_fifo or "")
 
 
 def suite(scenarios, controller=None, overrides=None, jobs=1, out_dir=None, plots=False):

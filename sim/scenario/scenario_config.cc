@@ -931,11 +931,8 @@ void ApplyOverride(YAML::Node& root, const Override& override_value) {
 
 ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string& source_name,
                                       const std::vector<Override>& overrides) {
-  // The file alone first, so its own errors carry its lines; then each override in turn, so an error
-  // it causes names it.
-  ScenarioConfig config = LoadFromRoot(ParseRoot(text, source_name), source_name);
-  for (size_t count = 1; count <= overrides.size(); ++count) {
-    const Override& latest = overrides[count - 1];
+  // The file with the first `count` overrides applied.
+  const auto root_with = [&](size_t count) {
     YAML::Node root = ParseRoot(text, source_name);
     for (size_t i = 0; i < count; ++i) {
       const Override& o = overrides[i];
@@ -949,13 +946,28 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
       if (o.key == "controller.name" && root["controller"].IsMap()) root["controller"].remove("plugin");
       ApplyOverride(root, o);
     }
-    try {
-      config = LoadFromRoot(root, source_name);
-    } catch (const ConfigError& error) {
-      throw error.WithContext("--set " + latest.key + "=" + latest.value);
+    return root;
+  };
+  // Validated with every override applied, so overrides that belong together (backend and port) may
+  // come in any order, and a file completed by them (a serial backend given its port) loads.
+  try {
+    return LoadFromRoot(root_with(overrides.size()), source_name);
+  } catch (const ConfigError& full) {
+    if (overrides.empty()) throw;
+    // Name where the error came in: the file itself (it carries its lines) or the first override
+    // after which the same error appears.
+    for (size_t count = 0; count < overrides.size(); ++count) {
+      try {
+        LoadFromRoot(root_with(count), source_name);
+      } catch (const ConfigError& error) {
+        if (std::string(error.what()) != full.what()) continue;
+        if (count == 0) throw;
+        throw error.WithContext("--set " + overrides[count - 1].key + "=" + overrides[count - 1].value);
+      }
     }
+    const Override& last = overrides.back();
+    throw full.WithContext("--set " + last.key + "=" + last.value);
   }
-  return config;
 }
 
 ScenarioConfig LoadScenario(const std::string& path, const std::vector<Override>& overrides) {

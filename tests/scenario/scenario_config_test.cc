@@ -208,6 +208,31 @@ TEST(ScenarioConfigTest, OverridesUseDottedKeysAndAreValidatedLikeTheFile) {
   EXPECT_EQ(ParseOverride("a.b=c=d").value, "c=d");
 }
 
+TEST(ScenarioConfigTest, OverridesThatBelongTogetherLoadInAnyOrderAndMayCompleteTheFile) {
+  const std::string text = "duration_s: 1\nscript:\n  - {at_s: 0.2, action: close}\n";
+  // The backend and its port, either order.
+  for (const std::vector<Override>& overrides :
+       {std::vector<Override>{{"backend", "serial"}, {"serial.port", "/dev/ttyACM0"}},
+        std::vector<Override>{{"serial.port", "/dev/ttyACM0"}, {"backend", "serial"}}}) {
+    const ScenarioConfig config = LoadScenarioFromString(text, "t.yaml", overrides);
+    EXPECT_EQ(config.backend, Backend::kSerial);
+    EXPECT_EQ(config.serial.port, "/dev/ttyACM0");
+  }
+  // A file naming the serial backend without its port, given it as `graspbed run --port` does.
+  const std::string serial_file = "backend: serial\n" + text;
+  EXPECT_EQ(LoadScenarioFromString(serial_file, "t.yaml", {{"serial.port", "/dev/ttyACM0"}}).serial.port,
+            "/dev/ttyACM0");
+  // Without it, the file's own error, at its line; an error an override brings in names that one,
+  // even when later overrides follow.
+  std::string error = ErrorOf(serial_file);
+  EXPECT_NE(error.find("test.yaml:1: backend = serial: serial needs a port"), std::string::npos) << error;
+  error = ErrorOf(serial_file, {{"seed", "3"}});
+  EXPECT_EQ(error.find("--set"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:1: backend = serial"), std::string::npos) << error;
+  error = ErrorOf(text, {{"object.mass_kg", "-1"}, {"seed", "3"}});
+  EXPECT_NE(error.find("--set object.mass_kg=-1: "), std::string::npos) << error;
+}
+
 TEST(ScenarioConfigTest, ChangingTheControllerDropsTheOldControllersParameters) {
   const std::string text = "controller:\n  name: open_loop\n  params:\n    close_effort: 0.7\n";
   const auto names = controller::ControllerNames();
