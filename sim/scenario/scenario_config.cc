@@ -413,7 +413,8 @@ const common::FieldTable<SensorOptions>& SensorOptionsFields() {
           Table::Text("layout", &C::layout, {}, "sensing units; unit indices in actions refer to it")
               .Note("`default_20`, `paper_3x3` or a layout file path (relative to the scenario file)"),
           Table::Number("sample_rate_hz", &C::sample_rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
-                        "sensor frames per second"),
+                        "sensor frames per second")
+              .Note("simulated: <= 1 / `physics.timestep_s`"),
           Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, kMaxLatencyS), "s",
                         "sampling to delivery")
               .Note("with the `add_latency` actions at most 1 in total"),
@@ -458,7 +459,8 @@ const common::FieldTable<ControllerOptions>& ControllerOptionsFields() {
           Table::Number("grip_ceiling_n", &C::grip_ceiling_n, NumberRule::Between(0.0, sim::kMaxForceN), "N",
                         "task grip ceiling handed to the controller (fragile objects); 0 = none"),
           Table::Number("rate_hz", &C::rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
-                        "control ticks per second"),
+                        "control ticks per second")
+              .Note("simulated: <= 1 / `physics.timestep_s`"),
           Table::Number("stale_timeout_s", &C::stale_timeout_s, {0.0, kMaxStaleTimeoutS, true}, "s",
                         "no frame for this long: state stale, the controller holds")
               .Note(">= 1 / `sensor.sample_rate_hz`"),
@@ -855,6 +857,20 @@ void ScenarioConfig::Validate() const {
     throw ConfigError("", 0, "controller.stale_timeout_s", FormatNumber(controller.stale_timeout_s),
                       "must be >= one sensor period (1 / sensor.sample_rate_hz = " +
                           FormatNumber(1.0 / sensor.sample_rate_hz) + " s)");
+  }
+  // The simulated loop samples and ticks at the end of physics steps, at most once per step: a faster
+  // rate would silently run at the step rate.
+  if (backend == Backend::kSim) {
+    const double step_rate_hz = 1.0 / scene.physics.timestep_s;
+    const auto at_most_step_rate = [&](const char* key, double rate_hz) {
+      if (rate_hz > step_rate_hz * (1.0 + 1e-9)) {
+        throw ConfigError("", 0, key, FormatNumber(rate_hz),
+                          "must be <= 1 / physics.timestep_s = " + FormatNumber(step_rate_hz) +
+                              " Hz (at most one per physics step; a shorter physics.timestep_s allows more)");
+      }
+    };
+    at_most_step_rate("controller.rate_hz", controller.rate_hz);
+    at_most_step_rate("sensor.sample_rate_hz", sensor.sample_rate_hz);
   }
   for (const Action& action : script) {
     // The script is sorted by time, so an action is named by its kind and located by its own line.

@@ -60,7 +60,8 @@ std::string UnstableScenario() {
 object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.7, solref_timeconst_s: 0.02}
 hand: {open_gap_m: 0.055, palm_mass_kg: 0.01, wrist_stiffness_n_m: 1.0e+6}
 physics: {timestep_s: 0.01}
-controller: {name: open_loop}
+sensor: {sample_rate_hz: 100}
+controller: {name: open_loop, rate_hz: 100}
 script:
   - {at_s: 0.04, action: close}
 )";
