@@ -31,6 +31,7 @@ EmulatedHand::EmulatedHand(const ScenarioConfig& config, const sensor::Layout& l
       period_s_(1.0 / config.sensor.sample_rate_hz),
       wall_start_(std::chrono::steady_clock::now()) {
   player_.Start(rig_);
+  rig_.simulation().set_sliding_friction_fraction(config.metrics.sliding_friction_fraction);
   initial_object_z_m_ = rig_.simulation().truth().object_position_m[2];
   // The tracker sees no estimates (the host has them): a stale state keeps it to ground truth.
   no_estimate_.stale = true;
