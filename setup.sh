@@ -20,7 +20,7 @@ packages=(
   libcairo2-dev fonts-dejavu-core                # PNG plots; their labels need a font
   libegl-dev libegl-mesa0 libgl1-mesa-dri        # offscreen rendering: EGL, Mesa llvmpipe (no display/GPU)
   ffmpeg                                         # videos: run --video pipes frames to it; tests read them with ffprobe
-  libglfw3-dev xvfb xauth                        # graspbed view: a window (GLFW); its test runs under xvfb-run
+  libglfw3-dev xvfb xauth xdotool                # graspbed view: a window (GLFW); its tests run under xvfb-run and type keys with xdotool
   clang-14 libclang-rt-14-dev                    # libFuzzer target for the wire decoder
   python3 python3-dev pybind11-dev               # the graspbed Python module; python3 runs the install tests
   python3-numpy python3-pytest                   # its signals as numpy arrays; its tests

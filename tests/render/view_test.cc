@@ -1,6 +1,7 @@
 // `graspbed view` as users run it, on a virtual display (xvfb-run): a few frames of the default
-// scenario live and of a finished run replayed, each exiting 0 with time advanced; a directory that is
-// not a run and a machine without a display are refused with a message.
+// scenario live and of a finished run replayed, each exiting 0 with time advanced; keys typed into the
+// window (xdotool) pause, step, restart and quit; a directory that is not a run and a machine without
+// a display are refused with a message.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -69,6 +70,44 @@ TEST(ViewCliTest, RefusesADirectoryThatIsNotARunAndSaysWhenThereIsNoDisplay) {
                                            "view " + SourcePath("scenarios/default.yaml") + " --frames 1");
   EXPECT_EQ(no_display.exit_code, kExitFailed) << no_display.err;
   EXPECT_NE(no_display.err.find("no display?"), std::string::npos) << no_display.err;
+}
+
+/// Runs `graspbed view ARGUMENTS` (the script adds `view`) on a virtual display while tests/render/view_keys.sh types `keys`
+/// (xdotool key names, `sleep:S` pauses) into its window, as a user's keyboard would.
+CliResult ViewWithKeys(const std::string& keys, const std::string& arguments) {
+  return RunCliUnder(std::string(kVirtualDisplay) + "sh " + SourcePath("tests/render/view_keys.sh") + " ",
+                     "'" + keys + "' " + arguments);
+}
+
+int ShownRestarts(const std::string& out) {
+  const size_t at = out.find(" restarts");
+  if (at == std::string::npos) return -1;
+  const size_t start = out.rfind(' ', at - 1);
+  return std::stoi(out.substr(start + 1, at - start - 1));
+}
+
+TEST(ViewCliTest, KeysPauseStepRestartAndQuitTheLiveRun) {
+  const std::string paused = SourcePath("scenarios/default.yaml") + " --paused --size 320x240";
+  const double tick_s = 0.001;  // the scenario's 1 kHz control tick: one Right key advances one
+  // Started paused, q closes the window on the first tick shown.
+  const CliResult quit = ViewWithKeys("q", paused);
+  ASSERT_EQ(quit.exit_code, kExitOk) << quit.out << quit.err;
+  const double first_s = ShownTime(quit.out);
+  EXPECT_NEAR(first_s, tick_s, 1e-9) << quit.out;
+  // Right steps one control tick at a time while paused.
+  const CliResult steps = ViewWithKeys("Right Right Right q", paused);
+  ASSERT_EQ(steps.exit_code, kExitOk) << steps.out << steps.err;
+  EXPECT_NEAR(ShownTime(steps.out), first_s + 3 * tick_s, 1e-9) << steps.out;
+  EXPECT_EQ(ShownRestarts(steps.out), 0) << steps.out;
+  // Backspace restarts the run from the beginning (still paused).
+  const CliResult restart = ViewWithKeys("Right Right BackSpace sleep:1 Right q", paused);
+  ASSERT_EQ(restart.exit_code, kExitOk) << restart.out << restart.err;
+  EXPECT_EQ(ShownRestarts(restart.out), 1) << restart.out;
+  EXPECT_NEAR(ShownTime(restart.out), first_s + tick_s, 1e-9) << restart.out;
+  // Space resumes: 1.5 s of wall time at 4x runs well past the first ticks.
+  const CliResult resumed = ViewWithKeys("space sleep:1.5 q", paused + " --speed 4");
+  ASSERT_EQ(resumed.exit_code, kExitOk) << resumed.out << resumed.err;
+  EXPECT_GT(ShownTime(resumed.out), 0.1) << resumed.out;
 }
 
 }  // namespace
