@@ -25,25 +25,27 @@ ExpectationOutcome Outcome(const std::string& name, const std::string& limit) {
 MetricsTracker::MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n)
     : config_(config), crush_limit_n_(crush_limit_n), contact_threshold_n_(contact_threshold_n) {}
 
-void MetricsTracker::OpenEvent(double time_s) {
+void MetricsTracker::OpenEvent(double time_s, double onset_s) {
   event_open_ = true;
   current_ = SlipEvent{};
-  current_.onset_s = time_s;
+  current_.onset_s = onset_s;
   current_.end_s = time_s;
   last_above_s_ = time_s;
   // A flag still raised at the onset detects it if it rose within the early window (the controller
   // reports slip as it starts); a flag left up since long before says nothing about this slip.
-  if (previous_flag_ && time_s - last_rise_s_ <= config_.early_detection_window_s) {
+  if (previous_flag_ && last_rise_s_ >= onset_s - config_.early_detection_window_s) {
     current_.detected = true;
-    current_.latency_s = 0.0;
+    current_.latency_s = std::max(0.0, last_rise_s_ - onset_s);
   }
-  // A flag shortly before the onset detected the slip early (incipient slip).
-  const double window_start = time_s - config_.early_detection_window_s;
+  // A flag shortly before the onset detected the slip early (incipient slip); one since the onset of
+  // a creep (opened only once it had crept far enough) detected it that much after the onset.
+  const double window_start = onset_s - config_.early_detection_window_s;
   for (int i = 0; i < pending_count_; ++i) {
     if (pending_flags_[i] >= window_start) {
-      if (!current_.detected) {
+      const double latency_s = std::max(0.0, pending_flags_[i] - onset_s);
+      if (!current_.detected || latency_s < current_.latency_s) {
         current_.detected = true;
-        current_.latency_s = 0.0;
+        current_.latency_s = latency_s;
       }
     } else {
       JudgeUnmatchedFlag(i);  // older than the window: it matched nothing
@@ -147,10 +149,25 @@ void MetricsTracker::Update(const TickSample& sample) {
     // The pads seating on the object right after the grasp is acquisition, not the held object
     // slipping: it opens no event and flags then match nothing (nor count as false).
     const bool seating = t < grasp_start_s_ + config_.seating_s;
+    // A creep: sliding above creep speed, with gaps shorter than slip_event_gap_s, from its start.
+    const bool creeping = !seating && speed > config_.creep_speed_m_s;
+    if (creep_start_s_ >= 0.0 && !creeping && t - creep_last_s_ >= config_.slip_event_gap_s) creep_start_s_ = -1.0;
+    if (creeping) {
+      if (creep_start_s_ < 0.0) {
+        creep_start_s_ = t;
+        creep_distance_m_ = 0.0;
+      }
+      creep_distance_m_ += speed * dt;
+      creep_last_s_ = t;
+    }
+    const bool creep_event = config_.creep_event_m > 0.0 && creep_start_s_ >= 0.0 &&
+                             creep_distance_m_ >= config_.creep_event_m;
     if (seating) {
       if (rising_flag) ++flags_;
-    } else if (speed > config_.slip_speed_m_s) {
-      if (!event_open_) OpenEvent(t);
+    } else if (speed > config_.slip_speed_m_s || (creep_event && creeping)) {
+      if (!event_open_) {
+        OpenEvent(t, speed > config_.slip_speed_m_s ? t : creep_start_s_);
+      }
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
@@ -163,10 +180,15 @@ void MetricsTracker::Update(const TickSample& sample) {
     if (!seating && speed > config_.creep_speed_m_s) last_sliding_s_ = t;
     if (rising_flag && !seating) OnControllerFlag(t);
     if (flag && !seating && !event_open_) false_flag_s_ += dt;
-    // Flags that fell out of the early window can no longer match an event.
+    // Flags that fell out of the early window can no longer match an event, unless a creep that may
+    // still become one began after them.
+    double keep_from_s = t - config_.early_detection_window_s;
+    if (config_.creep_event_m > 0.0 && creep_start_s_ >= 0.0 && !event_open_) {
+      keep_from_s = std::min(keep_from_s, creep_start_s_ - config_.early_detection_window_s);
+    }
     int kept = 0;
     for (int i = 0; i < pending_count_; ++i) {
-      if (pending_flags_[i] >= t - config_.early_detection_window_s) {
+      if (pending_flags_[i] >= keep_from_s) {
         pending_sliding_[kept] = pending_sliding_[i];
         pending_flags_[kept++] = pending_flags_[i];
       } else {

@@ -115,7 +115,9 @@ class MetricsTracker {
   Metrics Finish(double sim_s, double wall_s, double first_close_time_s) const;
 
  private:
-  void OpenEvent(double time_s);
+  /// Opens an event at `time_s` whose onset was `onset_s` (earlier for a creep, which becomes an event
+  /// only once it has crept MetricsConfig::creep_event_m).
+  void OpenEvent(double time_s, double onset_s);
   void CloseEvent();
   void OnControllerFlag(double time_s);
   /// A flag that matched no event: false, or incipient when a contact slid near it.
@@ -143,6 +145,11 @@ class MetricsTracker {
   std::array<SlipEvent, kMaxEvents> events_{};
   int event_count_ = 0;  ///< events started (may exceed kMaxEvents)
   bool event_open_ = false;
+  /// The current creep: sliding above creep speed since creep_start_s_ (< 0: none) [s], the latest
+  /// such tick [s] and the distance so far [m].
+  double creep_start_s_ = -1.0;
+  double creep_last_s_ = 0.0;
+  double creep_distance_m_ = 0.0;
   SlipEvent current_{};
   double last_above_s_ = 0.0;
   bool previous_flag_ = false;

@@ -384,6 +384,9 @@ const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
           Table::Number("slip_speed_m_s", &C::slip_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
                         "sliding speed above which a slip event starts")
               .Note(">= `creep_speed_m_s`"),
+          Table::Number("creep_event_m", &C::creep_event_m, NumberRule::Between(0.0, 0.1), "m",
+                        "a slower slide (above creep_speed_m_s) is a slip event once it has slid this far; "
+                        "0: only slip_speed_m_s opens events"),
           Table::Number("slip_event_gap_s", &C::slip_event_gap_s, kDuration, "s",
                         "a slip event ends after the speed stays below slip_speed_m_s this long"),
           Table::Number("early_detection_window_s", &C::early_detection_window_s, kDuration, "s",

@@ -153,6 +153,9 @@ struct MetricsConfig {
   double creep_speed_m_s = 0.5e-3;
   /// Sliding speed above which a slip event starts [m/s].
   double slip_speed_m_s = 2e-3;
+  /// A slower slide (above creep_speed_m_s) is a slip event too once it has slid this far without a
+  /// pause of slip_event_gap_s; its onset is when it began [m]. 0: only slip_speed_m_s opens events.
+  double creep_event_m = 0.0;
   /// A slip event ends after the speed stays below slip_speed_m_s this long [s].
   double slip_event_gap_s = 0.05;
   /// A controller slip flag up to this long before a ground-truth onset counts as detecting it

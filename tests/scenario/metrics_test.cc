@@ -307,6 +307,45 @@ TEST_F(TrackerTest, AFlagAfterSlidingTooSlowForAnEventIsIncipientNotFalse) {
   EXPECT_EQ(m.false_slip_flags, 2);
 }
 
+TEST(TrackerCreepTest, ASlowSlideIsAnEventOnceItHasCreptFarEnoughWithItsOnsetAtItsStart) {
+  // 1 mm/s at the friction limit for 0.3 s (0.3 mm; under the 2 mm/s of a slip event), flagged
+  // 40 ms after it began.
+  const auto run = [](double creep_event_m) {
+    MetricsConfig config;
+    config.creep_event_m = creep_event_m;
+    MetricsTracker tracker(config, 8.0, 0.05);
+    sim::GroundTruth truth;
+    truth.finger_contacts = truth.thumb_contacts = 1;
+    truth.finger_normal_force_n = truth.object_squeeze_n = 2.0;
+    sensor::TactileState state;
+    for (int tick = 0; tick <= 1000; ++tick) {
+      const double t = tick * kTickS;
+      const bool creeping = t >= 0.5 - kTimeTolS && t < 0.8 - kTimeTolS;
+      truth.slip_speed_m_s = truth.sliding_speed_m_s = creeping ? 0.001 : 0.0;
+      TickSample sample;
+      sample.time_s = t;
+      sample.intent = controller::GraspIntent::kClose;
+      sample.truth = &truth;
+      sample.state = &state;
+      sample.controller_slip = t >= 0.54 - kTimeTolS && t < 0.6 - kTimeTolS;
+      tracker.Update(sample);
+    }
+    return tracker.Finish(1.0, 0.1, 0.0);
+  };
+  const Metrics counted = run(0.2e-3);
+  ASSERT_EQ(counted.slip_events, 1);
+  EXPECT_EQ(counted.missed_slip_events, 0);
+  ASSERT_EQ(counted.events.size(), 1u);
+  EXPECT_NEAR(counted.events[0].onset_s, 0.5, 1e-9);
+  EXPECT_NEAR(*counted.slip_detect_latency_ms, 40.0, 1e-6);
+  EXPECT_EQ(counted.false_slip_flags + counted.incipient_slip_flags, 0);
+  // Off (the default): no event; the flag followed sliding, so it is an incipient-slip flag.
+  const Metrics off = run(0.0);
+  EXPECT_EQ(off.slip_events, 0);
+  EXPECT_EQ(off.incipient_slip_flags, 1);
+  EXPECT_NEAR(off.max_slip_mm, 0.3, 0.01);
+}
+
 TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
   Run(0.2, 0.0);
   truth_.object_position_m = {0.0, 0.0, -0.025};  // 25 mm below where it was grasped
