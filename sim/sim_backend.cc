@@ -85,6 +85,7 @@ void SimBackend::Poll() {
     ++sample_index_;
     if (!loads_current) {
       simulation_.ComputeUnitLoads(loads_);
+      loads_time_s_ = now;
       loads_current = true;
     }
     Slot& slot = ring_[ring_head_];

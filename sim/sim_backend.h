@@ -75,6 +75,9 @@ class SimBackend : public sensor::TactileBackend {
   void SetLatency(double latency_s);
   /// The unit loads used for the most recent sample (ground truth of what the sensor saw).
   std::span<const sensor::UnitLoad> last_loads() const { return loads_; }
+  /// Simulated time of the physics state last_loads() were computed from [s]; -1 before the first
+  /// sample. Equal to the simulation's time: they are the loads of the present state.
+  double last_loads_time_s() const { return loads_time_s_; }
   const SimBackendConfig& config() const { return config_; }
 
  private:
@@ -88,6 +91,7 @@ class SimBackend : public sensor::TactileBackend {
   sensor::StrainModel strain_model_;
   std::mt19937_64 drop_rng_;
   std::vector<sensor::UnitLoad> loads_;
+  double loads_time_s_ = -1.0;
   std::vector<Slot> ring_;    ///< fixed capacity, allocated at construction
   size_t ring_head_ = 0;      ///< next slot to write
   size_t ring_size_ = 0;      ///< frames queued and not yet released

@@ -322,7 +322,14 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
     const double t = rig->time_s();
     sim::Simulation& simulation = rig->simulation();
-    rig->simulation().ComputeUnitLoads(truth_ring.Next(t));
+    const std::span<sensor::UnitLoad> tick_loads = truth_ring.Next(t);
+    // When the backend sampled in this step it computed this very state's loads: no second pass
+    // over the contacts.
+    if (rig->backend().last_loads_time_s() == t) {
+      std::ranges::copy(rig->backend().last_loads(), tick_loads.begin());
+    } else {
+      simulation.ComputeUnitLoads(tick_loads);
+    }
     const sim::GroundTruth truth = simulation.truth();
     const sensor::TactileState& state = rig->loop().state();
     const std::span<const sensor::UnitLoad> true_loads = truth_ring.Near(state.time_s);

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,8 @@ class SignalLog {
  public:
   /// `numeric_columns` and `text_columns` name the columns (text columns are written first after
   /// time in CSV order given by the caller); `capacity_rows` rows are reserved up front.
+  /// The numeric storage is zeroed and its pages mapped here, not on first use in the loop.
+  /// Throws std::bad_alloc when the memory cannot be had.
   SignalLog(std::vector<std::string> numeric_columns, std::vector<std::string> text_columns,
             size_t capacity_rows);
 
@@ -37,7 +40,8 @@ class SignalLog {
   std::vector<double> ColumnValues(const std::string& name) const;
 
   /// Writes the log as CSV (header: text columns after the first numeric column "time_s"). Numbers
-  /// in the shortest form that reads back (strtod) to the same double; inf/nan as "inf"/"nan".
+  /// in the shortest form that reads back (strtod) to the same double (std::to_chars' text);
+  /// inf/nan as "inf"/"nan". Allocates its buffers (1 MB, and 3 KB a column) and writes in 1 MB pieces.
   /// Throws std::runtime_error on a write error.
   void WriteCsv(std::FILE* file) const;
 
@@ -47,8 +51,25 @@ class SignalLog {
   size_t capacity_rows_ = 0;
   size_t rows_ = 0;
   size_t lost_rows_ = 0;
-  std::vector<double> values_;
+  /// Unmaps the numeric storage.
+  struct Unmap {
+    size_t bytes = 0;
+    void operator()(double* values) const;
+  };
+  std::unique_ptr<double[], Unmap> values_;
   std::vector<const char*> texts_;
 };
+
+namespace internal {
+
+/// Room FormatShortest() may need: "-2.2250738585072014e-308" is 24 characters.
+inline constexpr size_t kMaxNumberChars = 32;
+
+/// Writes `value` to `out` (room for kMaxNumberChars) exactly as std::to_chars(double) does (the
+/// shortest text that strtod reads back to the same double), or "nan", "inf", "-inf"; returns the
+/// end of the text. Exposed for tests.
+char* FormatShortest(double value, char* out);
+
+}  // namespace internal
 
 }  // namespace graspbed::scenario

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sim/scenario/runner.h"
+#include "sim/scenario/run_outputs.h"
 
 namespace graspbed::scenario {
 namespace {
@@ -49,23 +49,7 @@ void StateRecorder::Record(double time_s, const sim::Simulation& simulation) {
   std::copy_n(d->ctrl, nu_, row + 1 + nq_ + nv_);
 }
 
-void StateRecorder::WriteCsv(const std::string& path) const {
-  char* buffer = nullptr;
-  size_t size = 0;
-  std::FILE* memory = open_memstream(&buffer, &size);
-  if (memory == nullptr) throw std::runtime_error(path + ": cannot format the state log");
-  try {
-    log_.WriteCsv(memory);
-  } catch (...) {
-    std::fclose(memory);
-    std::free(buffer);
-    throw;
-  }
-  std::fclose(memory);
-  const std::string content(buffer, size);
-  std::free(buffer);
-  WriteFileAtomic(path, content);
-}
+void StateRecorder::WriteCsv(const std::string& path) const { internal::WriteCsvAtomic(log_, path); }
 
 size_t StateLog::RowAt(double time) const {
   const auto after = std::upper_bound(time_s.begin(), time_s.end(), time + kClockSlackS);
