@@ -332,7 +332,8 @@ int main(int argc, char** argv) {
     };
     // The defaults, then one change at a time from them (docs/simulation.md, "Where a step's time goes").
     add("default: 1 ms, noslip 0, impratio 1000", [](SceneConfig&) {});
-    add("before: 0.5 ms, noslip 3, impratio 10", [](SceneConfig& s) { s.physics = graspbed::sim::PhysicsBefore(); });
+    add("before: 0.5 ms, noslip 3, impratio 10",
+        [](SceneConfig& s) { s.physics = graspbed::sim::PhysicsBefore(); });
     add("timestep 0.5 ms", [](SceneConfig& s) { s.physics.timestep_s = 0.0005; });
     add("noslip 1, impratio 10", [](SceneConfig& s) {
       s.physics.noslip_iterations = 1;

@@ -67,7 +67,8 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("release_time_s", release_time_s, 0.01, 10.0, "s",
                     "opening effort is applied this long after an open command, then 0"),
       GRASPBED_BIND("contact_unit_threshold_n", slip.contact_unit_threshold_n, 0.01, 5.0, "N",
-                    "a valid unit is in contact above this normal force (and above contact_noise_sigmas x its reported noise)"),
+                    "a valid unit is in contact above this normal force (and above contact_noise_sigmas x "
+                    "its reported noise)"),
       GRASPBED_BIND("contact_noise_sigmas", slip.contact_noise_sigmas, 0.0, 20.0, "sigma",
                     "with the readout's noise figures, a unit is in contact only above this many standard "
                     "deviations of its normal-force noise too (and the contact's sum above as many of the "

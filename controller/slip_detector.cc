@@ -404,7 +404,8 @@ void SlipDetector::UpdateVibration(const TactileState& state, bool learn_noise) 
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
     const double highpassed =
         shear_highpass_[static_cast<size_t>(i)].Update(state.ft_n[static_cast<size_t>(i)]);
-    if (state.fn_n[static_cast<size_t>(i)] < kReferenceFraction * unit_contact_threshold_n_[static_cast<size_t>(i)]) {
+    if (state.fn_n[static_cast<size_t>(i)] <
+        kReferenceFraction * unit_contact_threshold_n_[static_cast<size_t>(i)]) {
       reference_square_sum += highpassed * highpassed;
       ++reference_units;
     }
@@ -475,9 +476,10 @@ void SlipDetector::UpdateCentroid(const TactileState& state, double grip_n, bool
   double position_square_sum = 0.0;
   for (int i = 0; i < count; ++i) {
     if (state.validity[static_cast<size_t>(i)] != UnitValidity::kValid) continue;
-    const double weight = std::max(state.fn_n[static_cast<size_t>(i)] -
-                                       kCentroidDeadbandFraction * unit_contact_threshold_n_[static_cast<size_t>(i)],
-                                   0.0);
+    const double weight =
+        std::max(state.fn_n[static_cast<size_t>(i)] -
+                     kCentroidDeadbandFraction * unit_contact_threshold_n_[static_cast<size_t>(i)],
+                 0.0);
     if (weight <= 0.0) continue;
     const double row = i / config_.grid_columns;
     const double column = i % config_.grid_columns;

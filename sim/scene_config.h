@@ -199,7 +199,7 @@ struct HandConfig {
 
 /// Solver and contact options (MuJoCo <option>); defaults chosen for grasping, docs/simulation.md.
 struct PhysicsConfig {
-  double timestep_s = 0.001;  ///< physics step [s]
+  double timestep_s = 0.001;   ///< physics step [s]
   bool elliptic_cones = true;  ///< elliptic friction cones (pyramidal drops held objects)
   /// Friction-to-normal impedance ratio: 1000 keeps soft-contact creep near 1 um/s without noslip.
   double impratio = 1000.0;

@@ -524,7 +524,8 @@ GroundTruth Simulation::truth() const {
     const double slip = mju_norm3(rel);
     t.slip_speed_m_s = std::max(t.slip_speed_m_s, slip);
     // local = [Fn, Ft1, Ft2, ...]; contact.friction[0] is the pair's sliding friction coefficient.
-    if (normal > 0.0 && std::hypot(local[1], local[2]) >= sliding_friction_fraction_ * contact.friction[0] * normal) {
+    if (normal > 0.0 &&
+        std::hypot(local[1], local[2]) >= sliding_friction_fraction_ * contact.friction[0] * normal) {
       t.sliding_speed_m_s = std::max(t.sliding_speed_m_s, slip);
     }
     slip_weighted += slip * std::max(normal, 0.0);

@@ -103,9 +103,10 @@ nlohmann::json EmulatedHand::Summary() const {
   nlohmann::json metrics = SummaryJson(result)["metrics"];
   // The host's controller, not the emulator, sees slip flags and estimates: leave out what it
   // cannot score.
-  for (const char* key : {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n",
-                          "missed_slip_events", "controller_slip_flags", "false_slip_flags", "incipient_slip_flags",
-                          "false_slip_flag_s", "false_slip_flag_pct", "estimation_samples"}) {
+  for (const char* key :
+       {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n", "missed_slip_events",
+        "controller_slip_flags", "false_slip_flags", "incipient_slip_flags", "false_slip_flag_s",
+        "false_slip_flag_pct", "estimation_samples"}) {
     metrics.erase(key);
   }
   return {

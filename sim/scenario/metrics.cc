@@ -151,7 +151,8 @@ void MetricsTracker::Update(const TickSample& sample) {
     const bool seating = t < grasp_start_s_ + config_.seating_s;
     // A creep: sliding above creep speed, with gaps shorter than slip_event_gap_s, from its start.
     const bool creeping = !seating && speed > config_.creep_speed_m_s;
-    if (creep_start_s_ >= 0.0 && !creeping && t - creep_last_s_ >= config_.slip_event_gap_s) creep_start_s_ = -1.0;
+    if (creep_start_s_ >= 0.0 && !creeping && t - creep_last_s_ >= config_.slip_event_gap_s)
+      creep_start_s_ = -1.0;
     if (creeping) {
       if (creep_start_s_ < 0.0) {
         creep_start_s_ = t;
@@ -160,8 +161,8 @@ void MetricsTracker::Update(const TickSample& sample) {
       creep_distance_m_ += speed * dt;
       creep_last_s_ = t;
     }
-    const bool creep_event = config_.creep_event_m > 0.0 && creep_start_s_ >= 0.0 &&
-                             creep_distance_m_ >= config_.creep_event_m;
+    const bool creep_event =
+        config_.creep_event_m > 0.0 && creep_start_s_ >= 0.0 && creep_distance_m_ >= config_.creep_event_m;
     if (seating) {
       if (rising_flag) ++flags_;
     } else if (speed > config_.slip_speed_m_s || (creep_event && creeping)) {

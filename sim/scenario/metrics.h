@@ -46,9 +46,9 @@ struct Metrics {
   std::optional<double> grip_efficiency_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
-  int slip_events = 0;              ///< ground-truth slip events while held
-  int missed_slip_events = 0;       ///< of those, never flagged by the controller
-  int controller_slip_flags = 0;    ///< rising edges of the controller's slip flag while held
+  int slip_events = 0;            ///< ground-truth slip events while held
+  int missed_slip_events = 0;     ///< of those, never flagged by the controller
+  int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
   /// Flags matching no slip event with no contact sliding at the friction limit (above creep speed)
   /// in the early_detection_window_s before them: the contact was not slipping at all.
   int false_slip_flags = 0;

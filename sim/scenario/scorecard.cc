@@ -382,7 +382,8 @@ const std::vector<Figure>& Figures() {
          return OptionalText(s.incipient_per_min, "%.2f") + " (" + Int(s.incipient_flags) + ")";
        },
        [](const ControllerScore& s) { return OptionalJson(s.incipient_per_min); }},
-      {"incipient-slip flags", "incipient_flags", [](const ControllerScore& s) { return Int(s.incipient_flags); },
+      {"incipient-slip flags", "incipient_flags",
+       [](const ControllerScore& s) { return Int(s.incipient_flags); },
        [](const ControllerScore& s) { return nlohmann::json(s.incipient_flags); }},
       {"false flag up, % of held", "false_flag_pct",
        [](const ControllerScore& s) { return OptionalText(s.false_flag_pct, "%.1f %%"); },

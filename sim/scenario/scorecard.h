@@ -77,12 +77,12 @@ struct ControllerScore {
   std::optional<double> latency_p50_ms;  ///< over detected events [ms]
   std::optional<double> latency_p95_ms;
   int false_flags = 0;
-  double held_min = 0.0;                 ///< time held, all runs [min]
-  std::optional<double> false_per_min;   ///< false_flags / held_min [1/min]
-  int incipient_flags = 0;                   ///< flags near a contact sliding below the event speed
-  std::optional<double> incipient_per_min;   ///< incipient_flags / held_min [1/min]
-  double false_flag_min = 0.0;           ///< time the flag was up outside slip events, all runs [min]
-  std::optional<double> false_flag_pct;  ///< false_flag_min / held_min [%]
+  double held_min = 0.0;                    ///< time held, all runs [min]
+  std::optional<double> false_per_min;      ///< false_flags / held_min [1/min]
+  int incipient_flags = 0;                  ///< flags near a contact sliding below the event speed
+  std::optional<double> incipient_per_min;  ///< incipient_flags / held_min [1/min]
+  double false_flag_min = 0.0;              ///< time the flag was up outside slip events, all runs [min]
+  std::optional<double> false_flag_pct;     ///< false_flag_min / held_min [%]
   int drops = 0;
   int crushes = 0;
   std::optional<double> grip_ratio_median;  ///< peak grip / needed grip over runs with a load [-]

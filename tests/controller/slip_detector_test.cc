@@ -383,15 +383,17 @@ TEST(SlipDetectorTest, ContactThresholdFollowsTheReportedNormalNoise) {
       const SlipSignals& signals = stream.detector.Update(state, state.total_fn_n, kFriction, false, true);
       if (signals.in_contact) ++contact_frames;
     }
-    EXPECT_NEAR(stream.detector.signals().contact_threshold_n, std::max(0.15, contact_noise_sigmas * 0.17), 1e-12);
+    EXPECT_NEAR(stream.detector.signals().contact_threshold_n, std::max(0.15, contact_noise_sigmas * 0.17),
+                1e-12);
     return contact_frames;
   };
   const int noise_only = count_contact_frames(5.0, 0.0);
   const int noise_only_fixed_threshold = count_contact_frames(0.0, 0.0);
   const int real_contact = count_contact_frames(5.0, 8.0);
-  std::printf("[ measure ] noise alone read as contact: %d of 1000 frames at 5 sigma, %d at the fixed 0.15 N; "
-              "an 8 N contact: %d\n",
-              noise_only, noise_only_fixed_threshold, real_contact);
+  std::printf(
+      "[ measure ] noise alone read as contact: %d of 1000 frames at 5 sigma, %d at the fixed 0.15 N; "
+      "an 8 N contact: %d\n",
+      noise_only, noise_only_fixed_threshold, real_contact);
   EXPECT_EQ(noise_only, 0);
   EXPECT_GT(noise_only_fixed_threshold, 500);  // what the fixed threshold did
   EXPECT_EQ(real_contact, 1000);

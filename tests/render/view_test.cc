@@ -72,8 +72,9 @@ TEST(ViewCliTest, RefusesADirectoryThatIsNotARunAndSaysWhenThereIsNoDisplay) {
   EXPECT_NE(no_display.err.find("no display?"), std::string::npos) << no_display.err;
 }
 
-/// Runs `graspbed view ARGUMENTS` (the script adds `view`) on a virtual display while tests/render/view_keys.sh types `keys`
-/// (xdotool key names, `sleep:S` pauses) into its window, as a user's keyboard would.
+/// Runs `graspbed view ARGUMENTS` (the script adds `view`) on a virtual display while
+/// tests/render/view_keys.sh types `keys` (xdotool key names, `sleep:S` pauses) into its window, as a user's
+/// keyboard would.
 CliResult ViewWithKeys(const std::string& keys, const std::string& arguments) {
   return RunCliUnder(std::string(kVirtualDisplay) + "sh " + SourcePath("tests/render/view_keys.sh") + " ",
                      "'" + keys + "' " + arguments);

@@ -236,14 +236,16 @@ TEST(ScenarioConfigTest, OverridesThatBelongTogetherLoadInAnyOrderAndMayComplete
 TEST(ScenarioConfigTest, RatesAboveThePhysicsStepRateAreRefusedNotSilentlyLowered) {
   const std::string text = "duration_s: 1\n";
   std::string error = ErrorOf(text, {{"controller.rate_hz", "2000"}});
-  EXPECT_NE(error.find("controller.rate_hz = 2000: must be <= 1 / physics.timestep_s = 1000 Hz"), std::string::npos)
+  EXPECT_NE(error.find("controller.rate_hz = 2000: must be <= 1 / physics.timestep_s = 1000 Hz"),
+            std::string::npos)
       << error;
   error = ErrorOf(text, {{"sensor.sample_rate_hz", "1500"}});
   EXPECT_NE(error.find("sensor.sample_rate_hz = 1500: must be <= 1 / physics.timestep_s"), std::string::npos)
       << error;
   // A shorter step allows them; the serial backend has no physics step.
   EXPECT_EQ(ErrorOf(text, {{"physics.timestep_s", "0.0005"}, {"controller.rate_hz", "2000"}}), "");
-  EXPECT_EQ(ErrorOf(text, {{"controller.rate_hz", "2000"}, {"backend", "serial"}, {"serial.port", "/dev/x"}}), "");
+  EXPECT_EQ(ErrorOf(text, {{"controller.rate_hz", "2000"}, {"backend", "serial"}, {"serial.port", "/dev/x"}}),
+            "");
 }
 
 TEST(ScenarioConfigTest, ChangingTheControllerDropsTheOldControllersParameters) {

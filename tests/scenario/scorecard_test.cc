@@ -243,10 +243,11 @@ TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndGripsAtMost
   ASSERT_TRUE(scorecard.completed);
   ASSERT_EQ(scorecard.scores.size(), 1u);
   const ControllerScore& score = scorecard.scores[0];
-  std::printf("[ measure ] shipped set, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
-              "%.2f false flags/min held, grip ratio median %.2f\n",
-              score.runs, score.passed, score.slip_detected, score.slip_events, score.latency_p95_ms.value_or(-1.0),
-              score.false_per_min.value_or(-1.0), score.grip_ratio_median.value_or(-1.0));
+  std::printf(
+      "[ measure ] shipped set, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
+      "%.2f false flags/min held, grip ratio median %.2f\n",
+      score.runs, score.passed, score.slip_detected, score.slip_events, score.latency_p95_ms.value_or(-1.0),
+      score.false_per_min.value_or(-1.0), score.grip_ratio_median.value_or(-1.0));
   EXPECT_EQ(score.errors, 0);
   EXPECT_EQ(score.runs, scorecard.runs_per_controller);
   EXPECT_EQ(score.physics_faults, 0);
