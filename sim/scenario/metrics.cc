@@ -197,6 +197,8 @@ void MetricsTracker::Update(const TickSample& sample) {
       }
     }
     pending_count_ = kept;
+  } else {
+    creep_start_s_ = -1.0;  // a creep belongs to the grasp it happened in
   }
 
   // Estimation error over (tick, unit) pairs in contact, valid and fresh.
