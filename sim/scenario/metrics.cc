@@ -167,13 +167,18 @@ void MetricsTracker::Update(const TickSample& sample) {
       if (rising_flag) ++flags_;
     } else if (speed > config_.slip_speed_m_s || (creep_event && creeping)) {
       if (!event_open_) {
-        OpenEvent(t, speed > config_.slip_speed_m_s ? t : creep_start_s_);
+        const bool fast = speed > config_.slip_speed_m_s;
+        OpenEvent(t, fast ? t : creep_start_s_);
+        if (!fast) current_.distance_m = creep_distance_m_;  // from its back-dated onset
       }
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
+      // Sliding that goes on after the event is a creep of its own from here, not one that began
+      // before the event and would open a second event with an earlier onset.
+      creep_start_s_ = -1.0;
     }
     // A contact sliding at the friction limit up to early_detection_window_s before a flag, too
     // slowly for an event, makes it an incipient-slip flag rather than a false one. Sliding after

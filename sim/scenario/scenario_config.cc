@@ -968,16 +968,19 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
     return root;
   };
   // Validated with every override applied, so overrides that belong together (backend and port) may
-  // come in any order, and a file completed by them (a serial backend given its port) loads.
+  // come in any order, and a file completed by them (a serial backend given its port) loads. An
+  // override that cannot be applied (a bad index or value) says so itself, naming the override.
+  const YAML::Node root = root_with(overrides.size());
   try {
-    return LoadFromRoot(root_with(overrides.size()), source_name);
+    return LoadFromRoot(root, source_name);
   } catch (const ConfigError& full) {
     if (overrides.empty()) throw;
     // Name where the error came in: the file itself (it carries its lines) or the first override
     // after which the same error appears.
     for (size_t count = 0; count < overrides.size(); ++count) {
+      const YAML::Node prefix = root_with(count);
       try {
-        LoadFromRoot(root_with(count), source_name);
+        LoadFromRoot(prefix, source_name);
       } catch (const ConfigError& error) {
         if (std::string(error.what()) != full.what()) continue;
         if (count == 0) throw;

@@ -339,11 +339,43 @@ TEST(TrackerCreepTest, ASlowSlideIsAnEventOnceItHasCreptFarEnoughWithItsOnsetAtI
   EXPECT_NEAR(counted.events[0].onset_s, 0.5, 1e-9);
   EXPECT_NEAR(*counted.slip_detect_latency_ms, 40.0, 1e-6);
   EXPECT_EQ(counted.false_slip_flags + counted.incipient_slip_flags, 0);
+  // The creep's distance counts from its onset.
+  EXPECT_NEAR(counted.events[0].distance_m, 0.3e-3, 0.01e-3);
   // Off (the default): no event; the flag followed sliding, so it is an incipient-slip flag.
   const Metrics off = run(0.0);
   EXPECT_EQ(off.slip_events, 0);
   EXPECT_EQ(off.incipient_slip_flags, 1);
   EXPECT_NEAR(off.max_slip_mm, 0.3, 0.01);
+}
+
+TEST(TrackerCreepTest, SlidingOnAfterAFastSlipIsANewCreepNotAnEarlierOne) {
+  // Creep at 1 mm/s from 0.5 s, a burst at 10 mm/s at 0.55 - 0.56 s, creep again until 1.0 s. The
+  // burst's event closes 50 ms after it with 0.2 mm slid, under the 0.3 mm of a creep event; the
+  // creep that goes on is a second event, with its onset after the first ended (not at 0.5 s).
+  MetricsConfig config;
+  config.creep_event_m = 0.3e-3;
+  MetricsTracker tracker(config, 8.0, 0.05);
+  sim::GroundTruth truth;
+  truth.finger_contacts = truth.thumb_contacts = 1;
+  truth.finger_normal_force_n = truth.object_squeeze_n = 2.0;
+  sensor::TactileState state;
+  for (int tick = 0; tick <= 1500; ++tick) {
+    const double t = tick * kTickS;
+    double speed = 0.0;
+    if (t >= 0.5 - kTimeTolS && t < 1.0 - kTimeTolS) speed = 0.001;
+    if (t >= 0.55 - kTimeTolS && t < 0.56 - kTimeTolS) speed = 0.01;
+    truth.slip_speed_m_s = truth.sliding_speed_m_s = speed;
+    TickSample sample;
+    sample.time_s = t;
+    sample.intent = controller::GraspIntent::kClose;
+    sample.truth = &truth;
+    sample.state = &state;
+    tracker.Update(sample);
+  }
+  const Metrics m = tracker.Finish(1.5, 0.1, 0.0);
+  ASSERT_EQ(m.slip_events, 2);
+  EXPECT_NEAR(m.events[0].onset_s, 0.55, 1e-9);
+  EXPECT_GT(m.events[1].onset_s, m.events[0].end_s);
 }
 
 TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {

@@ -231,6 +231,10 @@ TEST(ScenarioConfigTest, OverridesThatBelongTogetherLoadInAnyOrderAndMayComplete
   EXPECT_NE(error.find("test.yaml:1: backend = serial"), std::string::npos) << error;
   error = ErrorOf(text, {{"object.mass_kg", "-1"}, {"seed", "3"}});
   EXPECT_NE(error.find("--set object.mass_kg=-1: "), std::string::npos) << error;
+  // An override that cannot be applied names itself, once.
+  error = ErrorOf(text, {{"seed", "3"}, {"script[9].at_s", "1"}});
+  EXPECT_NE(error.find("index 9 out of range"), std::string::npos) << error;
+  EXPECT_EQ(error.find("--set"), error.rfind("--set")) << error;
 }
 
 TEST(ScenarioConfigTest, RatesAboveThePhysicsStepRateAreRefusedNotSilentlyLowered) {
