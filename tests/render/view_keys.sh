@@ -20,6 +20,7 @@ if [ -z "$window" ]; then
   exit 3
 fi
 xdotool windowfocus --sync "$window"
+sleep 1  # the viewer's first frames (llvmpipe) before the first key, so none arrives unread
 for key in $keys; do
   case $key in
     sleep:*) sleep "${key#sleep:}" ;;
