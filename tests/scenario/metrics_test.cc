@@ -307,30 +307,41 @@ TEST_F(TrackerTest, AFlagAfterSlidingTooSlowForAnEventIsIncipientNotFalse) {
   EXPECT_EQ(m.false_slip_flags, 2);
 }
 
+/// Runs a tracker with `config` over held ticks 0 .. end_s at 1 kHz, the object sliding at the
+/// friction limit at `speed_m_s(t)` and the controller flagging where `flag(t)`; returns its metrics.
+template <typename Speed, typename Flag>
+Metrics RunHeld(const MetricsConfig& config, double end_s, Speed speed_m_s, Flag flag) {
+  MetricsTracker tracker(config, /*crush_limit_n=*/8.0, /*contact_threshold_n=*/0.05);
+  sim::GroundTruth truth;
+  truth.finger_contacts = truth.thumb_contacts = 1;
+  truth.finger_normal_force_n = truth.object_squeeze_n = 2.0;
+  sensor::TactileState state;
+  for (int tick = 0; tick * kTickS <= end_s + kTimeTolS; ++tick) {
+    const double t = tick * kTickS;
+    truth.slip_speed_m_s = truth.sliding_speed_m_s = speed_m_s(t);
+    TickSample sample;
+    sample.time_s = t;
+    sample.intent = controller::GraspIntent::kClose;
+    sample.truth = &truth;
+    sample.state = &state;
+    sample.controller_slip = flag(t);
+    tracker.Update(sample);
+  }
+  return tracker.Finish(end_s, 0.1, 0.0);
+}
+
+/// True for t in [from_s, to_s) at tick resolution.
+bool Within(double t, double from_s, double to_s) { return t >= from_s - kTimeTolS && t < to_s - kTimeTolS; }
+
 TEST(TrackerCreepTest, ASlowSlideIsAnEventOnceItHasCreptFarEnoughWithItsOnsetAtItsStart) {
   // 1 mm/s at the friction limit for 0.3 s (0.3 mm; under the 2 mm/s of a slip event), flagged
   // 40 ms after it began.
   const auto run = [](double creep_event_m) {
     MetricsConfig config;
     config.creep_event_m = creep_event_m;
-    MetricsTracker tracker(config, 8.0, 0.05);
-    sim::GroundTruth truth;
-    truth.finger_contacts = truth.thumb_contacts = 1;
-    truth.finger_normal_force_n = truth.object_squeeze_n = 2.0;
-    sensor::TactileState state;
-    for (int tick = 0; tick <= 1000; ++tick) {
-      const double t = tick * kTickS;
-      const bool creeping = t >= 0.5 - kTimeTolS && t < 0.8 - kTimeTolS;
-      truth.slip_speed_m_s = truth.sliding_speed_m_s = creeping ? 0.001 : 0.0;
-      TickSample sample;
-      sample.time_s = t;
-      sample.intent = controller::GraspIntent::kClose;
-      sample.truth = &truth;
-      sample.state = &state;
-      sample.controller_slip = t >= 0.54 - kTimeTolS && t < 0.6 - kTimeTolS;
-      tracker.Update(sample);
-    }
-    return tracker.Finish(1.0, 0.1, 0.0);
+    return RunHeld(
+        config, 1.0, [](double t) { return Within(t, 0.5, 0.8) ? 0.001 : 0.0; },
+        [](double t) { return Within(t, 0.54, 0.6); });
   };
   const Metrics counted = run(0.2e-3);
   ASSERT_EQ(counted.slip_events, 1);
@@ -354,25 +365,10 @@ TEST(TrackerCreepTest, SlidingOnAfterAFastSlipIsANewCreepNotAnEarlierOne) {
   // creep that goes on is a second event, with its onset after the first ended (not at 0.5 s).
   MetricsConfig config;
   config.creep_event_m = 0.3e-3;
-  MetricsTracker tracker(config, 8.0, 0.05);
-  sim::GroundTruth truth;
-  truth.finger_contacts = truth.thumb_contacts = 1;
-  truth.finger_normal_force_n = truth.object_squeeze_n = 2.0;
-  sensor::TactileState state;
-  for (int tick = 0; tick <= 1500; ++tick) {
-    const double t = tick * kTickS;
-    double speed = 0.0;
-    if (t >= 0.5 - kTimeTolS && t < 1.0 - kTimeTolS) speed = 0.001;
-    if (t >= 0.55 - kTimeTolS && t < 0.56 - kTimeTolS) speed = 0.01;
-    truth.slip_speed_m_s = truth.sliding_speed_m_s = speed;
-    TickSample sample;
-    sample.time_s = t;
-    sample.intent = controller::GraspIntent::kClose;
-    sample.truth = &truth;
-    sample.state = &state;
-    tracker.Update(sample);
-  }
-  const Metrics m = tracker.Finish(1.5, 0.1, 0.0);
+  const Metrics m = RunHeld(
+      config, 1.5,
+      [](double t) { return Within(t, 0.55, 0.56) ? 0.01 : (Within(t, 0.5, 1.0) ? 0.001 : 0.0); },
+      [](double) { return false; });
   ASSERT_EQ(m.slip_events, 2);
   EXPECT_NEAR(m.events[0].onset_s, 0.55, 1e-9);
   EXPECT_GT(m.events[1].onset_s, m.events[0].end_s);
