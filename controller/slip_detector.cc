@@ -133,9 +133,7 @@ void SlipDetector::Reset() {
   settle_threshold_n_ = 0.0;
   noise_known_seen_ = false;
   noise_generation_seen_ = 0;
-  unit_contact_threshold_n_.fill(config_.contact_unit_threshold_n);
-  contact_sum_threshold_n_ = kContactSumFactor * config_.contact_unit_threshold_n;
-  signals_.contact_threshold_n = config_.contact_unit_threshold_n;
+  ResetContactThresholds();
   RestartContact();
 }
 
@@ -160,6 +158,12 @@ void SlipDetector::RestartContact() {
   preload_frames_ = 0;
   signals_.preload_shear_axial_n = 0.0;
   signals_.preload_shear_circumferential_n = 0.0;
+}
+
+void SlipDetector::ResetContactThresholds() {
+  unit_contact_threshold_n_.fill(config_.contact_unit_threshold_n);
+  contact_sum_threshold_n_ = kContactSumFactor * config_.contact_unit_threshold_n;
+  signals_.contact_threshold_n = config_.contact_unit_threshold_n;
 }
 
 bool SlipDetector::IsAxial(int unit) const {
@@ -262,9 +266,7 @@ void SlipDetector::UpdateSensorNoise(const TactileState& state) {
   signals_.sensor_shear_noise_n = 0.0;
   signals_.sensor_normal_noise_n = 0.0;
   signals_.shear_blind = false;
-  unit_contact_threshold_n_.fill(config_.contact_unit_threshold_n);
-  contact_sum_threshold_n_ = kContactSumFactor * config_.contact_unit_threshold_n;
-  signals_.contact_threshold_n = config_.contact_unit_threshold_n;
+  ResetContactThresholds();
   if (!state.noise_known) return;
   const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
   double shear_sum = 0.0, normal_sum = 0.0;

@@ -203,6 +203,8 @@ class SlipDetector {
 
   bool IsAxial(int unit) const;
   void UpdateSensorNoise(const sensor::TactileState& state);
+  /// Contact thresholds back to contact_unit_threshold_n (and the sum's to kContactSumFactor x it).
+  void ResetContactThresholds();
   void UpdateRatio(const sensor::TactileState& state, double grip_n, double friction_estimate, bool live);
   void UpdateVibration(const sensor::TactileState& state, bool learn_noise);
   void UpdateCentroid(const sensor::TactileState& state, double grip_n, bool live);

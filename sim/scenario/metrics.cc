@@ -41,14 +41,14 @@ void MetricsTracker::OpenEvent(double time_s, double onset_s) {
   // a creep (opened only once it had crept far enough) detected it that much after the onset.
   const double window_start = onset_s - config_.early_detection_window_s;
   for (int i = 0; i < pending_count_; ++i) {
-    if (pending_flags_[i] >= window_start) {
-      const double latency_s = std::max(0.0, pending_flags_[i] - onset_s);
+    if (pending_flags_[i].time_s >= window_start) {
+      const double latency_s = std::max(0.0, pending_flags_[i].time_s - onset_s);
       if (!current_.detected || latency_s < current_.latency_s) {
         current_.detected = true;
         current_.latency_s = latency_s;
       }
     } else {
-      JudgeUnmatchedFlag(i);  // older than the window: it matched nothing
+      JudgeUnmatchedFlag(pending_flags_[i]);  // older than the window: it matched nothing
     }
   }
   pending_count_ = 0;
@@ -75,17 +75,15 @@ void MetricsTracker::OnControllerFlag(double time_s) {
     return;  // a repeated flag during an event is no false alarm
   }
   if (pending_count_ == static_cast<int>(pending_flags_.size())) {
-    JudgeUnmatchedFlag(0);  // window full of flags: the oldest cannot all be early detections
+    JudgeUnmatchedFlag(pending_flags_[0]);  // window full of flags: the oldest cannot all be early detections
     std::copy(pending_flags_.begin() + 1, pending_flags_.end(), pending_flags_.begin());
-    std::copy(pending_sliding_.begin() + 1, pending_sliding_.end(), pending_sliding_.begin());
     --pending_count_;
   }
-  pending_sliding_[pending_count_] = last_sliding_s_ >= time_s - config_.early_detection_window_s;
-  pending_flags_[pending_count_++] = time_s;
+  pending_flags_[pending_count_++] = {time_s, last_sliding_s_ >= time_s - config_.early_detection_window_s};
 }
 
-void MetricsTracker::JudgeUnmatchedFlag(int pending_index) {
-  if (pending_sliding_[pending_index]) {
+void MetricsTracker::JudgeUnmatchedFlag(const PendingFlag& flag) {
+  if (flag.after_sliding) {
     ++incipient_flags_;
   } else {
     ++false_flags_;
@@ -194,11 +192,10 @@ void MetricsTracker::Update(const TickSample& sample) {
     }
     int kept = 0;
     for (int i = 0; i < pending_count_; ++i) {
-      if (pending_flags_[i] >= keep_from_s) {
-        pending_sliding_[kept] = pending_sliding_[i];
+      if (pending_flags_[i].time_s >= keep_from_s) {
         pending_flags_[kept++] = pending_flags_[i];
       } else {
-        JudgeUnmatchedFlag(i);
+        JudgeUnmatchedFlag(pending_flags_[i]);
       }
     }
     pending_count_ = kept;
@@ -249,7 +246,7 @@ void MetricsTracker::Update(const TickSample& sample) {
 Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_time_s) const {
   MetricsTracker copy = *this;  // closing the open event must not change the live tracker
   if (copy.event_open_) copy.CloseEvent();
-  for (int i = 0; i < copy.pending_count_; ++i) copy.JudgeUnmatchedFlag(i);
+  for (int i = 0; i < copy.pending_count_; ++i) copy.JudgeUnmatchedFlag(copy.pending_flags_[i]);
   copy.pending_count_ = 0;
 
   Metrics m;

@@ -115,13 +115,18 @@ class MetricsTracker {
   Metrics Finish(double sim_s, double wall_s, double first_close_time_s) const;
 
  private:
+  /// A flag not (yet) matched to an event, within the early-detection window of now.
+  struct PendingFlag {
+    double time_s = 0.0;
+    bool after_sliding = false;  ///< a contact slid above creep speed within the window before it
+  };
   /// Opens an event at `time_s` whose onset was `onset_s` (earlier for a creep, which becomes an event
   /// only once it has crept MetricsConfig::creep_event_m).
   void OpenEvent(double time_s, double onset_s);
   void CloseEvent();
   void OnControllerFlag(double time_s);
-  /// A flag that matched no event: false, or incipient when a contact slid near it.
-  void JudgeUnmatchedFlag(int pending_index);
+  /// A flag that matched no event: false, or incipient when a contact slid just before it.
+  void JudgeUnmatchedFlag(const PendingFlag& flag);
 
   MetricsConfig config_;
   double crush_limit_n_ = 0.0;
@@ -159,10 +164,7 @@ class MetricsTracker {
   int incipient_flags_ = 0;
   double last_sliding_s_ = -1e9;  ///< latest held tick with a contact sliding above creep speed [s]
   double false_flag_s_ = 0.0;
-  /// Flags not (yet) matched to an event, within the early-detection window of now.
-  std::array<double, 64> pending_flags_{};
-  /// Per pending flag: a contact slid above creep speed within the early window before it.
-  std::array<bool, 64> pending_sliding_{};
+  std::array<PendingFlag, 64> pending_flags_{};
   int pending_count_ = 0;
   int missed_ = 0;
   double worst_latency_s_ = -1.0;
