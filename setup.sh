@@ -17,7 +17,8 @@ packages=(
   libeigen3-dev libyaml-cpp-dev                  # linear algebra, configuration files
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   libcli11-dev nlohmann-json3-dev                # command line, JSON output
-  libcairo2-dev fonts-dejavu-core                # PNG plots; their labels need a font
+  libcairo2-dev fonts-dejavu-core                # plots are drawn with cairo; their labels need a font
+  libpng-dev                                     # PNG files (plots, stills): written with libpng's fast settings
   libegl-dev libegl-mesa0 libgl1-mesa-dri        # offscreen rendering: EGL, Mesa llvmpipe (no display/GPU)
   ffmpeg                                         # videos: run --video pipes frames to it; tests read them with ffprobe
   libglfw3-dev xvfb xauth xdotool                # graspbed view: a window (GLFW); its tests run under xvfb-run and type keys with xdotool

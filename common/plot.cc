@@ -1,17 +1,17 @@
 #include "common/plot.h"
 
 #include <cairo.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <stdexcept>
-#include <system_error>
+
+#include "common/rgb_image.h"
 
 namespace graspbed::plot {
 namespace {
@@ -90,6 +90,60 @@ void ShowText(cairo_t* cr, const std::string& text, double x, double y, double a
 }
 
 // Draws one chart into the rectangle (x0, y0, width, height) of the surface.
+// Adds `series` to the path as polylines in pixels (non-finite points break the line), keeping of
+// each run of consecutive points in one pixel column only the first, the lowest, the highest and the
+// last: the same pixels as a line through every point, for a fraction of the stroke's cost (a 20 s
+// run logs 20000 samples for a 700 px wide chart).
+template <typename ToPxX, typename ToPxY>
+void AddPolyline(cairo_t* cr, const Series& series, ToPxX to_px_x, ToPxY to_px_y) {
+  struct Point {
+    double x, y;
+  };
+  bool pen_down = false;
+  auto emit = [&](const Point& p) {
+    if (pen_down) {
+      cairo_line_to(cr, p.x, p.y);
+    } else {
+      cairo_move_to(cr, p.x, p.y);
+      pen_down = true;
+    }
+  };
+  // The open column: its points in order of arrival, the lowest and the highest by pixel y.
+  bool open = false;
+  double column = 0.0;
+  size_t first = 0, low = 0, high = 0, last = 0;
+  std::vector<Point> points(series.x.size());
+  auto flush = [&] {
+    if (!open) return;
+    std::array<size_t, 4> order{first, low, high, last};
+    std::sort(order.begin(), order.end());
+    for (size_t k = 0; k < order.size(); ++k) {
+      if (k == 0 || order[k] != order[k - 1]) emit(points[order[k]]);
+    }
+    open = false;
+  };
+  for (size_t i = 0; i < series.x.size(); ++i) {
+    if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) {
+      flush();
+      pen_down = false;
+      continue;
+    }
+    points[i] = {to_px_x(series.x[i]), to_px_y(series.y[i])};
+    const double this_column = std::floor(points[i].x);
+    if (open && this_column == column) {
+      if (points[i].y < points[low].y) low = i;
+      if (points[i].y > points[high].y) high = i;
+      last = i;
+      continue;
+    }
+    flush();
+    open = true;
+    column = this_column;
+    first = low = high = last = i;
+  }
+  flush();
+}
+
 void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
   Range x_range;
   Range y_range;
@@ -214,21 +268,7 @@ void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double wid
     cairo_set_line_width(cr, 2.0);
     const double dash[] = {7.0, 4.0};
     cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
-    bool pen_down = false;
-    for (size_t i = 0; i < series.x.size(); ++i) {
-      if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) {
-        pen_down = false;
-        continue;
-      }
-      const double px = to_px_x(series.x[i]);
-      const double py = to_px_y(series.y[i]);
-      if (pen_down) {
-        cairo_line_to(cr, px, py);
-      } else {
-        cairo_move_to(cr, px, py);
-        pen_down = true;
-      }
-    }
+    AddPolyline(cr, series, to_px_x, to_px_y);
     cairo_stroke(cr);
     cairo_set_dash(cr, nullptr, 0, 0);
     if (series.markers) {
@@ -307,20 +347,23 @@ void Render(int width_px, int height_px, const std::string& path, DrawFn draw) {
     throw std::runtime_error("plot: drawing " + path +
                              " failed: " + cairo_status_to_string(cairo_status(cr.get())));
   }
-  const std::string temp_path = path + ".tmp." + std::to_string(::getpid());
-  const cairo_status_t status = cairo_surface_write_to_png(surface.get(), temp_path.c_str());
-  if (status != CAIRO_STATUS_SUCCESS) {
-    std::error_code ignored;
-    std::filesystem::remove(temp_path, ignored);
-    throw std::runtime_error("plot: cannot write " + path + ": " + cairo_status_to_string(status));
+  // CAIRO_FORMAT_RGB24: one native-endian uint32 per pixel, 0x00RRGGBB.
+  image::RgbImage picture;
+  picture.width_px = width_px;
+  picture.height_px = height_px;
+  picture.rgb.resize(static_cast<size_t>(width_px) * height_px * 3);
+  const unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  uint8_t* out = picture.rgb.data();
+  for (int row = 0; row < height_px; ++row) {
+    const auto* in = reinterpret_cast<const uint32_t*>(data + static_cast<size_t>(row) * stride);
+    for (int column = 0; column < width_px; ++column, out += 3) {
+      out[0] = static_cast<uint8_t>(in[column] >> 16);
+      out[1] = static_cast<uint8_t>(in[column] >> 8);
+      out[2] = static_cast<uint8_t>(in[column]);
+    }
   }
-  std::error_code error;
-  std::filesystem::rename(temp_path, path, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temp_path, ignored);
-    throw std::runtime_error("plot: cannot write " + path + ": " + error.message());
-  }
+  image::WritePng(picture, path);
 }
 
 // ---- heat maps ------------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
 #pragma once
-/// An 8-bit RGB picture in memory (rows from the top) and its PNG file (cairo), for rendered stills.
+/// An 8-bit RGB picture in memory (rows from the top) and its PNG file (libpng), for plots and stills.
 /// Files are written atomically (temporary file + rename), so a reader never sees half a PNG.
 
 #include <cstdint>
@@ -25,8 +25,8 @@ struct RgbImage {
 /// be written.
 void WritePng(const RgbImage& image, const std::string& path);
 
-/// Reads a PNG (any of cairo's formats; alpha is dropped). Throws std::runtime_error naming the path
-/// when the file is missing or not a PNG.
+/// Reads a PNG (any of its colour types and depths, converted to 8-bit RGB). Throws std::runtime_error naming
+/// the path when the file is missing or not a PNG.
 RgbImage ReadPng(const std::string& path);
 
 }  // namespace graspbed::image

@@ -1,7 +1,6 @@
 // The run's taxel pictures: taxels_fn.png and taxels_ft.png, units x time colour maps of the estimated
 // Fn and Ft, written beside the other plots at their fixed size, with a loaded unit's row coloured
-// where an unloaded unit's row stays white. The PNGs are read back with cairo.
-#include <cairo.h>
+// where an unloaded unit's row stays white. The PNGs are read back with image::ReadPng.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -10,6 +9,7 @@
 #include <string>
 
 #include "common/plot.h"
+#include "common/rgb_image.h"
 #include "sim/scenario/runner.h"
 #include "sim/scenario/scenario_config.h"
 #include "tests/scenario/scenario_test_util.h"
@@ -29,28 +29,11 @@ constexpr int kUnits = 20;        // default_20 layout
 constexpr double kLoadedN = 1.0;  // clearly loaded
 constexpr int kWhiteTol = 8;      // an unloaded cell is white within this, per channel [0..255]
 
-class Png {
- public:
-  explicit Png(const std::string& path) : surface_(cairo_image_surface_create_from_png(path.c_str())) {}
-  ~Png() { cairo_surface_destroy(surface_); }
-  Png(const Png&) = delete;
-  Png& operator=(const Png&) = delete;
-  bool ok() const { return cairo_surface_status(surface_) == CAIRO_STATUS_SUCCESS; }
-  int width() const { return cairo_image_surface_get_width(surface_); }
-  int height() const { return cairo_image_surface_get_height(surface_); }
-  /// {r, g, b} at pixel (x, y), 0..255.
-  std::array<int, 3> At(double x, double y) const {
-    const unsigned char* data = cairo_image_surface_get_data(surface_);
-    const int stride = cairo_image_surface_get_stride(surface_);
-    const uint32_t pixel =
-        *reinterpret_cast<const uint32_t*>(data + static_cast<int>(y) * stride + 4 * static_cast<int>(x));
-    return {static_cast<int>((pixel >> 16) & 0xff), static_cast<int>((pixel >> 8) & 0xff),
-            static_cast<int>(pixel & 0xff)};
-  }
-
- private:
-  cairo_surface_t* surface_;
-};
+// {r, g, b} at pixel (x, y), 0..255.
+std::array<int, 3> At(const image::RgbImage& picture, double x, double y) {
+  const uint8_t* p = picture.At(static_cast<int>(x), static_cast<int>(y));
+  return {p[0], p[1], p[2]};
+}
 
 bool IsWhite(const std::array<int, 3>& rgb) {
   return rgb[0] >= 255 - kWhiteTol && rgb[1] >= 255 - kWhiteTol && rgb[2] >= 255 - kWhiteTol;
@@ -82,17 +65,16 @@ TEST(TaxelPlotsTest, RunWritesFnAndFtMapsWhereALoadedUnitsRowDiffersFromAnUnload
   geometry.x = {signals.At("time_s", 0), signals.At("time_s", signals.rows() - 1)};
   geometry.values.resize(kUnits);
   for (const char* name : {"taxels_fn.png", "taxels_ft.png"}) {
-    const Png png(options.out_dir + "/" + name);
-    ASSERT_TRUE(png.ok()) << name;
-    EXPECT_EQ(png.width(), kTaxelWidthPx) << name;
-    EXPECT_EQ(png.height(), kTaxelHeightPx) << name;
+    const image::RgbImage png = image::ReadPng(options.out_dir + "/" + name);
+    EXPECT_EQ(png.width_px, kTaxelWidthPx) << name;
+    EXPECT_EQ(png.height_px, kTaxelHeightPx) << name;
     const auto [x_px, loaded_y_px] = plot::HeatmapCellCenterPx(geometry, loaded, kHeldInAirS);
     const double unloaded_y_px = plot::HeatmapCellCenterPx(geometry, unloaded, kHeldInAirS).second;
-    const std::array<int, 3> unloaded_rgb = png.At(x_px, unloaded_y_px);
+    const std::array<int, 3> unloaded_rgb = At(png, x_px, unloaded_y_px);
     EXPECT_TRUE(IsWhite(unloaded_rgb)) << name << " unit " << unloaded << ": " << unloaded_rgb[0] << ","
                                        << unloaded_rgb[1] << "," << unloaded_rgb[2];
     if (std::string(name) == "taxels_fn.png") {
-      const std::array<int, 3> loaded_rgb = png.At(x_px, loaded_y_px);
+      const std::array<int, 3> loaded_rgb = At(png, x_px, loaded_y_px);
       EXPECT_FALSE(IsWhite(loaded_rgb)) << name << " unit " << loaded;
       EXPECT_NE(loaded_rgb, unloaded_rgb) << name;
     }
@@ -100,9 +82,9 @@ TEST(TaxelPlotsTest, RunWritesFnAndFtMapsWhereALoadedUnitsRowDiffersFromAnUnload
   // The shear map colours the loaded unit by its sign: red for +Ft, blue for -Ft.
   const double ft = signals.AtTime("ft_est_n_" + std::to_string(loaded), kHeldInAirS);
   if (std::abs(ft) > kLoadedN) {
-    const Png png(options.out_dir + "/taxels_ft.png");
+    const image::RgbImage png = image::ReadPng(options.out_dir + "/taxels_ft.png");
     const auto [x_px, y_px] = plot::HeatmapCellCenterPx(geometry, loaded, kHeldInAirS);
-    const std::array<int, 3> rgb = png.At(x_px, y_px);
+    const std::array<int, 3> rgb = At(png, x_px, y_px);
     EXPECT_EQ(ft > 0.0, rgb[0] > rgb[2])
         << "Ft " << ft << " drawn as " << rgb[0] << "," << rgb[1] << "," << rgb[2];
   }
