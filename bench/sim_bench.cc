@@ -335,6 +335,10 @@ int main(int argc, char** argv) {
     add("before: 0.5 ms, noslip 3, impratio 10",
         [](SceneConfig& s) { s.physics = graspbed::sim::PhysicsBefore(); });
     add("timestep 0.5 ms", [](SceneConfig& s) { s.physics.timestep_s = 0.0005; });
+    add("timestep 2 ms, object solref 4 ms", [](SceneConfig& s) {
+      s.physics.timestep_s = 0.002;
+      s.object.solref_timeconst_s = 0.004;
+    });
     add("noslip 1, impratio 10", [](SceneConfig& s) {
       s.physics.noslip_iterations = 1;
       s.physics.impratio = 10;

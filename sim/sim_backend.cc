@@ -76,20 +76,18 @@ void SimBackend::SetLatency(double latency_s) {
   config_.latency_s = latency_s;
 }
 
-void SimBackend::Poll() {
-  const double now = simulation_.time_s();
+void SimBackend::Poll(double now_s) {
+  const double now = now_s;
   const double period = 1.0 / config_.sample_rate_hz;
   const double slack = kTimeSlackPeriods * period;
-  bool loads_current = false;
   while (static_cast<double>(sample_index_) * period <= now + slack) {
     ++sample_index_;
-    if (!loads_current) {
+    // One pass over the contacts per physics state, however many samples it serves.
+    if (loads_time_s_ != simulation_.time_s()) {
       simulation_.ComputeUnitLoads(loads_);
-      loads_time_s_ = now;
-      loads_current = true;
+      loads_time_s_ = simulation_.time_s();
     }
     Slot& slot = ring_[ring_head_];
-    // The frame carries the time of the physics state it was taken from.
     strain_model_.Sample(loads_, now, &slot.frame);
     bool drop = false;
     if (drop_next_ > 0) {

@@ -5,9 +5,10 @@
 /// readout downstream sees RawFrames only, exactly as from hardware; ground truth stays in
 /// Simulation::truth().
 ///
-/// Driving it (the sim-only call controllers never see, like gz_ros2_control's initSim): after every
-/// Simulation::Step() call Poll(); it samples when a sample time has been reached. Read() then hands
-/// out the newest frame whose release time (sample time + latency) has passed.
+/// Driving it (the sim-only call controllers never see, like gz_ros2_control's initSim): whenever the
+/// clock moves (a physics step, or a control instant between steps, SimRig::Step) call Poll(now); it
+/// samples when a sample time has been reached. Read() then hands out the newest frame whose release
+/// time (sample time + latency) has passed.
 
 #include <cstdint>
 #include <random>
@@ -55,9 +56,12 @@ class SimBackend : public sensor::TactileBackend {
   /// `seed` seeds the strain model and the frame-drop draw (same seed = identical frames).
   SimBackend(Simulation& simulation, const SimBackendConfig& config, uint64_t seed);
 
-  /// Samples if the simulation clock has reached the next sample time (possibly several samples
-  /// if Poll() was not called for a while; all at the current physics state). Allocates nothing.
-  void Poll();
+  /// Samples if `now_s` (the rig's clock [s], never behind the simulation's) has reached the next
+  /// sample time (possibly several samples if Poll() was not called for a while), every sample from
+  /// the current physics state: between physics steps the sensor sees the last step's contact forces
+  /// (zero-order hold), as a sensor sampling faster than the physics steps would. Frames carry
+  /// `now_s`. Allocates nothing.
+  void Poll(double now_s);
 
   /// Newest released frame newer than the last one read. Never blocks, never allocates.
   sensor::ReadStatus Read(sensor::RawFrame* frame) override;
@@ -75,8 +79,8 @@ class SimBackend : public sensor::TactileBackend {
   void SetLatency(double latency_s);
   /// The unit loads used for the most recent sample (ground truth of what the sensor saw).
   std::span<const sensor::UnitLoad> last_loads() const { return loads_; }
-  /// Simulated time of the physics state last_loads() were computed from [s]; -1 before the first
-  /// sample. Equal to the simulation's time: they are the loads of the present state.
+  /// Simulated time of the physics state last_loads() were computed from [s] (the simulation's time
+  /// then, not the sample's); -1 before the first sample.
   double last_loads_time_s() const { return loads_time_s_; }
   const SimBackendConfig& config() const { return config_; }
 

@@ -1,5 +1,6 @@
 #include "sim/sim_rig.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -32,21 +33,28 @@ SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibrat
 }
 
 bool SimRig::Step() {
-  simulation_.Step();
-  backend_.Poll();
   const double period = 1.0 / config_.control_rate_hz;
-  // Same slack as the backend's sampling, so a 1 kHz loop sees each 1 kHz frame at once.
-  if (static_cast<double>(control_index_) * period > simulation_.time_s() + 1e-6 * period) return false;
-  while (static_cast<double>(control_index_) * period <= simulation_.time_s() + 1e-6 * period)
-    ++control_index_;
-  loop_.Tick(simulation_.time_s());
+  // Absorbs floating-point sums of timesteps, so a 1 kHz loop sees each 1 kHz frame at once.
+  const double slack = 1e-6 * period;
+  const double next_tick_s = static_cast<double>(control_index_) * period;
+  const double physics_s = simulation_.time_s();
+  if (next_tick_s > physics_s + slack && next_tick_s < physics_s + simulation_.timestep_s() - slack) {
+    clock_s_ = next_tick_s;
+  } else {
+    simulation_.Step();
+    clock_s_ = simulation_.time_s();
+  }
+  backend_.Poll(clock_s_);
+  if (next_tick_s > clock_s_ + slack) return false;
+  while (static_cast<double>(control_index_) * period <= clock_s_ + slack) ++control_index_;
+  loop_.Tick(clock_s_);
   return true;
 }
 
 void SimRig::AdvanceTo(double time_s) {
   // A fault ends the run; Simulation::Step() advances the clock regardless, so this always ends.
-  while (!simulation_.fault().occurred && simulation_.time_s() < time_s - 0.5 * simulation_.timestep_s())
-    Step();
+  const double half_step_s = 0.5 * std::min(simulation_.timestep_s(), 1.0 / config_.control_rate_hz);
+  while (!simulation_.fault().occurred && clock_s_ < time_s - half_step_s) Step();
 }
 
 }  // namespace graspbed::sim

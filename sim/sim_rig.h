@@ -40,14 +40,18 @@ class SimRig {
   SimRig(const SimRig&) = delete;
   SimRig& operator=(const SimRig&) = delete;
 
-  /// Steps physics until time_s() >= `time_s` [s], polling the sensor after every step and ticking the
-  /// control loop at the control rate; returns early at a physics fault (simulation().fault()).
-  /// Allocates nothing.
+  /// Steps until time_s() >= `time_s` [s], polling the sensor and ticking the control loop at the
+  /// control rate; returns early at a physics fault (simulation().fault()). Allocates nothing.
   void AdvanceTo(double time_s);
-  /// One physics step with the same bookkeeping; returns true when the control loop ticked.
+  /// Advances the rig's clock to the next physics step's end or, when a control instant falls before
+  /// it (a physics step longer than the control period), to that instant without stepping the
+  /// physics: there the sensor samples the last step's contact forces (zero-order hold) and the
+  /// loop ticks, as the real loop does between the hand's physical changes. Polls the sensor and
+  /// ticks the control loop when due; returns true when it ticked.
   bool Step();
-  double time_s() const { return simulation_.time_s(); }
-
+  /// The rig's clock [s]: the control loop's and the sensor's time. The physics may be one step
+  /// behind it (simulation().time_s()) between physics steps.
+  double time_s() const { return clock_s_; }
   Simulation& simulation() { return simulation_; }
   SimBackend& backend() { return backend_; }
   SimActuator& actuator() { return actuator_; }
@@ -63,6 +67,7 @@ class SimRig {
   std::unique_ptr<controller::GraspController> controller_;
   controller::ControlLoop loop_;
   int64_t control_index_ = 0;  ///< next control tick: time = control_index_ / control_rate_hz
+  double clock_s_ = 0.0;       ///< time_s()
 };
 
 }  // namespace graspbed::sim

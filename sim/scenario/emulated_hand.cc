@@ -43,11 +43,14 @@ void EmulatedHand::Frame(bool streaming, sensor::RawFrame* frame) {
   if (started_) {
     target_s_ += period_s_;
     sim::Simulation& simulation = rig_.simulation();
-    while (simulation.time_s() < target_s_) {
+    // The physics steps that end by the frame's time; a physics step longer than the frame period
+    // leaves the frame sampling the last step's state (zero-order hold), as SimRig::Step does.
+    const double slack_s = 1e-6 * period_s_;
+    while (simulation.time_s() + simulation.timestep_s() <= target_s_ + slack_s) {
       player_.Update(simulation.time_s(), rig_);
       simulation.Step();
-      rig_.backend().Poll();
     }
+    rig_.backend().Poll(target_s_);
     const sim::GroundTruth truth = simulation.truth();
     std::lock_guard lock(mutex_);
     sim_time_s_ = simulation.time_s();

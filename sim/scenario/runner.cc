@@ -324,9 +324,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     const double t = rig->time_s();
     sim::Simulation& simulation = rig->simulation();
     const std::span<sensor::UnitLoad> tick_loads = truth_ring.Next(t);
-    // When the backend sampled in this step it computed this very state's loads: no second pass
-    // over the contacts.
-    if (rig->backend().last_loads_time_s() == t) {
+    // When the backend sampled this physics state it computed its loads: no second pass over the
+    // contacts. (Between physics steps, t is ahead of the state, which holds, as the sensor's does.)
+    if (rig->backend().last_loads_time_s() == simulation.time_s()) {
       std::ranges::copy(rig->backend().last_loads(), tick_loads.begin());
     } else {
       simulation.ComputeUnitLoads(tick_loads);
@@ -394,7 +394,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       options.progress(t, config.duration_s);
       next_progress_s = t + kProgressPeriodS;
     }
-    if (!options.out_dir.empty()) states.Record(t, simulation);
+    if (!options.out_dir.empty()) states.Record(simulation.time_s(), simulation);
     if (options.on_frame && options.frame_period_s > 0.0 &&
         t >= static_cast<double>(next_frame) * options.frame_period_s - 1e-9) {
       options.on_frame({t, static_cast<double>(next_frame) * options.frame_period_s, *rig, player});

@@ -861,19 +861,15 @@ void ScenarioConfig::Validate() const {
                       "must be >= one sensor period (1 / sensor.sample_rate_hz = " +
                           FormatNumber(1.0 / sensor.sample_rate_hz) + " s)");
   }
-  // The simulated loop samples and ticks at the end of physics steps, at most once per step: a faster
-  // rate would silently run at the step rate.
+  // The simulated sensor samples when the rig's clock moves: at every physics step's end and every
+  // control tick (between steps when the step is the longer). A faster sensor would silently run slower.
   if (backend == Backend::kSim) {
-    const double step_rate_hz = 1.0 / scene.physics.timestep_s;
-    const auto at_most_step_rate = [&](const char* key, double rate_hz) {
-      if (rate_hz > step_rate_hz * (1.0 + 1e-9)) {
-        throw ConfigError("", 0, key, FormatNumber(rate_hz),
-                          "must be <= 1 / physics.timestep_s = " + FormatNumber(step_rate_hz) +
-                              " Hz (at most one per physics step; a shorter physics.timestep_s allows more)");
-      }
-    };
-    at_most_step_rate("controller.rate_hz", controller.rate_hz);
-    at_most_step_rate("sensor.sample_rate_hz", sensor.sample_rate_hz);
+    const double clock_rate_hz = std::max(1.0 / scene.physics.timestep_s, controller.rate_hz);
+    if (sensor.sample_rate_hz > clock_rate_hz * (1.0 + 1e-9)) {
+      throw ConfigError("", 0, "sensor.sample_rate_hz", FormatNumber(sensor.sample_rate_hz),
+                        "must be <= the larger of 1 / physics.timestep_s and controller.rate_hz = " +
+                            FormatNumber(clock_rate_hz) + " Hz (samples are taken at physics steps and control ticks)");
+    }
   }
   for (const Action& action : script) {
     // The script is sorted by time, so an action is named by its kind and located by its own line.

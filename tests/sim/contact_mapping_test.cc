@@ -96,7 +96,7 @@ class ContactMappingTest : public test_support::MujocoTest {
     const double end = simulation_->time_s() + duration_s;
     while (simulation_->time_s() < end - 1e-9) {
       simulation_->Step();
-      backend_->Poll();
+      backend_->Poll(simulation_->time_s());
       if (backend_->Read(&frame_) == sensor::ReadStatus::kOk) {
         readout_->Process(frame_, &readout_frame_);
         inversion_->Invert(readout_frame_, &state_);

@@ -176,7 +176,7 @@ TEST_F(RigTest, BackendSamplesAtItsRateWithLatencyAndDrops) {
   rig.simulation().StepUntil(0.0);  // nothing
   while (rig.simulation().time_s() < 0.2) {
     rig.simulation().Step();
-    backend.Poll();
+    backend.Poll(rig.simulation().time_s());
     if (rig.simulation().time_s() > 0.1 && rig.simulation().time_s() < 0.1005) backend.DropNextFrames(3);
     if (backend.Read(&frame) == sensor::ReadStatus::kOk) {
       sequences.push_back(frame.sequence);
@@ -196,6 +196,43 @@ TEST_F(RigTest, BackendSamplesAtItsRateWithLatencyAndDrops) {
   EXPECT_EQ(backend.counters().dropped, 3u);
   // 0.2 s at 500 Hz, minus the latency and the drops.
   EXPECT_NEAR(static_cast<double>(sequences.size()), 0.196 * 500 - 3, 2.0);
+}
+
+TEST_F(RigTest, AControlLoopFasterThanThePhysicsTicksBetweenStepsOnTheLastStepsState) {
+  SimRigConfig config;
+  config.scene.physics.timestep_s = 0.002;
+  config.scene.object.solref_timeconst_s = 0.004;
+  config.control_rate_hz = 1000.0;
+  config.backend.sample_rate_hz = 1000.0;
+  config.backend.latency_s = 0.0;
+  SimRig& rig = MakeRig(config, "open_loop", {{"close_effort", 0.5}});
+  rig.controller().SetIntent(controller::GraspIntent::kClose);
+  rig.AdvanceTo(0.5);  // closed on the box: the loads change from step to step
+  const uint64_t ticks_before = rig.loop().counters().ticks;
+  int between_steps = 0;
+  int on_steps = 0;
+  for (int i = 0; i < 200; ++i) {
+    const double physics_before_s = rig.simulation().time_s();
+    const sensor::RawFrame previous = rig.loop().frame();
+    ASSERT_TRUE(rig.Step()) << "every 1 ms instant is a control tick";
+    const sensor::RawFrame& frame = rig.loop().frame();
+    EXPECT_EQ(frame.sequence, previous.sequence + 1);
+    EXPECT_NEAR(frame.time_s, rig.time_s(), 1e-9);
+    EXPECT_NEAR(rig.time_s() - previous.time_s, 0.001, 1e-9);
+    if (rig.simulation().time_s() == physics_before_s) {
+      // Between physics steps: the clock is 1 ms ahead of the state, the sample is the last step's.
+      ++between_steps;
+      EXPECT_NEAR(rig.time_s() - rig.simulation().time_s(), 0.001, 1e-9);
+      for (int u = 0; u < frame.unit_count; ++u) EXPECT_EQ(frame.r1_ohm[u], previous.r1_ohm[u]) << u;
+    } else {
+      ++on_steps;
+      EXPECT_NEAR(rig.time_s(), rig.simulation().time_s(), 1e-12);
+    }
+  }
+  EXPECT_EQ(between_steps, 100);
+  EXPECT_EQ(on_steps, 100);
+  EXPECT_EQ(rig.loop().counters().ticks - ticks_before, 200u);
+  EXPECT_GT(rig.loop().state().contact_count, 0);
 }
 
 TEST_F(RigTest, StepSamplingAndControlAllocateNothing) {
