@@ -181,7 +181,7 @@ void PrintPhysicsOptions(const std::vector<PhysicsOption>& options) {
     const StepProfile p = ProfileSteps(*simulation, 1.0);
     const double share = p.step_cpu_us / p.step_us;  // wall-timed stages scaled to CPU time
     const CreepCheck creep = MeasureCreep(Layout(), option.scene);
-    const double onset = MeasureSlipOnsetRatio(Layout(), option.scene);
+    const double onset = MeasureSlipOnset(Layout(), option.scene).ratio;
     const PinchCheck pinch = MeasurePinch(Layout(), option.scene, 0.8, 0.2);
     const bool fault = simulation->fault().occurred || creep.fault || pinch.fault;
     std::printf("  %-34s %6.1f %6.1f %6.1f %6.1f %6.1f %7.1f %5.1f %5.1f %5.1f %6.2fum %7.4f %6.3f %5s\n",
@@ -288,7 +288,7 @@ void PrintScenarioSpeed(const char* label, const PhysicsConfig& physics, const s
   SceneConfig scene;
   scene.physics = physics;
   const CreepCheck creep = MeasureCreep(Layout(), scene);
-  const double onset = MeasureSlipOnsetRatio(Layout(), scene);
+  const double onset = MeasureSlipOnset(Layout(), scene).ratio;
   const PinchCheck pinch = MeasurePinch(Layout(), scene, 0.8, 0.2);
   const double duration = config.duration_s;
   std::printf("  %-40s %7.1fx %7.1fx %7.1fx %7.1fx %9.1f %9.1f %4d/%-3zu %6.2fum %7.4f %6.3f %s\n", label,

@@ -1,5 +1,7 @@
 #include "sim/physics_checks.h"
 
+#include <algorithm>
+
 #include <mujoco/mujoco.h>
 
 #include <array>
@@ -56,20 +58,24 @@ CreepCheck MeasureCreep(const sensor::Layout& layout, const SceneConfig& scene) 
   const double start = ObjectAlongPad(simulation);
   const double t0 = simulation.time_s();
   double slip_speed_sum = 0.0;
+  double max_share = 0.0;
   int steps = 0;
   while (simulation.time_s() < t0 + 2.0 && !simulation.fault().occurred) {
     simulation.Step();
-    slip_speed_sum += simulation.truth().mean_slip_speed_m_s;
+    const GroundTruth truth = simulation.truth();
+    slip_speed_sum += truth.mean_slip_speed_m_s;
+    max_share = std::max(max_share, truth.sliding_load_share);
     ++steps;
   }
   CreepCheck check;
+  check.max_sliding_load_share = max_share;
   check.drift_m_s = std::abs(ObjectAlongPad(simulation) - start) / (simulation.time_s() - t0);
   check.contact_slip_m_s = steps > 0 ? slip_speed_sum / steps : 0.0;
   check.fault = simulation.fault().occurred;
   return check;
 }
 
-double MeasureSlipOnsetRatio(const sensor::Layout& layout, const SceneConfig& scene) {
+SlipOnsetCheck MeasureSlipOnset(const sensor::Layout& layout, const SceneConfig& scene) {
   // Slip starts when the object leaves the pad at 1 mm/s; at that instant the pull is compared with
   // friction x the normal force of both digits then (a tilted pad wedges the object a little and
   // raises the normal force while it is pulled, so the limit is taken when it matters).
@@ -91,9 +97,9 @@ double MeasureSlipOnsetRatio(const sensor::Layout& layout, const SceneConfig& sc
     const double speed = std::abs(now - window_start_position) / (simulation.time_s() - window_start_s);
     window_start_position = now;
     window_start_s = simulation.time_s();
-    if (speed > kSlipSpeedM_S) return pull / CoulombLimitN(simulation);
+    if (speed > kSlipSpeedM_S) return {pull / CoulombLimitN(simulation), simulation.truth().sliding_load_share};
   }
-  return 0.0;
+  return {};
 }
 
 PinchCheck MeasurePinch(const sensor::Layout& layout, const SceneConfig& scene, double settle_s,

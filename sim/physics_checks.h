@@ -15,14 +15,23 @@ namespace graspbed::sim {
 struct CreepCheck {
   double drift_m_s = 0.0;         ///< the object's drift along the pad, relative to the holder [m/s]
   double contact_slip_m_s = 0.0;  ///< mean relative speed at the finger/thumb contacts [m/s]
+  /// Largest GroundTruth::sliding_load_share over the hold: how much of a digit's force was on
+  /// contacts at the edge of their friction cone [0..1].
+  double max_sliding_load_share = 0.0;
   bool fault = false;             ///< a physics fault ended the check
 };
 CreepCheck MeasureCreep(const sensor::Layout& layout, const SceneConfig& scene);
 
 /// The same pinch under a pull along the pad ramped from 0 to twice the initial Coulomb limit in
-/// 2 s: pull / (friction x both digits' normal force) when the object first moves at > 1 mm/s
-/// (speed over 10 ms windows); 0 when it never slipped or the physics faulted.
-double MeasureSlipOnsetRatio(const sensor::Layout& layout, const SceneConfig& scene);
+/// 2 s, at the moment the object first moves at > 1 mm/s (speed over 10 ms windows).
+struct SlipOnsetCheck {
+  /// pull / (friction x both digits' normal force) then; 0 when it never slipped or the physics
+  /// faulted.
+  double ratio = 0.0;
+  /// GroundTruth::sliding_load_share then: the share of a digit's force on sliding contacts [0..1].
+  double sliding_load_share = 0.0;
+};
+SlipOnsetCheck MeasureSlipOnset(const sensor::Layout& layout, const SceneConfig& scene);
 
 /// A pinch at half effort (10 N on the default motors) of `object`, settled for `settle_s` and
 /// averaged over `average_s`.

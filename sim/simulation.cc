@@ -463,6 +463,8 @@ GroundTruth Simulation::truth() const {
 
   double finger_on_object = 0.0;
   double thumb_on_object = 0.0;
+  double finger_sliding_normal = 0.0;
+  double thumb_sliding_normal = 0.0;
   double slip_weighted = 0.0;
   double slip_weight = 0.0;
   // Tangential force of each digit on the object, world frame [N].
@@ -527,6 +529,7 @@ GroundTruth Simulation::truth() const {
     if (normal > 0.0 &&
         std::hypot(local[1], local[2]) >= sliding_friction_fraction_ * contact.friction[0] * normal) {
       t.sliding_speed_m_s = std::max(t.sliding_speed_m_s, slip);
+      (side == kFinger ? finger_sliding_normal : thumb_sliding_normal) += normal;
     }
     slip_weighted += slip * std::max(normal, 0.0);
     slip_weight += std::max(normal, 0.0);
@@ -534,6 +537,9 @@ GroundTruth Simulation::truth() const {
   if (slip_weight > 0.0) t.mean_slip_speed_m_s = slip_weighted / slip_weight;
   if (t.holder_normal_force_n > 1e-9) t.sensed_share = t.sensed_normal_force_n / t.holder_normal_force_n;
   t.object_squeeze_n = std::max(finger_on_object, thumb_on_object);
+  if (finger_on_object > 0.0) t.sliding_load_share = finger_sliding_normal / finger_on_object;
+  if (thumb_on_object > 0.0)
+    t.sliding_load_share = std::max(t.sliding_load_share, thumb_sliding_normal / thumb_on_object);
   for (int k = 0; k < 3; ++k) t.object_tangential_force_n[k] = finger_tangential[k] + thumb_tangential[k];
   t.object_tangential_load_n = mju_norm3(t.object_tangential_force_n.data());
   // Both digits press with the same squeeze, and each must hold its own tangential force inside

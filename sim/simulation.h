@@ -62,6 +62,11 @@ struct GroundTruth {
   /// friction is a soft velocity constraint: under a shake the object rocks against the pads at a
   /// third of the friction limit); that is excluded here [m/s].
   double sliding_speed_m_s = 0.0;
+  /// Share of a digit's normal force on the object carried by its sliding contacts (those counted in
+  /// sliding_speed_m_s), the larger of the two digits' [0, 1]: near 1 the digit slides over the
+  /// object as a whole; a few percent is a lightly loaded contact at the patch's edge sliding while
+  /// the rest sticks (partial slip, as when the object pivots a little in the grasp).
+  double sliding_load_share = 0.0;
   /// Total contact normal force on the sensorised finger (holder, mesas, fingertip, phalanges) from anything
   /// outside the hand [N]; on the thumb (pad, link) [N].
   double finger_normal_force_n = 0.0;

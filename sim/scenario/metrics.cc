@@ -139,7 +139,12 @@ void MetricsTracker::Update(const TickSample& sample) {
   if (rising_flag) last_rise_s_ = t;
   previous_flag_ = flag;
   if (holding_) {
-    const double speed = truth.sliding_speed_m_s;
+    // Slip needs the sliding contacts to carry a share of the digit's force; a contact at the edge of
+    // the patch sliding alone is partial slip, which only makes a flag then incipient (below).
+    const double sliding = truth.sliding_speed_m_s;
+    const bool partial = truth.sliding_load_share < config_.slip_min_load_share;
+    const double speed = partial ? 0.0 : sliding;
+    if (partial && sliding > config_.creep_speed_m_s) partial_slip_distance_m_ += sliding * dt;
     if (speed > config_.creep_speed_m_s) {
       slip_distance_m_ += speed * dt;
       if (event_open_) current_.distance_m += speed * dt;
@@ -181,7 +186,7 @@ void MetricsTracker::Update(const TickSample& sample) {
     // A contact sliding at the friction limit up to early_detection_window_s before a flag, too
     // slowly for an event, makes it an incipient-slip flag rather than a false one. Sliding after
     // the flag does not: the controller's own response (a grip step rolling the pad) could cause it.
-    if (!seating && speed > config_.creep_speed_m_s) last_sliding_s_ = t;
+    if (!seating && sliding > config_.creep_speed_m_s) last_sliding_s_ = t;
     if (rising_flag && !seating) OnControllerFlag(t);
     if (flag && !seating && !event_open_) false_flag_s_ += dt;
     // Flags that fell out of the early window can no longer match an event, unless a creep that may
@@ -255,6 +260,7 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.dropped = copy.dropped_ || (first_close_time_s >= 0.0 && !copy.grasped_ever_);
   m.drop_time_s = copy.drop_time_s_;
   m.max_slip_mm = copy.slip_distance_m_ * 1e3;
+  m.partial_slip_mm = copy.partial_slip_distance_m_ * 1e3;
   m.peak_grip_n = copy.peak_grip_n_;
   m.needed_grip_n = copy.needed_grip_n_;
   if (copy.needed_grip_n_ >= kMinNeededGripN)

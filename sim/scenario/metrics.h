@@ -35,6 +35,9 @@ struct Metrics {
   bool dropped = false;        ///< left the hand while held (or was never grasped)
   double drop_time_s = -1.0;   ///< [s]; < 0 not dropped
   double max_slip_mm = 0.0;    ///< slip distance accumulated above the creep speed while held [mm]
+  /// Distance slid while held by contacts carrying less than MetricsConfig::slip_min_load_share of
+  /// their digit's force, the rest sticking (partial slip; not in max_slip_mm) [mm].
+  double partial_slip_mm = 0.0;
   double peak_grip_n = 0.0;    ///< largest squeeze on the object over the run [N]
   bool crushed = false;        ///< peak_grip_n above object.crush_limit_n (fragile objects only)
   /// Largest grip the held object needed: max over holding ticks of the ground truth's
@@ -144,6 +147,7 @@ class MetricsTracker {
   double held_s_ = 0.0;
 
   double slip_distance_m_ = 0.0;
+  double partial_slip_distance_m_ = 0.0;
   double peak_grip_n_ = 0.0;
   double needed_grip_n_ = 0.0;
 

@@ -96,6 +96,7 @@ enum Col : size_t {
   kTrueSqueeze,
   kSlipSpeed,
   kSlidingSpeed,
+  kSlidingShare,
   kNeededGrip,
   kObjectX,
   kObjectY,
@@ -118,7 +119,7 @@ enum Col : size_t {
 
 constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
     {"true_sensed_fn_n", "true_finger_fn_n",   "true_thumb_fn_n",    "true_squeeze_n",
-     "slip_speed_mm_s",  "sliding_speed_mm_s", "needed_grip_n",      "object_x_m",
+     "slip_speed_mm_s",  "sliding_speed_mm_s", "sliding_load_share", "needed_grip_n",      "object_x_m",
      "object_y_m",       "object_z_m",         "object_height_m",    "wrist_x_m",
      "wrist_y_m",        "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",
      "object_mass_kg",   "external_force_x_n", "external_force_y_n", "external_force_z_n",
@@ -361,6 +362,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       row[kTrueSqueeze] = truth.object_squeeze_n;
       row[kSlipSpeed] = truth.slip_speed_m_s * 1e3;
       row[kSlidingSpeed] = truth.sliding_speed_m_s * 1e3;
+      row[kSlidingShare] = truth.sliding_load_share;
       row[kNeededGrip] = truth.required_grip_n;
       row[kObjectX] = truth.object_position_m[0];
       row[kObjectY] = truth.object_position_m[1];
@@ -484,6 +486,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
   nlohmann::json metrics = {
       {"dropped", m.dropped},
       {"max_slip_mm", m.max_slip_mm},
+      {"partial_slip_mm", m.partial_slip_mm},
       {"peak_grip_n", m.peak_grip_n},
       {"needed_grip_n", m.needed_grip_n},
       {"grip_efficiency_ratio", Optional(m.grip_efficiency_ratio)},

@@ -166,6 +166,10 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       const double norm = std::hypot(action.vector[0], action.vector[1], action.vector[2]);
       if (!(norm > 1e-9)) map.Fail("axis", "must not be the zero vector");
       for (double& component : action.vector) component /= norm;
+      // An arm starts and stops shaking smoothly; one period in and out unless the file says.
+      action.ramp_s = map.GetNumber("ramp_s", std::min(1.0 / action.frequency_hz, 0.5 * action.duration_s),
+                                    kDuration);
+      if (action.ramp_s > 0.5 * action.duration_s) map.Fail("ramp_s", "must be <= duration_s / 2");
       break;
     }
     case ActionKind::kAddMass:
@@ -379,6 +383,9 @@ const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
           Table::Number("sliding_friction_fraction", &C::sliding_friction_fraction, {0.0, 1.0, true}, "",
                         "a contact slides (slip) when its friction force is at least this fraction of mu x "
                         "its normal force; motion inside the cone is the soft contact's give"),
+          Table::Number("slip_min_load_share", &C::slip_min_load_share, {0.0, 1.0, false}, "-",
+                        "slip also needs the sliding contacts to carry this share of their digit's normal "
+                        "force; below it is partial slip (partial_slip_mm), no slip event; 0 = any share"),
           Table::Number("creep_speed_m_s", &C::creep_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
                         "sliding speed below which motion is creep, not slip"),
           Table::Number("slip_speed_m_s", &C::slip_speed_m_s, {0.0, kMaxSpeedMS, true}, "m/s",
@@ -417,7 +424,7 @@ const common::FieldTable<SensorOptions>& SensorOptionsFields() {
               .Note("`default_20`, `paper_3x3` or a layout file path (relative to the scenario file)"),
           Table::Number("sample_rate_hz", &C::sample_rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
                         "sensor frames per second")
-              .Note("simulated: <= 1 / `physics.timestep_s`"),
+              .Note("simulated: <= the larger of 1 / `physics.timestep_s` and `controller.rate_hz`"),
           Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, kMaxLatencyS), "s",
                         "sampling to delivery")
               .Note("with the `add_latency` actions at most 1 in total"),
@@ -463,7 +470,7 @@ const common::FieldTable<ControllerOptions>& ControllerOptionsFields() {
                         "task grip ceiling handed to the controller (fragile objects); 0 = none"),
           Table::Number("rate_hz", &C::rate_hz, NumberRule::Between(1.0, kMaxRateHz), "Hz",
                         "control ticks per second")
-              .Note("simulated: <= 1 / `physics.timestep_s`"),
+              .Note("simulated: faster than the physics steps ticks between them, on the last step's state"),
           Table::Number("stale_timeout_s", &C::stale_timeout_s, {0.0, kMaxStaleTimeoutS, true}, "s",
                         "no frame for this long: state stale, the controller holds")
               .Note(">= 1 / `sensor.sample_rate_hz`"),
@@ -759,6 +766,7 @@ void EmitAction(YAML::Emitter& out, const Action& a) {
       EmitNumber(out, "amplitude_m", a.amplitude_m);
       EmitNumber(out, "duration_s", a.duration_s);
       EmitVector(out, "axis", a.vector);
+      EmitNumber(out, "ramp_s", a.ramp_s);
       break;
     case ActionKind::kAddMass:
       EmitNumber(out, "mass_kg", a.mass_kg);

@@ -107,7 +107,7 @@ struct Action {
   /// move/lift: time to reach the target [s]; shake/noise_burst/drop_frames: how long it lasts [s];
   /// pull: how long the force stays after its ramp (0 = until the end or the next pull) [s].
   double duration_s = 0.0;
-  double ramp_s = 0.0;  ///< add_mass/pull/set_friction: ramp time; 0 = step [s]
+  double ramp_s = 0.0;  ///< add_mass/pull/set_friction: ramp time, 0 = step; shake: fade in and out [s]
   Profile profile = Profile::kMinimumJerk;
   double mass_kg = 0.0;       ///< add_mass: mass added [kg] (negative removes, total stays > 0)
   double friction = 0.0;      ///< set_friction: new coefficient [-]
@@ -148,6 +148,13 @@ struct MetricsConfig {
   /// MuJoCo's soft friction lets the object rock against the pads (a shake at a third of the
   /// friction limit moved it +-0.09 mm, 7 um net); that is not slip [-].
   double sliding_friction_fraction = 0.95;
+  /// Slip also needs the sliding contacts to carry at least this share of their digit's normal force
+  /// on the object (GroundTruth::sliding_load_share). Below it a lightly loaded contact at the edge
+  /// of the patch slides while the rest sticks: partial slip, the object pivoting a little in a grasp
+  /// with margin to spare (a shaken 150 g box: 3-7 % of the pad's force sliding at 4.6 mm/s, 0.1 mm,
+  /// with 3x the grip it needed). It is reported as Metrics::partial_slip_mm, opens no slip event, and
+  /// a controller flag during it is an incipient-slip flag. 0: any sliding contact is slip [-].
+  double slip_min_load_share = 0.2;
   /// Sliding speed below which motion counts as creep, not slip [m/s]; slip distance accumulates
   /// only above it.
   double creep_speed_m_s = 0.5e-3;

@@ -111,6 +111,7 @@ class ScriptPlayer {
   double shake_end_s_ = -1.0;
   double shake_frequency_hz_ = 0.0;
   double shake_amplitude_m_ = 0.0;
+  double shake_ramp_s_ = 0.0;  ///< fade in and out [s]
 
   // Object: mass, friction and external force as ramps towards their latest targets.
   Ramp mass_;

@@ -186,9 +186,14 @@ TEST_F(ActionsTest, ShakeOscillatesTheWristAtItsFrequencyAndAmplitudeAndStops) {
       dir_, "shake",
       HeldBoxScenario(0.95,
                       "  - {at_s: 0.45, action: shake, frequency_hz: 5, amplitude_m: 0.005, duration_s: 0.4, "
-                      "axis: [0, 0, 2]}\n"));
+                      "axis: [0, 0, 2], ramp_s: 0.1}\n"));
   const Signals& s = run.signals;
   const double base = s.AtTime("wrist_target_z_m", 0.44);
+  // Faded in and out over ramp_s: 5 ms into the shake and 5 ms before its end the target is within
+  // 0.01 mm of rest (a sine switched on at full speed would be 0.78 mm away after 5 ms), and it
+  // reaches the full amplitude in between (the peaks at 0.6 and 0.7 s).
+  EXPECT_NEAR(s.AtTime("wrist_target_z_m", 0.455), base, 1e-5);
+  EXPECT_NEAR(s.AtTime("wrist_target_z_m", 0.845), base, 1e-5);
   const auto [low, high] = Range(s, "wrist_target_z_m", 0.45, 0.85);
   EXPECT_NEAR(high - base, kAmplitudeM, 1e-4);
   EXPECT_NEAR(base - low, kAmplitudeM, 1e-4);

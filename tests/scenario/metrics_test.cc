@@ -207,6 +207,7 @@ class TrackerTest : public ::testing::Test {
       truth_.time_s = time_s_;
       truth_.slip_speed_m_s = contact_speed_m_s;
       truth_.sliding_speed_m_s = sliding_speed_m_s;
+      truth_.sliding_load_share = sliding_speed_m_s > 0.0 ? sliding_share_ : 0.0;
       TickSample sample;
       sample.time_s = time_s_;
       sample.intent = intent;
@@ -224,6 +225,7 @@ class TrackerTest : public ::testing::Test {
   sensor::TactileState state_;
   std::array<sensor::UnitLoad, 1> loads_{};
   double time_s_ = 0.0;
+  double sliding_share_ = 1.0;  ///< share of the digit's force on the sliding contacts, while sliding
 };
 
 TEST_F(TrackerTest, SlipEventDetectedLateGivesItsLatencyAndDistance) {
@@ -307,6 +309,31 @@ TEST_F(TrackerTest, AFlagAfterSlidingTooSlowForAnEventIsIncipientNotFalse) {
   EXPECT_EQ(m.false_slip_flags, 2);
 }
 
+TEST_F(TrackerTest, PartialSlipAtALightlyLoadedContactIsNoEventButMakesAFlagIncipient) {
+  // One contact carrying 5 % of the digit's force slides at 5 mm/s for 50 ms while the rest stick
+  // (the default slip_min_load_share is 0.2): no event, no slip distance, 0.25 mm of partial slip,
+  // and a flag 10 ms later is incipient. The same sliding with 30 % of the force is a slip event.
+  sliding_share_ = 0.05;
+  Run(0.5, 0.0);
+  Run(0.55, 0.005);
+  Run(0.56, 0.0);
+  Run(0.57, 0.0, true);
+  Run(0.8, 0.0);
+  Metrics m = tracker_.Finish(0.8, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 0);
+  EXPECT_EQ(m.max_slip_mm, 0.0);
+  EXPECT_NEAR(m.partial_slip_mm, 0.25, 0.01);
+  EXPECT_EQ(m.incipient_slip_flags, 1);
+  EXPECT_EQ(m.false_slip_flags, 0);
+  sliding_share_ = 0.3;
+  Run(0.85, 0.005);
+  Run(1.0, 0.0);
+  m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_EQ(m.slip_events, 1);
+  EXPECT_NEAR(m.max_slip_mm, 0.25, 0.01);
+  EXPECT_NEAR(m.partial_slip_mm, 0.25, 0.01);
+}
+
 /// Runs a tracker with `config` over held ticks 0 .. end_s at 1 kHz, the object sliding at the
 /// friction limit at `speed_m_s(t)` and the controller flagging where `flag(t)`; returns its metrics.
 template <typename Speed, typename Flag>
@@ -319,6 +346,7 @@ Metrics RunHeld(const MetricsConfig& config, double end_s, Speed speed_m_s, Flag
   for (int tick = 0; tick * kTickS <= end_s + kTimeTolS; ++tick) {
     const double t = tick * kTickS;
     truth.slip_speed_m_s = truth.sliding_speed_m_s = speed_m_s(t);
+    truth.sliding_load_share = 1.0;
     TickSample sample;
     sample.time_s = t;
     sample.intent = controller::GraspIntent::kClose;

@@ -336,6 +336,8 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
        "test.yaml:2: script[0].axis = [...]: must not be the zero vector"},
       {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 0, amplitude_m: 0.01, duration_s: 1}\n",
        "test.yaml:2: script[0].frequency_hz = 0: must be > 0"},
+      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, ramp_s: 0.6}\n",
+       "test.yaml:2: script[0].ramp_s = 0.6: must be <= duration_s / 2"},
       {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0}\n",
        "test.yaml:2: script[0].mass_kg = 0: must not be 0"},
       {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0.1, ramp_s: -1}\n",

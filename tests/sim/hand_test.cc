@@ -120,6 +120,9 @@ TEST_F(HandTest, TheLoadMovesAlongTheFingertipWithTheObjectsWidth) {
 constexpr double kMaxCreepM_S = 5e-6;
 // Slip must start within 5 % of Coulomb's limit, the contact model's promise (docs/simulation.md).
 constexpr double kCoulombBand = 0.05;
+// What the metrics call slip needs at least this share of a digit's force on sliding contacts
+// (MetricsConfig::slip_min_load_share's default).
+constexpr double kMinSlipLoadShare = 0.2;
 
 class FrictionTest : public test_support::MujocoTest {};
 
@@ -130,11 +133,16 @@ TEST_F(FrictionTest, AHeldObjectDoesNotCreep) {
   RecordProperty("creep_um_s", std::to_string(creep.drift_m_s * 1e6));
   EXPECT_LT(creep.drift_m_s, kMaxCreepM_S) << creep.drift_m_s * 1e6 << " um/s";
   EXPECT_LT(creep.contact_slip_m_s, kMaxCreepM_S) << creep.contact_slip_m_s * 1e6 << " um/s at the contacts";
+  // At half Coulomb's load no contact carrying a slip's share of the force is at its cone's edge.
+  EXPECT_LT(creep.max_sliding_load_share, kMinSlipLoadShare);
 }
 
 TEST_F(FrictionTest, TheObjectSlipsWithinFivePercentOfCoulombsLimit) {
-  const double ratio_at_onset = MeasureSlipOnsetRatio(DefaultLayout(), SceneConfig{});
+  const SlipOnsetCheck onset = MeasureSlipOnset(DefaultLayout(), SceneConfig{});
+  const double ratio_at_onset = onset.ratio;
   ASSERT_GT(ratio_at_onset, 0.0) << "never slipped up to twice the initial limit (or faulted)";
+  // The digits slide over the object as a whole: the sliding contacts carry its force.
+  EXPECT_GT(onset.sliding_load_share, 1.0 - kCoulombBand);
   RecordProperty("ratio_at_onset", std::to_string(ratio_at_onset));
   EXPECT_NEAR(ratio_at_onset, 1.0, kCoulombBand) << "pull / (mu x normal force) at the onset of slip";
 }
