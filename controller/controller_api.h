@@ -27,9 +27,40 @@
 ///     GRASPBED_CONTROLLER_PLUGIN("my_controller", &MyParameters, &MakeMy)
 
 #include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "controller/grasp_controller.h"
+
+namespace graspbed::controller {
+
+/// What a plugin's make() throws for a parameter it refuses (a combination its ranges cannot say,
+/// e.g. a contact threshold above the grip target): graspbed reports it at that parameter in the
+/// scenario file, `file:line: controller.params.<parameter> = <value>: <reason>`, and exits 2, as it
+/// does for a value out of its declared range. (Any other std::exception from make() is reported
+/// too, naming the plugin but no parameter.) Header-only, so a plugin links nothing for it.
+class ParameterError : public std::invalid_argument {
+ public:
+  /// `parameter` a declared name, `value` the value refused, `reason` why ("must be below
+  /// target_grip_n = 3").
+  ParameterError(std::string parameter, double value, std::string reason)
+      : std::invalid_argument(parameter + " = " + std::to_string(value) + ": " + reason),
+        parameter_(std::move(parameter)),
+        value_(value),
+        reason_(std::move(reason)) {}
+  const std::string& parameter() const { return parameter_; }
+  double value() const { return value_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string parameter_;
+  double value_;
+  std::string reason_;
+};
+
+}  // namespace graspbed::controller
 
 /// Version of the controller API these headers describe (an integer, raised on every change a
 /// compiled plugin could notice; see above). Version 1: graspbed 0.1.
@@ -48,8 +79,8 @@ struct GraspbedControllerPlugin {
   /// scenario's controller.params against them exactly as for the built-in controllers. May throw.
   std::vector<graspbed::controller::ControllerParameter> (*parameters)();
   /// Builds a controller from `params`, which holds every declared parameter (defaults filled in,
-  /// each in its range). Throws std::invalid_argument for combinations it refuses (graspbed reports
-  /// the message and exits 2); must not return nullptr.
+  /// each in its range). Throws graspbed::controller::ParameterError for a parameter it refuses
+  /// (graspbed reports it at that parameter and exits 2); must not return nullptr.
   std::unique_ptr<graspbed::controller::GraspController> (*make)(
       const graspbed::controller::ControllerParams& params);
 };

@@ -3,6 +3,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/config_error.h"
 #include "controller/grasp_controller.h"
 #include "controller/grip_slip_controller.h"
 #include "controller/open_loop_controller.h"
@@ -76,14 +77,14 @@ std::unique_ptr<GraspController> MakeController(const std::string& name, const C
     if (match == declared.end()) {
       std::string valid;
       for (const ControllerParameter& p : declared) valid += (valid.empty() ? "" : ", ") + p.name;
-      throw std::invalid_argument("controller '" + name + "' has no parameter '" + key +
-                                  "'; valid parameters: " + valid);
+      throw common::ConfigError("", 0, key, std::nullopt, "no such parameter; valid parameters: " + valid)
+          .WithContext("controller '" + name + "'");
     }
     if (!std::isfinite(value) || value < match->min || value > match->max) {
-      std::ostringstream message;
-      message << "controller '" << name << "' parameter " << key << " = " << value << ": must be in ["
-              << match->min << ", " << match->max << "] " << match->unit;
-      throw std::invalid_argument(message.str());
+      std::ostringstream range;
+      range << "must be in [" << match->min << ", " << match->max << "] " << match->unit;
+      throw common::ConfigError("", 0, key, common::ReadableNumber(value), range.str())
+          .WithContext("controller '" + name + "'");
     }
     resolved[key] = value;
   }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "common/config_error.h"
+
 namespace graspbed::controller {
 namespace {
 
@@ -30,6 +32,7 @@ const char* CueNames(bool ratio, bool vibration, bool centroid) {
 /// One declared parameter bound to its field of GripSlipConfig.
 struct Binding {
   const char* name;
+  const char* member;  ///< the GripSlipConfig member it sets, as written ("slip.settle_s")
   double min;
   double max;
   const char* unit;
@@ -45,7 +48,7 @@ constexpr bool kIsInteger = std::is_integral_v<Field>;
 // Binds a parameter name to a config field in one line; ints and bools take whole numbers.
 #define GRASPBED_BIND(name, field, min, max, unit, doc)                       \
   Binding {                                                                   \
-    name, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,  \
+    name, #field, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,  \
         [](const GripSlipConfig& c) { return static_cast<double>(c.field); }, \
         [](GripSlipConfig& c, double v) {                                     \
           using Field = decltype(GripSlipConfig{}.field);                     \
@@ -215,11 +218,16 @@ const std::vector<Binding>& Bindings() {
 
 #undef GRASPBED_BIND
 
-void Require(bool ok, const char* name, double value, const std::string& rule) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "controller 'grip_slip' parameter " << name << " = " << value << ": " << rule;
-  throw std::invalid_argument(message.str());
+using common::Require;
+
+/// `error` as a parameter's: a detector field's key becomes the parameter that sets it, and the
+/// controller is named.
+common::ConfigError AsParameterError(const common::ConfigError& error) {
+  std::string key = error.key();
+  for (const Binding& binding : Bindings()) {
+    if ("slip." + key == binding.member) key = binding.name;
+  }
+  return common::ConfigError("", 0, key, error.value(), error.message()).WithContext("controller 'grip_slip'");
 }
 
 /// The detector's part of `config`, after validating all of it (so the first message names a
@@ -232,17 +240,22 @@ const SlipDetectorConfig& ValidatedSlipConfig(const GripSlipConfig& config) {
 }  // namespace
 
 void GripSlipConfig::Validate() const {
-  for (const Binding& binding : Bindings()) {
-    const double value = binding.get(*this);
-    std::ostringstream range;
-    range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
-    Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value,
-            range.str());
+  try {
+    for (const Binding& binding : Bindings()) {
+      const double value = binding.get(*this);
+      std::ostringstream range;
+      range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
+      Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value,
+              range.str());
+    }
+    Require(min_grip_n <= max_grip_n, "min_grip_n", min_grip_n, "must not exceed max_grip_n");
+    Require(initial_grip_n <= max_grip_n, "initial_grip_n", initial_grip_n, "must not exceed max_grip_n");
+    Require(friction_min <= friction_initial, "friction_min", friction_min,
+            "must not exceed friction_initial");
+    slip.Validate();
+  } catch (const common::ConfigError& error) {
+    throw AsParameterError(error);
   }
-  Require(min_grip_n <= max_grip_n, "min_grip_n", min_grip_n, "must not exceed max_grip_n");
-  Require(initial_grip_n <= max_grip_n, "initial_grip_n", initial_grip_n, "must not exceed max_grip_n");
-  Require(friction_min <= friction_initial, "friction_min", friction_min, "must not exceed friction_initial");
-  slip.Validate();
 }
 
 std::vector<ControllerParameter> GripSlipController::Parameters() {
@@ -261,9 +274,9 @@ GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& para
     const auto found = params.find(binding.name);
     if (found == params.end()) continue;
     const double value = found->second;
-    if (binding.integer) {
-      Require(std::isfinite(value) && value == std::round(value), binding.name, value,
-              "must be a whole number");
+    if (binding.integer && !(std::isfinite(value) && value == std::round(value))) {
+      throw AsParameterError(common::ConfigError("", 0, binding.name, common::ReadableNumber(value),
+                                                 "must be a whole number"));
     }
     binding.set(config, value);
   }

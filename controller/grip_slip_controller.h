@@ -75,7 +75,9 @@ struct GripSlipConfig {
 
   SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
 
-  /// Throws std::invalid_argument naming the offending parameter and value.
+  /// @throws common::ConfigError keyed by the offending parameter (its name among Parameters(),
+  /// also for a detector field: "detector_settle_s" for slip.settle_s), with its value, in the
+  /// context "controller 'grip_slip'".
   void Validate() const;
 };
 
@@ -92,13 +94,14 @@ struct GripSlipDiagnostics {
 
 class GripSlipController final : public GraspController {
  public:
-  /// Validates `config` (throws std::invalid_argument).
+  /// Validates `config` (@throws common::ConfigError, as GripSlipConfig::Validate).
   explicit GripSlipController(const GripSlipConfig& config);
 
   /// Parameter declarations for the factory, defaults from GripSlipConfig.
   static std::vector<ControllerParameter> Parameters();
   /// Config from a factory-resolved parameter map (every declared name present, values in range).
-  /// Throws std::invalid_argument for a non-integer count or a failed Validate().
+  /// @throws common::ConfigError keyed by the parameter for a non-integer count or a failed
+  /// Validate().
   static GripSlipConfig ConfigFromParams(const ControllerParams& params);
 
   void Reset() override;

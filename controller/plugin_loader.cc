@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/config_error.h"
 #include "common/data_dir.h"
 
 namespace graspbed::controller {
@@ -163,6 +164,9 @@ std::unique_ptr<GraspController> MakePluginController(const LoadedPlugin& plugin
   std::unique_ptr<GraspController> controller;
   try {
     controller = plugin.descriptor->make(params);
+  } catch (const ParameterError& error) {
+    throw common::ConfigError("", 0, error.parameter(), common::ReadableNumber(error.value()), error.reason())
+        .WithContext(where);
   } catch (const std::exception& error) {
     throw std::invalid_argument(where + ": " + error.what());
   } catch (...) {

@@ -6,8 +6,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/config_error.h"
+
 namespace graspbed::controller {
 namespace {
+
+using common::Require;
 
 using sensor::TactileState;
 using sensor::UnitValidity;
@@ -35,12 +39,6 @@ constexpr int kImpulseResponseSamples = 20000;
 constexpr int kImpulseTailSamples = 32;
 constexpr double kImpulseTailFraction = 1e-20;
 
-void Require(bool ok, const char* field, double value, const char* rule) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "slip detector " << field << " = " << value << ": " << rule;
-  throw std::invalid_argument(message.str());
-}
 
 }  // namespace
 

@@ -112,7 +112,8 @@ struct SlipDetectorConfig {
   /// Fewest units off the contact that make a noise reference (vibration_noise_reference).
   static constexpr int kMinReferenceUnits = 3;
 
-  /// Throws std::invalid_argument naming the offending field and value.
+  /// @throws common::ConfigError keyed by the offending field (e.g. "vibration_highpass_hz"), with
+  /// its value.
   void Validate() const;
 };
 
@@ -174,7 +175,7 @@ struct SlipSignals {
 
 class SlipDetector {
  public:
-  /// Validates `config` (throws std::invalid_argument).
+  /// Validates `config` (@throws common::ConfigError, as SlipDetectorConfig::Validate).
   explicit SlipDetector(const SlipDetectorConfig& config);
 
   /// Forgets everything, the learned noise floor included.

@@ -514,9 +514,9 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
   }
   ControllerOptionsFields().Load(map, &c);
   // Each value is in its range; what is left are the controller's cross-field checks (e.g. min_grip_n
-  // <= max_grip_n). Build it once and blame the parameter the error names: as data when the
-  // controller throws a ConfigError keyed by the parameter, else (controllers that throw a plain
-  // std::invalid_argument, as grip_slip does today) the parameter its message names.
+  // <= max_grip_n). Build it once and blame the parameter the error names, as data: the built-in
+  // controllers throw a ConfigError keyed by the parameter. A plugin's own std::invalid_argument
+  // names no key, so its parameters as a whole are blamed.
   try {
     controller::MakeController(c.name, c.params);
   } catch (const ConfigError& error) {
@@ -525,14 +525,7 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
       params->Fail(error.key(), error.message());
     map.Fail(params ? "params" : name_key, error.what());
   } catch (const std::invalid_argument& error) {
-    const std::string message = error.what();
-    if (auto params = map.GetMap("params")) {
-      for (const std::string& key : params->Keys()) {
-        if (message.find("parameter " + key + " ") != std::string::npos) params->Fail(key, message);
-      }
-      map.Fail("params", message);
-    }
-    map.Fail(name_key, message);
+    map.Fail(map.GetMap("params") ? "params" : name_key, error.what());
   }
   return c;
 }

@@ -72,40 +72,40 @@ TEST(ControllerFactoryTest, UnknownParameterIsNamed) {
       ErrorOf([] {
         MakeController("grip_slip", {{"safety_margn", 1.5}});
       }),
-      HasSubstr("controller 'grip_slip' has no parameter 'safety_margn'; valid parameters: close_effort"));
+      HasSubstr("controller 'grip_slip': safety_margn: no such parameter; valid parameters: close_effort"));
 }
 
 TEST(ControllerFactoryTest, OutOfRangeParameterNamesValueAndRange) {
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"safety_margin", 0.5}});
               }),
-              HasSubstr("controller 'grip_slip' parameter safety_margin = 0.5: must be in [1, 5]"));
+              HasSubstr("controller 'grip_slip': safety_margin = 0.5: must be in [1, 5]"));
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"max_grip_n", -3.0}});
               }),
-              HasSubstr("parameter max_grip_n = -3: must be in [0.1, 200] N"));
+              HasSubstr("controller 'grip_slip': max_grip_n = -3: must be in [0.1, 200] N"));
 }
 
 TEST(ControllerFactoryTest, CountsMustBeWholeNumbers) {
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"grid_columns", 2.5}});
               }),
-              HasSubstr("controller 'grip_slip' parameter grid_columns = 2.5: must be a whole number"));
+              HasSubstr("controller 'grip_slip': grid_columns = 2.5: must be a whole number"));
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"ratio_detector", 0.5}});
               }),
-              HasSubstr("parameter ratio_detector = 0.5: must be a whole number"));
+              HasSubstr("controller 'grip_slip': ratio_detector = 0.5: must be a whole number"));
 }
 
 TEST(ControllerFactoryTest, InconsistentParametersAreRejected) {
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"min_grip_n", 5.0}, {"max_grip_n", 3.0}});
               }),
-              HasSubstr("parameter min_grip_n = 5: must not exceed max_grip_n"));
+              HasSubstr("controller 'grip_slip': min_grip_n = 5: must not exceed max_grip_n"));
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"friction_min", 0.6}});
               }),
-              HasSubstr("parameter friction_min = 0.6: must not exceed friction_initial"));
+              HasSubstr("controller 'grip_slip': friction_min = 0.6: must not exceed friction_initial"));
   EXPECT_THAT(ErrorOf([] {
                 MakeController("grip_slip", {{"centroid_window_s", 0.5}, {"sample_rate_hz", 2000}});
               }),

@@ -85,7 +85,7 @@ TEST_F(HwCliTest, BadParamOnTheCommandLineIsRefusedBeforeThePortIsOpened) {
 
   result = RunCli("hw --port " + dir_.Path("no-device") + " --param no_such_gain=1");
   EXPECT_EQ(result.exit_code, kExitBadInput);
-  EXPECT_THAT(result.err, HasSubstr("has no parameter 'no_such_gain'"));
+  EXPECT_THAT(result.err, HasSubstr("controller 'grip_slip': no_such_gain: no such parameter"));
   // Refused before the port: the missing device is not what the message is about.
   EXPECT_THAT(result.err, ::testing::Not(HasSubstr("does not exist")));
 }
