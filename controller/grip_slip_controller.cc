@@ -46,20 +46,20 @@ template <typename Field>
 constexpr bool kIsInteger = std::is_integral_v<Field>;
 
 // Binds a parameter name to a config field in one line; ints and bools take whole numbers.
-#define GRASPBED_BIND(name, field, min, max, unit, doc)                       \
-  Binding {                                                                   \
-    name, #field, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>,  \
-        [](const GripSlipConfig& c) { return static_cast<double>(c.field); }, \
-        [](GripSlipConfig& c, double v) {                                     \
-          using Field = decltype(GripSlipConfig{}.field);                     \
-          if constexpr (std::is_same_v<Field, bool>) {                        \
-            c.field = v != 0.0;                                               \
-          } else if constexpr (std::is_integral_v<Field>) {                   \
-            c.field = static_cast<Field>(std::lround(v));                     \
-          } else {                                                            \
-            c.field = v;                                                      \
-          }                                                                   \
-        }                                                                     \
+#define GRASPBED_BIND(name, field, min, max, unit, doc)                              \
+  Binding {                                                                          \
+    name, #field, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>, \
+        [](const GripSlipConfig& c) { return static_cast<double>(c.field); },        \
+        [](GripSlipConfig& c, double v) {                                            \
+          using Field = decltype(GripSlipConfig{}.field);                            \
+          if constexpr (std::is_same_v<Field, bool>) {                               \
+            c.field = v != 0.0;                                                      \
+          } else if constexpr (std::is_integral_v<Field>) {                          \
+            c.field = static_cast<Field>(std::lround(v));                            \
+          } else {                                                                   \
+            c.field = v;                                                             \
+          }                                                                          \
+        }                                                                            \
   }
 
 const std::vector<Binding>& Bindings() {
@@ -227,7 +227,8 @@ common::ConfigError AsParameterError(const common::ConfigError& error) {
   for (const Binding& binding : Bindings()) {
     if ("slip." + key == binding.member) key = binding.name;
   }
-  return common::ConfigError("", 0, key, error.value(), error.message()).WithContext("controller 'grip_slip'");
+  return common::ConfigError("", 0, key, error.value(), error.message())
+      .WithContext("controller 'grip_slip'");
 }
 
 /// The detector's part of `config`, after validating all of it (so the first message names a
@@ -275,8 +276,8 @@ GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& para
     if (found == params.end()) continue;
     const double value = found->second;
     if (binding.integer && !(std::isfinite(value) && value == std::round(value))) {
-      throw AsParameterError(common::ConfigError("", 0, binding.name, common::ReadableNumber(value),
-                                                 "must be a whole number"));
+      throw AsParameterError(
+          common::ConfigError("", 0, binding.name, common::ReadableNumber(value), "must be a whole number"));
     }
     binding.set(config, value);
   }

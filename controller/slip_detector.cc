@@ -39,7 +39,6 @@ constexpr int kImpulseResponseSamples = 20000;
 constexpr int kImpulseTailSamples = 32;
 constexpr double kImpulseTailFraction = 1e-20;
 
-
 }  // namespace
 
 void SlipDetectorConfig::Validate() const {

@@ -18,7 +18,7 @@ struct CreepCheck {
   /// Largest GroundTruth::sliding_load_share over the hold: how much of a digit's force was on
   /// contacts at the edge of their friction cone [0..1].
   double max_sliding_load_share = 0.0;
-  bool fault = false;             ///< a physics fault ended the check
+  bool fault = false;  ///< a physics fault ended the check
 };
 CreepCheck MeasureCreep(const sensor::Layout& layout, const SceneConfig& scene);
 

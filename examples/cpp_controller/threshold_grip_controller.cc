@@ -121,7 +121,8 @@ std::unique_ptr<GraspController> MakeThresholdGrip(const ControllerParams& param
   // A cross-field check, reported by graspbed like any bad parameter (file:line, exit 2).
   if (config.contact_n >= config.target_grip_n) {
     throw graspbed::controller::ParameterError(
-        "contact_n", config.contact_n, "must be below target_grip_n = " + std::to_string(config.target_grip_n));
+        "contact_n", config.contact_n,
+        "must be below target_grip_n = " + std::to_string(config.target_grip_n));
   }
   return std::make_unique<ThresholdGripController>(config);
 }

@@ -38,8 +38,8 @@ struct Metrics {
   /// Distance slid while held by contacts carrying less than MetricsConfig::slip_min_load_share of
   /// their digit's force, the rest sticking (partial slip; not in max_slip_mm) [mm].
   double partial_slip_mm = 0.0;
-  double peak_grip_n = 0.0;    ///< largest squeeze on the object over the run [N]
-  bool crushed = false;        ///< peak_grip_n above object.crush_limit_n (fragile objects only)
+  double peak_grip_n = 0.0;  ///< largest squeeze on the object over the run [N]
+  bool crushed = false;      ///< peak_grip_n above object.crush_limit_n (fragile objects only)
   /// Largest grip the held object needed: max over holding ticks of the ground truth's
   /// required_grip_n, max(|Ft finger|, |Ft thumb|) / mu [N].
   double needed_grip_n = 0.0;

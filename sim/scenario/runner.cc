@@ -118,12 +118,18 @@ enum Col : size_t {
 };
 
 constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
-    {"true_sensed_fn_n", "true_finger_fn_n",   "true_thumb_fn_n",    "true_squeeze_n",
-     "slip_speed_mm_s",  "sliding_speed_mm_s", "sliding_load_share", "needed_grip_n",      "object_x_m",
-     "object_y_m",       "object_z_m",         "object_height_m",    "wrist_x_m",
-     "wrist_y_m",        "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",
-     "object_mass_kg",   "external_force_x_n", "external_force_y_n", "external_force_z_n",
-     "holding",          "slip_event",         "slip_distance_mm"};
+    {"true_sensed_fn_n",   "true_finger_fn_n",
+     "true_thumb_fn_n",    "true_squeeze_n",
+     "slip_speed_mm_s",    "sliding_speed_mm_s",
+     "sliding_load_share", "needed_grip_n",
+     "object_x_m",         "object_y_m",
+     "object_z_m",         "object_height_m",
+     "wrist_x_m",          "wrist_y_m",
+     "wrist_z_m",          "wrist_target_z_m",
+     "grip_closure_m",     "object_mass_kg",
+     "external_force_x_n", "external_force_y_n",
+     "external_force_z_n", "holding",
+     "slip_event",         "slip_distance_mm"};
 
 // Per-unit columns, in this order per unit.
 constexpr const char* kUnitNames[] = {"r1_ohm",    "r2_ohm",    "fn_est_n", "ft_est_n",

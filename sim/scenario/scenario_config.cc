@@ -167,8 +167,8 @@ Action LoadAction(const YamlMap& map, const ScenarioConfig& config, int unit_cou
       if (!(norm > 1e-9)) map.Fail("axis", "must not be the zero vector");
       for (double& component : action.vector) component /= norm;
       // An arm starts and stops shaking smoothly; one period in and out unless the file says.
-      action.ramp_s = map.GetNumber("ramp_s", std::min(1.0 / action.frequency_hz, 0.5 * action.duration_s),
-                                    kDuration);
+      action.ramp_s =
+          map.GetNumber("ramp_s", std::min(1.0 / action.frequency_hz, 0.5 * action.duration_s), kDuration);
       if (action.ramp_s > 0.5 * action.duration_s) map.Fail("ramp_s", "must be <= duration_s / 2");
       break;
     }
@@ -869,7 +869,8 @@ void ScenarioConfig::Validate() const {
     if (sensor.sample_rate_hz > clock_rate_hz * (1.0 + 1e-9)) {
       throw ConfigError("", 0, "sensor.sample_rate_hz", FormatNumber(sensor.sample_rate_hz),
                         "must be <= the larger of 1 / physics.timestep_s and controller.rate_hz = " +
-                            FormatNumber(clock_rate_hz) + " Hz (samples are taken at physics steps and control ticks)");
+                            FormatNumber(clock_rate_hz) +
+                            " Hz (samples are taken at physics steps and control ticks)");
     }
   }
   for (const Action& action : script) {

@@ -207,7 +207,9 @@ void ScriptPlayer::Update(double time_s, sim::SimRig& rig) {
     const double since_s = time_s - shake_start_s_;
     const double edge_s = std::min(since_s, shake_end_s_ - time_s);
     const double envelope =
-        edge_s >= shake_ramp_s_ ? 1.0 : 0.5 * (1.0 - std::cos(std::numbers::pi * std::max(edge_s, 0.0) / shake_ramp_s_));
+        edge_s >= shake_ramp_s_
+            ? 1.0
+            : 0.5 * (1.0 - std::cos(std::numbers::pi * std::max(edge_s, 0.0) / shake_ramp_s_));
     const double offset =
         envelope * shake_amplitude_m_ * std::sin(2.0 * std::numbers::pi * shake_frequency_hz_ * since_s);
     for (int k = 0; k < 3; ++k) target[k] += offset * shake_axis_[k];

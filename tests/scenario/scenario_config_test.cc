@@ -250,8 +250,9 @@ TEST(ScenarioConfigTest, ASensorFasterThanTheSimulatedClockIsRefusedNotSilentlyL
   EXPECT_EQ(ErrorOf(text, {{"controller.rate_hz", "2000"}}), "");
   EXPECT_EQ(ErrorOf(text, {{"controller.rate_hz", "2000"}, {"sensor.sample_rate_hz", "1500"}}), "");
   EXPECT_EQ(ErrorOf(text, {{"physics.timestep_s", "0.0005"}, {"sensor.sample_rate_hz", "1500"}}), "");
-  EXPECT_EQ(ErrorOf(text, {{"sensor.sample_rate_hz", "1500"}, {"backend", "serial"}, {"serial.port", "/dev/x"}}),
-            "");
+  EXPECT_EQ(
+      ErrorOf(text, {{"sensor.sample_rate_hz", "1500"}, {"backend", "serial"}, {"serial.port", "/dev/x"}}),
+      "");
 }
 
 TEST(ScenarioConfigTest, ChangingTheControllerDropsTheOldControllersParameters) {
@@ -336,7 +337,8 @@ TEST(ScenarioValidationTest, MoreBadInputNamesFileLineKeyAndValue) {
        "test.yaml:2: script[0].axis = [...]: must not be the zero vector"},
       {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 0, amplitude_m: 0.01, duration_s: 1}\n",
        "test.yaml:2: script[0].frequency_hz = 0: must be > 0"},
-      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, ramp_s: 0.6}\n",
+      {"script:\n  - {at_s: 0.1, action: shake, frequency_hz: 4, amplitude_m: 0.01, duration_s: 1, ramp_s: "
+       "0.6}\n",
        "test.yaml:2: script[0].ramp_s = 0.6: must be <= duration_s / 2"},
       {"script:\n  - {at_s: 0.1, action: add_mass, mass_kg: 0}\n",
        "test.yaml:2: script[0].mass_kg = 0: must not be 0"},
