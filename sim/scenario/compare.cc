@@ -108,8 +108,48 @@ double Interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[lo] + w * (y[hi] - y[lo]);
 }
 
+/// B's time of an instant of A, piecewise: shifted by the last anchor at or before it in A (the first
+/// anchor's shift before any).
+double BTimeOf(const std::vector<AlignmentAnchor>& anchors, double a_s) {
+  if (anchors.empty()) return a_s;
+  double shift = anchors.front().shift_s;
+  for (const AlignmentAnchor& anchor : anchors) {
+    if (anchor.a_s > a_s) break;
+    shift = anchor.shift_s;
+  }
+  return a_s + shift;
+}
+
+/// A's time of an instant of B: shifted by the last anchor at or before it in B.
+double ATimeOf(const std::vector<AlignmentAnchor>& anchors, double b_s) {
+  if (anchors.empty()) return b_s;
+  double shift = anchors.front().shift_s;
+  for (const AlignmentAnchor& anchor : anchors) {
+    if (anchor.b_s > b_s) break;
+    shift = anchor.shift_s;
+  }
+  return b_s - shift;
+}
+
+/// The k-th change into each intent in A against the k-th in B, kept where both clocks advance.
+std::vector<AlignmentAnchor> Anchors(const std::vector<Change>& a, const std::vector<Change>& b) {
+  std::map<std::string, std::vector<double>> b_times;
+  for (size_t i = 1; i < b.size(); ++i) b_times[b[i].name].push_back(b[i].time_s);
+  std::map<std::string, size_t> used;
+  std::vector<AlignmentAnchor> anchors;
+  for (size_t i = 1; i < a.size(); ++i) {
+    const std::vector<double>& candidates = b_times[a[i].name];
+    size_t& next = used[a[i].name];
+    if (next >= candidates.size()) continue;
+    const double b_s = candidates[next++];
+    if (!anchors.empty() && b_s <= anchors.back().b_s) continue;  // out of order in B: no anchor
+    anchors.push_back({a[i].name, a[i].time_s, b_s, b_s - a[i].time_s});
+  }
+  return anchors;
+}
+
 void MatchInOrder(const std::vector<Change>& a, const std::vector<Change>& b, const std::string& kind,
-                  double shift_s, RunComparison* out) {
+                  const std::vector<AlignmentAnchor>& anchors, RunComparison* out) {
   // Skip the initial state (row 0); match the k-th change into NAME in A with the k-th in B.
   std::map<std::string, std::vector<double>> b_times;
   for (size_t i = 1; i < b.size(); ++i) b_times[b[i].name].push_back(b[i].time_s);
@@ -123,7 +163,7 @@ void MatchInOrder(const std::vector<Change>& a, const std::vector<Change>& b, co
       ++out->unmatched_events;
       continue;
     }
-    const double b_s = candidates[next++] - shift_s;
+    const double b_s = ATimeOf(anchors, candidates[next++]);
     out->events.push_back({kind, a[i].name, a[i].time_s, b_s, b_s - a[i].time_s});
   }
   int b_count = 0;
@@ -156,22 +196,18 @@ RunComparison CompareRuns(const std::string& run_a, const std::string& run_b) {
   const std::vector<double>& time_b = b.Column("time_s");
   const std::vector<Change> intents_a = Changes(a.intent, time_a);
   const std::vector<Change> intents_b = Changes(b.intent, time_b);
-  // Align on the first intent change both runs have (normally the first close).
+  // Align piecewise on the intent changes both runs have (normally close, then open, ...).
+  out.anchors = Anchors(intents_a, intents_b);
   out.aligned_on = "start";
-  if (intents_a.size() > 1) {
-    for (size_t j = 1; j < intents_b.size(); ++j) {
-      if (intents_b[j].name == intents_a[1].name) {
-        out.shift_s = intents_b[j].time_s - intents_a[1].time_s;
-        out.aligned_on = intents_a[1].name;
-        break;
-      }
-    }
+  if (!out.anchors.empty()) {
+    out.shift_s = out.anchors.front().shift_s;
+    out.aligned_on = out.anchors.front().intent;
   }
-  MatchInOrder(intents_a, intents_b, "intent", out.shift_s, &out);
-  MatchInOrder(Changes(a.phase, time_a), Changes(b.phase, time_b), "phase", out.shift_s, &out);
+  MatchInOrder(intents_a, intents_b, "intent", out.anchors, &out);
+  MatchInOrder(Changes(a.phase, time_a), Changes(b.phase, time_b), "phase", out.anchors, &out);
 
-  const double begin_s = std::max(time_a.front(), time_b.front() - out.shift_s);
-  const double end_s = std::min(time_a.back(), time_b.back() - out.shift_s);
+  const double begin_s = std::max(time_a.front(), ATimeOf(out.anchors, time_b.front()));
+  const double end_s = std::min(time_a.back(), ATimeOf(out.anchors, time_b.back()));
   if (!(end_s > begin_s)) {
     throw ConfigError(run_b + ": does not overlap " + run_a + " once aligned on " + out.aligned_on +
                       " (shift " + Format("%.3f", out.shift_s) + " s)");
@@ -187,7 +223,7 @@ RunComparison CompareRuns(const std::string& run_a, const std::string& run_b) {
   for (size_t i = 0; i < time_a.size(); ++i) {
     const double t = time_a[i];
     if (t < begin_s || t > end_s) continue;
-    const double tb = t + out.shift_s;
+    const double tb = BTimeOf(out.anchors, t);
     ++out.samples;
     const double gb = Interpolate(time_b, grip_b, tb);
     const double grip_diff = gb - grip_a[i];
@@ -253,10 +289,16 @@ nlohmann::json ComparisonJson(const RunComparison& c) {
                       {"b_s", e.b_s},
                       {"difference_s", e.difference_s}});
   }
+  nlohmann::json anchors = nlohmann::json::array();
+  for (const AlignmentAnchor& anchor : c.anchors) {
+    anchors.push_back(
+        {{"intent", anchor.intent}, {"a_s", anchor.a_s}, {"b_s", anchor.b_s}, {"shift_s", anchor.shift_s}});
+  }
   return {{"run_a", c.run_a},
           {"run_b", c.run_b},
           {"aligned_on", c.aligned_on},
           {"shift_s", c.shift_s},
+          {"anchors", anchors},
           {"overlap_s", c.overlap_s},
           {"samples", c.samples},
           {"fn_rms_n", c.fn_rms_n},
@@ -275,6 +317,14 @@ std::string ComparisonTable(const RunComparison& c) {
   out << "compare " << c.run_a << " (A) with " << c.run_b << " (B), aligned on " << c.aligned_on
       << " (B - A shift " << Format("%.4f", c.shift_s) << " s), " << Format("%.2f", c.overlap_s)
       << " s overlap, " << c.samples << " samples\n";
+  if (c.anchors.size() > 1) {
+    out << "  aligned piecewise on " << c.anchors.size() << " intent changes, B - A shift:";
+    for (const AlignmentAnchor& anchor : c.anchors) {
+      out << " " << anchor.intent << " at " << Format("%.3f", anchor.a_s) << " s "
+          << Format("%+.4f", anchor.shift_s) << " s;";
+    }
+    out << "\n";
+  }
   out << "  sensed grip: peak A " << Format("%.3f", c.peak_grip_a_n) << " N, B "
       << Format("%.3f", c.peak_grip_b_n) << " N; B - A RMS " << Format("%.3g", c.grip_rms_n) << " N, max "
       << Format("%.3g", c.grip_max_abs_n) << " N; effort RMS " << Format("%.3g", c.effort_rms) << "\n";

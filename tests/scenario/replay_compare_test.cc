@@ -236,5 +236,46 @@ TEST_F(ReplayCompareTest, ARunComparedWithItselfHasZeroResidualsAndTheSameTimes)
   EXPECT_NE(bad.err.find("signals.csv: cannot read"), std::string::npos) << bad.err;
 }
 
+// A session where the person closes 0.2 s and opens 0.5 s later than the script did: aligned
+// piecewise on each intent change, the release lines up again (the controller enters releasing and
+// open at the same delay after the open in both), where one shift taken at close would leave it
+// 0.3 s apart. The hold itself differs a little: the box has settled 0.2 s longer when the digits
+// reach it, and the closing impact is sensitive to that (loading and holding within 30 ms).
+TEST_F(ReplayCompareTest, EachIntentChangeRealignsTheRunsSoALateOpenIsNoResidual) {
+  const auto scenario = [&](const std::string& name, double close_s, double open_s) {
+    const std::string file = dir_.Write(
+        name + ".yaml", "name: " + name +
+                            "\nduration_s: 2.2\nsensor: {profile: ideal}\n"
+                            "controller: {name: grip_slip}\n"
+                            "script:\n  - {at_s: " +
+                            std::to_string(close_s) +
+                            ", action: close}\n  - {at_s: " + std::to_string(open_s) + ", action: open}\n");
+    const CliResult run = RunCli("run " + file + " --no-plots --out " + Path(name));
+    ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  };
+  scenario("script", 0.15, 1.0);
+  scenario("person", 0.35, 1.5);
+  const CliResult compare = RunCli("compare " + Path("script") + " " + Path("person") + " --json");
+  ASSERT_EQ(compare.exit_code, 0) << compare.out << compare.err;
+  const nlohmann::json c = nlohmann::json::parse(compare.out);
+  const nlohmann::json& anchors = c.at("anchors");
+  ASSERT_EQ(anchors.size(), 2u) << c.dump();
+  EXPECT_EQ(anchors[0].at("intent"), "close");
+  EXPECT_NEAR(anchors[0].at("shift_s").get<double>(), 0.2, 1e-3);
+  EXPECT_EQ(anchors[1].at("intent"), "open");
+  EXPECT_NEAR(anchors[1].at("shift_s").get<double>(), 0.5, 1e-3);
+  bool released = false;
+  for (const auto& event : c.at("events")) {
+    if (event.at("a_s").get<double>() < anchors[0].at("a_s").get<double>()) continue;  // before close
+    const bool after_open = event.at("a_s").get<double>() >= anchors[1].at("a_s").get<double>();
+    EXPECT_LE(std::abs(event.at("difference_s").get<double>()), after_open ? 0.002 : 0.03) << event.dump();
+    released = released || event.at("name") == "releasing";
+  }
+  EXPECT_TRUE(released) << c.dump();
+  const nlohmann::json script = Summary("script");
+  EXPECT_LT(c.at("grip_rms_n").get<double>(), 0.1 * script.at("metrics").at("peak_grip_n").get<double>())
+      << c.dump();
+}
+
 }  // namespace
 }  // namespace graspbed::scenario
