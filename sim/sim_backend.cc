@@ -76,8 +76,7 @@ void SimBackend::SetLatency(double latency_s) {
   config_.latency_s = latency_s;
 }
 
-void SimBackend::Poll(double now_s) {
-  const double now = now_s;
+void SimBackend::Poll(double now) {
   const double period = 1.0 / config_.sample_rate_hz;
   const double slack = kTimeSlackPeriods * period;
   while (static_cast<double>(sample_index_) * period <= now + slack) {

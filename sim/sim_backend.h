@@ -56,12 +56,12 @@ class SimBackend : public sensor::TactileBackend {
   /// `seed` seeds the strain model and the frame-drop draw (same seed = identical frames).
   SimBackend(Simulation& simulation, const SimBackendConfig& config, uint64_t seed);
 
-  /// Samples if `now_s` (the rig's clock [s], never behind the simulation's) has reached the next
+  /// Samples if `now` (the rig's clock [s], never behind the simulation's) has reached the next
   /// sample time (possibly several samples if Poll() was not called for a while), every sample from
   /// the current physics state: between physics steps the sensor sees the last step's contact forces
   /// (zero-order hold), as a sensor sampling faster than the physics steps would. Frames carry
-  /// `now_s`. Allocates nothing.
-  void Poll(double now_s);
+  /// `now`. Allocates nothing.
+  void Poll(double now);
 
   /// Newest released frame newer than the last one read. Never blocks, never allocates.
   sensor::ReadStatus Read(sensor::RawFrame* frame) override;
