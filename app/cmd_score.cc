@@ -57,6 +57,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   scenario::WriteScorecard(scorecard, options.out_dir);
   std::cout << scenario::ScorecardTable(scorecard);
   std::cout << "  by sensor (profile/sensitivities):\n" << scenario::ScorecardBySensorTable(scorecard);
+  std::cout << "  by scenario (base and its variations):\n" << scenario::ScorecardByScenarioTable(scorecard);
   std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
   if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
 }

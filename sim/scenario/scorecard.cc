@@ -446,36 +446,38 @@ std::string ScorecardTable(const Scorecard& scorecard) {
   return out.str();
 }
 
-std::string ScorecardBySensorTable(const Scorecard& scorecard) {
-  // Groups in order of first appearance, so the table reads in the set's order.
-  std::vector<std::string> sensors;
-  const auto sensor_of = [](const ScorecardRow& row) {
-    return row.result.config.sensor.profile + "/" + row.result.config.sensor.sensitivities;
-  };
+namespace {
+
+// The headline figures per group of runs (`group_of` a row's group name): one line per (group,
+// controller), groups sorted by name.
+template <typename GroupOf>
+std::string GroupTable(const Scorecard& scorecard, const char* group_label, GroupOf group_of) {
+  std::vector<std::string> groups;
   for (const ScorecardRow& row : scorecard.rows) {
     if (!row.error.empty() || !row.result.completed) continue;
-    const std::string sensor = sensor_of(row);
-    if (std::find(sensors.begin(), sensors.end(), sensor) == sensors.end()) sensors.push_back(sensor);
+    const std::string group = group_of(row);
+    if (std::find(groups.begin(), groups.end(), group) == groups.end()) groups.push_back(group);
   }
-  std::sort(sensors.begin(), sensors.end());
+  std::sort(groups.begin(), groups.end());
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", "sensor", "controller",
-                "runs", "detected", "latency p95", "false flags/min", "flag up", "drops", "grip ratio");
+  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
+                "controller", "runs", "detected", "latency p95", "false flags/min", "flag up", "drops",
+                "grip ratio");
   out << line;
-  for (const std::string& sensor : sensors) {
+  for (const std::string& group : groups) {
     for (const ControllerScore& total : scorecard.scores) {
       std::vector<const RunResult*> finished;
       for (const ScorecardRow& row : scorecard.rows) {
         if (row.controller == total.controller && row.error.empty() && row.result.completed &&
-            sensor_of(row) == sensor) {
+            group_of(row) == group) {
           finished.push_back(&row.result);
         }
       }
       const ControllerScore score = ScoreRuns(total.controller, finished, 0);
       const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" +
                                    Int(score.slip_detected) + "/" + Int(score.slip_events) + ")";
-      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n", sensor.c_str(),
+      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n", group.c_str(),
                     score.controller.c_str(), score.runs, detected.c_str(),
                     OptionalText(score.latency_p95_ms, "%.1f ms").c_str(),
                     (OptionalText(score.false_per_min, "%.1f") + " (" + Int(score.false_flags) + ")").c_str(),
@@ -485,6 +487,22 @@ std::string ScorecardBySensorTable(const Scorecard& scorecard) {
     }
   }
   return out.str();
+}
+
+}  // namespace
+
+std::string ScorecardBySensorTable(const Scorecard& scorecard) {
+  return GroupTable(scorecard, "sensor", [](const ScorecardRow& row) {
+    return row.result.config.sensor.profile + "/" + row.result.config.sensor.sensitivities;
+  });
+}
+
+std::string ScorecardByScenarioTable(const Scorecard& scorecard) {
+  // A run is named <base>.v<k>: its base scenario is the name up to the last ".v".
+  return GroupTable(scorecard, "scenario", [](const ScorecardRow& row) {
+    const size_t dot = row.run.rfind(".v");
+    return dot == std::string::npos ? row.run : row.run.substr(0, dot);
+  });
 }
 
 std::string ScorecardCsv(const Scorecard& scorecard) {

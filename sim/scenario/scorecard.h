@@ -151,6 +151,10 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
 /// minute held, flag-up share, drops and median grip ratio. The targets are per profile.
 std::string ScorecardBySensorTable(const Scorecard& scorecard);
 
+/// The same figures per base scenario of the set (a run `pull_ramp.v3` counts for `pull_ramp`), to
+/// see where a controller loses its events or raises its false flags.
+std::string ScorecardByScenarioTable(const Scorecard& scorecard);
+
 /// Side-by-side table: one column per controller, one line per figure.
 std::string ScorecardTable(const Scorecard& scorecard);
 /// CSV: a header and one row per controller ("" for a figure that does not exist).

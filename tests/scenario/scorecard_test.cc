@@ -194,6 +194,13 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
       header = true;
   }
   EXPECT_TRUE(header) << result.out;
+  // Per base scenario: each base's two runs (v0 and one variation) under each controller.
+  const std::string by_scenario = result.out.substr(result.out.find("by scenario"));
+  for (const char* line :
+       {"pull_ramp              grip_slip       2", "pull_ramp              open_loop       2",
+        "added_mass_step        grip_slip       2"}) {
+    EXPECT_NE(by_scenario.find(line), std::string::npos) << line << "\n" << result.out;
+  }
   for (const char* label : {"slip events detected", "detection latency p50", "detection latency p95",
                             "false flags / min held", "drops", "crushes", "peak/needed grip median",
                             "peak/needed grip p95", "Fn estimation RMSE", "passed"}) {
