@@ -89,36 +89,31 @@ void ShowText(cairo_t* cr, const std::string& text, double x, double y, double a
   cairo_show_text(cr, text.c_str());
 }
 
-// Draws one chart into the rectangle (x0, y0, width, height) of the surface.
 // Adds `series` to the path as polylines in pixels (non-finite points break the line), keeping of
 // each run of consecutive points in one pixel column only the first, the lowest, the highest and the
 // last: the same pixels as a line through every point, for a fraction of the stroke's cost (a 20 s
 // run logs 20000 samples for a 700 px wide chart).
 template <typename ToPxX, typename ToPxY>
 void AddPolyline(cairo_t* cr, const Series& series, ToPxX to_px_x, ToPxY to_px_y) {
-  struct Point {
-    double x, y;
-  };
   bool pen_down = false;
-  auto emit = [&](const Point& p) {
-    if (pen_down) {
-      cairo_line_to(cr, p.x, p.y);
-    } else {
-      cairo_move_to(cr, p.x, p.y);
-      pen_down = true;
-    }
-  };
-  // The open column: its points in order of arrival, the lowest and the highest by pixel y.
+  // The open column: indices of its first, lowest, highest (by pixel y) and last point.
   bool open = false;
   double column = 0.0;
-  size_t first = 0, low = 0, high = 0, last = 0;
-  std::vector<Point> points(series.x.size());
+  std::array<size_t, 4> kept{};  // first, low, high, last
   auto flush = [&] {
     if (!open) return;
-    std::array<size_t, 4> order{first, low, high, last};
+    std::array<size_t, 4> order = kept;
     std::sort(order.begin(), order.end());
     for (size_t k = 0; k < order.size(); ++k) {
-      if (k == 0 || order[k] != order[k - 1]) emit(points[order[k]]);
+      if (k > 0 && order[k] == order[k - 1]) continue;
+      const double px = to_px_x(series.x[order[k]]);
+      const double py = to_px_y(series.y[order[k]]);
+      if (pen_down) {
+        cairo_line_to(cr, px, py);
+      } else {
+        cairo_move_to(cr, px, py);
+        pen_down = true;
+      }
     }
     open = false;
   };
@@ -128,22 +123,23 @@ void AddPolyline(cairo_t* cr, const Series& series, ToPxX to_px_x, ToPxY to_px_y
       pen_down = false;
       continue;
     }
-    points[i] = {to_px_x(series.x[i]), to_px_y(series.y[i])};
-    const double this_column = std::floor(points[i].x);
+    const double this_column = std::floor(to_px_x(series.x[i]));
     if (open && this_column == column) {
-      if (points[i].y < points[low].y) low = i;
-      if (points[i].y > points[high].y) high = i;
-      last = i;
+      const double py = to_px_y(series.y[i]);
+      if (py < to_px_y(series.y[kept[1]])) kept[1] = i;
+      if (py > to_px_y(series.y[kept[2]])) kept[2] = i;
+      kept[3] = i;
       continue;
     }
     flush();
     open = true;
     column = this_column;
-    first = low = high = last = i;
+    kept = {i, i, i, i};
   }
   flush();
 }
 
+// Draws one chart into the rectangle (x0, y0, width, height) of the surface.
 void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
   Range x_range;
   Range y_range;

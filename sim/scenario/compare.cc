@@ -108,27 +108,25 @@ double Interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[lo] + w * (y[hi] - y[lo]);
 }
 
-/// B's time of an instant of A, piecewise: shifted by the last anchor at or before it in A (the first
-/// anchor's shift before any).
-double BTimeOf(const std::vector<AlignmentAnchor>& anchors, double a_s) {
-  if (anchors.empty()) return a_s;
+/// B's clock minus A's at an instant of one run's clock (`anchor_time` picks which: &AlignmentAnchor::a_s
+/// or ::b_s): the shift of the last anchor at or before it, the first anchor's before any; 0 without.
+double ShiftAt(const std::vector<AlignmentAnchor>& anchors, double AlignmentAnchor::*anchor_time,
+               double at_s) {
+  if (anchors.empty()) return 0.0;
   double shift = anchors.front().shift_s;
   for (const AlignmentAnchor& anchor : anchors) {
-    if (anchor.a_s > a_s) break;
+    if (anchor.*anchor_time > at_s) break;
     shift = anchor.shift_s;
   }
-  return a_s + shift;
+  return shift;
 }
 
-/// A's time of an instant of B: shifted by the last anchor at or before it in B.
+/// B's time of an instant of A, and A's of an instant of B.
+double BTimeOf(const std::vector<AlignmentAnchor>& anchors, double a_s) {
+  return a_s + ShiftAt(anchors, &AlignmentAnchor::a_s, a_s);
+}
 double ATimeOf(const std::vector<AlignmentAnchor>& anchors, double b_s) {
-  if (anchors.empty()) return b_s;
-  double shift = anchors.front().shift_s;
-  for (const AlignmentAnchor& anchor : anchors) {
-    if (anchor.b_s > b_s) break;
-    shift = anchor.shift_s;
-  }
-  return b_s - shift;
+  return b_s - ShiftAt(anchors, &AlignmentAnchor::b_s, b_s);
 }
 
 /// The k-th change into each intent in A against the k-th in B, kept where both clocks advance.
