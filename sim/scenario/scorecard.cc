@@ -264,6 +264,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
   Scorecard scorecard;
   scorecard.set_name = set.name;
   scorecard.set_version = set.version;
+  scorecard.set_seed = set.seed;
   scorecard.set_file = set.source_file;
   scorecard.runs_per_controller = static_cast<int>(runs.size());
   scorecard.jobs = std::max(1, options.jobs);
@@ -420,7 +421,8 @@ bool InTable(const Figure& figure) {
 
 std::string ScorecardTable(const Scorecard& scorecard) {
   std::ostringstream out;
-  out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " (" << scorecard.set_file
+  out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " seed " << scorecard.set_seed
+      << " (" << scorecard.set_file
       << "): " << scorecard.runs_per_controller << " runs per controller, " << scorecard.jobs << " jobs, "
       << FormatNumber(scorecard.wall_s) << " s" << (scorecard.completed ? "" : ", INCOMPLETE") << "\n";
   constexpr int kLabelWidth = 26;
@@ -533,6 +535,7 @@ nlohmann::json ScorecardJson(const Scorecard& scorecard) {
   nlohmann::json json;
   json["set"] = {{"name", scorecard.set_name},
                  {"version", scorecard.set_version},
+                 {"seed", scorecard.set_seed},
                  {"file", scorecard.set_file},
                  {"runs_per_controller", scorecard.runs_per_controller}};
   json["completed"] = scorecard.completed;

@@ -132,6 +132,7 @@ struct ScorecardRow {
 struct Scorecard {
   std::string set_name;
   int set_version = 0;
+  uint64_t set_seed = 0;  ///< the variations' sampling seed the runs were drawn with
   std::string set_file;
   int runs_per_controller = 0;
   std::vector<ControllerScore> scores;  ///< in the order of ScorecardOptions::controllers

@@ -290,6 +290,35 @@ TEST(ScorecardCliTest, LimitTakesTheFirstRunsOfTheShippedSetForOneController) {
   }
 }
 
+TEST(ScorecardCliTest, SeedAndVariationsScaleDrawAHeldOutSetFromTheSameRanges) {
+  TempDir dir;
+  const std::string common = "score --set-dir " + std::string(GRASPBED_SOURCE_DIR) +
+                             "/scenarios/scorecard --limit 5 --controller open_loop ";
+  CliResult result = RunCli(common + "--out " + dir.Path("shipped"));
+  ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
+  EXPECT_NE(result.out.find(" v1 seed 2026 ("), std::string::npos) << result.out;
+  result = RunCli(common + "--seed 11 --variations-scale 2 --out " + dir.Path("held_out"));
+  ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
+  EXPECT_NE(result.out.find(" v1 seed 11 ("), std::string::npos) << result.out;
+  const nlohmann::json shipped = nlohmann::json::parse(ReadText(dir.Path("shipped") + "/scorecard.json"));
+  const nlohmann::json held_out = nlohmann::json::parse(ReadText(dir.Path("held_out") + "/scorecard.json"));
+  EXPECT_EQ(held_out.at("set").at("seed"), 11);
+  // The shipped set gives the default base 3 variations, so its 5th run is the next base; scaled by
+  // 2 the default base still fills the first 5 runs.
+  const nlohmann::json& shipped_runs = shipped.at("runs");
+  const nlohmann::json& held_out_runs = held_out.at("runs");
+  ASSERT_EQ(shipped_runs.size(), 5u);
+  ASSERT_EQ(held_out_runs.size(), 5u);
+  EXPECT_EQ(shipped_runs[4].at("run"), "lift_unknown_mass.v0");
+  EXPECT_EQ(held_out_runs[4].at("run"), "default.v4");
+  // v0 is the base as shipped in both; the variations are other draws from the same ranges.
+  EXPECT_EQ(shipped_runs[0].at("overrides"), held_out_runs[0].at("overrides"));
+  EXPECT_NE(shipped_runs[1].at("overrides"), held_out_runs[1].at("overrides"));
+  const double mass = std::stod(held_out_runs[1].at("overrides").at("object.mass_kg").get<std::string>());
+  EXPECT_GE(mass, 0.05);
+  EXPECT_LE(mass, 0.4);
+}
+
 TEST(ScorecardCliTest, BadInputExitsTwoWithOneLineAndWritesNothing) {
   TempDir dir;
   CliResult result = RunCli("score --set-dir " + dir.Path("nowhere") + " --out " + dir.Path("out"));
