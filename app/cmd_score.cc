@@ -89,9 +89,17 @@ void AddScoreCommand(CLI::App& root) {
   command
       ->add_option("--limit", options->limit, "only the first N runs of the set per controller (smoke tests)")
       ->check(CLI::NonNegativeNumber);
-  command->add_option("--seed", options->seed,
-                      "draw the variations with this seed instead of the set's (a held-out draw of the same "
-                      "bases and ranges; the figures are then not the set's)");
+  command
+      ->add_option("--seed", options->seed,
+                   "draw the variations with this seed instead of the set's (a held-out draw of the same "
+                   "bases and ranges; the figures are then not the set's)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            return !text.empty() && text.find_first_not_of("0123456789") == std::string::npos
+                       ? std::string()
+                       : "expected a whole number >= 0, got " + text;
+          },
+          "UINT"));
   command
       ->add_option("--variations-scale", options->variations_scale,
                    "run this many times each base's variations (with --seed: a larger held-out draw)")

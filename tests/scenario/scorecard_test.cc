@@ -329,6 +329,13 @@ TEST(ScorecardCliTest, BadInputExitsTwoWithOneLineAndWritesNothing) {
   EXPECT_EQ(result.exit_code, kExitBadInput) << result.err;
   EXPECT_NE(result.err.find("no_such_controller"), std::string::npos) << result.err;
   EXPECT_FALSE(std::filesystem::exists(dir.Path("out")));
+  result = RunCli("score --seed -1 --out " + dir.Path("out"));
+  EXPECT_EQ(result.exit_code, kExitBadInput) << result.err;
+  EXPECT_NE(result.err.find("--seed"), std::string::npos) << result.err;
+  result = RunCli("score --variations-scale 0 --out " + dir.Path("out"));
+  EXPECT_EQ(result.exit_code, kExitBadInput) << result.err;
+  EXPECT_NE(result.err.find("--variations-scale"), std::string::npos) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.Path("out")));
 }
 
 }  // namespace
