@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -31,6 +33,51 @@ double Bisect(const std::function<double(double)>& f, double target, double lo, 
   }
   return 0.5 * (lo + hi);
 }
+
+// Closest point of segment [a, b] to p.
+Eigen::Vector2d ClosestOnSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                                 const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return a + t * ab;
+}
+
+// Distance from a circle (centre c, radius r) to a capsule (axis [a, b], radius rc); < 0 overlaps.
+double CapsuleClearance(const Eigen::Vector2d& c, double r, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b, double rc) {
+  return (c - ClosestOnSegment(c, a, b)).norm() - r - rc;
+}
+
+// The first q from `from` towards `to` (stepping `step`) at which f(q) <= 0, refined by bisection;
+// NaN when f stays positive all the way.
+double FirstRoot(const std::function<double(double)>& f, double from, double to, double step) {
+  const double direction = to > from ? 1.0 : -1.0;
+  double previous = from;
+  for (double q = from; direction * (to - q) > -1e-12; q += direction * step) {
+    const double clamped = direction > 0.0 ? std::min(q, to) : std::max(q, to);
+    if (f(clamped) <= 0.0) {
+      if (clamped == from) return from;
+      double lo = previous;  // f > 0
+      double hi = clamped;   // f <= 0
+      for (int i = 0; i < 60; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (f(mid) > 0.0 ? lo : hi) = mid;
+      }
+      return hi;
+    }
+    previous = clamped;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// In a wrap the pad's normal points at least this far from H +x towards the palm (+z) [rad]: it
+// presses the cylinder against the palm rather than across it (sin 30 deg: half its force).
+constexpr double kMinWrapPadNormalRad = std::numbers::pi / 6.0;
+// Angular step of the scans above [rad]: finer than any link's travel across a clearance of 1 mm.
+constexpr double kScanStepRad = 0.005;
+// The proximal and middle phalanges must clear the cylinder by this much when the pad touches it,
+// so the pad meets it first [m].
+constexpr double kMinLinkClearanceM = 1e-3;
 
 }  // namespace
 
@@ -120,6 +167,95 @@ double ProstheticKinematics::ThumbLeverArmM(double flexion_rad) const {
 
 double ProstheticKinematics::MaxApertureM() const {
   return ThumbTip(kThumbMinRad).point_xz.x() - IndexPad(kMcpMinRad).point_xz.x();
+}
+
+}  // namespace graspbed::sim
+
+namespace graspbed::sim {
+
+double ProstheticKinematics::IndexClearanceM(double mcp_rad, const Eigen::Vector2d& centre_xz,
+                                             double radius_m, bool links_only) const {
+  const Eigen::Vector2d pip = Pip(mcp_rad);
+  const Eigen::Vector2d dip = Dip(mcp_rad);
+  double clearance = std::min(CapsuleClearance(centre_xz, radius_m, mcp_, pip, kProximalRadiusM),
+                              CapsuleClearance(centre_xz, radius_m, pip, dip, kMiddleRadiusM));
+  if (!links_only) {
+    // The holder and its rounded tip as one capsule of the pad's depth about the phalanx's axis.
+    const Eigen::Vector2d tip =
+        dip + (holder_length_m_ + kTipCapLengthM) * IndexDirection(DistalAngle(mcp_rad));
+    clearance = std::min(clearance, CapsuleClearance(centre_xz, radius_m, dip, tip, pad_depth_m_));
+  }
+  return clearance;
+}
+
+double ProstheticKinematics::ThumbClearanceM(double flexion_rad, const Eigen::Vector2d& centre_xz,
+                                             double radius_m) const {
+  const Eigen::Vector2d ip = ThumbIp(flexion_rad);
+  const Eigen::Vector2d tip = ThumbTipCentre(flexion_rad);
+  return std::min({(centre_xz - thumb_base_).norm() - radius_m - kThumbProximalRadiusM,
+                   CapsuleClearance(centre_xz, radius_m, thumb_base_, ip, kThumbProximalRadiusM),
+                   CapsuleClearance(centre_xz, radius_m, ip, tip, thumb_.tip_radius_m)});
+}
+
+WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double clearance_m) const {
+  const auto fail = [radius_m](const std::string& why) {
+    std::ostringstream message;
+    message << "a wrap of a " << 2e3 * radius_m << " mm cylinder: " << why;
+    throw std::invalid_argument(message.str());
+  };
+  // Where the cylinder sits when the pad's centre touches it at MCP q: on the pad's normal.
+  const auto centre_for = [this, radius_m](double q) {
+    const DigitContact pad = IndexPad(q);
+    const double distal = DistalAngle(q);
+    return Eigen::Vector2d(pad.point_xz + radius_m * IndexPalmar(distal));
+  };
+  const auto palm_gap = [&](double q) { return -kPalmDepthM - (centre_for(q).y() + radius_m); };
+  // From the square pinch to full flexion the pad curls under the palm and the gap closes.
+  const double mcp_square = (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) /
+                            (1.0 + finger_.pip_mcp_ratio);
+  if (palm_gap(kMcpMaxRad) > palm_gap_m) fail("too small: the pad cannot press it against the palm");
+  if (palm_gap(mcp_square) < palm_gap_m) fail("too large: it reaches the palm before the pad curls under it");
+  WrapPose pose;
+  pose.index_contact_rad = Bisect(palm_gap, palm_gap_m, mcp_square, kMcpMaxRad, -1.0);
+  pose.centre_xz = centre_for(pose.index_contact_rad);
+  if (IndexPad(pose.index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) {
+    fail("too large: the pad would meet it from the side, not press it against the palm");
+  }
+  pose.index_link_clearance_m = IndexClearanceM(pose.index_contact_rad, pose.centre_xz, radius_m, true);
+  if (pose.index_link_clearance_m < kMinLinkClearanceM) {
+    fail("too large: the proximal or middle phalanx would meet it before the pad (" +
+         std::to_string(pose.index_link_clearance_m * 1e3) + " mm clear)");
+  }
+  // Open each digit from its contact until every link clears the cylinder by the clearance.
+  pose.index_preshape_rad =
+      FirstRoot([&](double q) { return clearance_m - IndexClearanceM(q, pose.centre_xz, radius_m); },
+                pose.index_contact_rad, kMcpMinRad, kScanStepRad);
+  if (std::isnan(pose.index_preshape_rad)) fail("the index cannot open clear of it");
+  const auto thumb_gap = [&](double q) { return ThumbClearanceM(q, pose.centre_xz, radius_m); };
+  if (thumb_gap(kThumbMinRad) < clearance_m) fail("the thumb cannot open clear of it");
+  pose.thumb_contact_rad = FirstRoot(thumb_gap, kThumbMinRad, kThumbMaxRad, kScanStepRad);
+  if (std::isnan(pose.thumb_contact_rad)) fail("out of the thumb's reach");
+  pose.thumb_preshape_rad = FirstRoot([&](double q) { return clearance_m - thumb_gap(q); },
+                                      pose.thumb_contact_rad, kThumbMinRad, kScanStepRad);
+  // Lever arms: the pad's travel along its normal per radian; the thumb's point nearest the axis
+  // turns about the thumb's base, pushing towards the axis with the arm of its perpendicular.
+  constexpr double kStep = 1e-6;
+  const double q = pose.index_contact_rad;
+  pose.pad_lever_arm_m =
+      (IndexPad(q + kStep).point_xz - IndexPad(q - kStep).point_xz).dot(IndexPalmar(DistalAngle(q))) /
+      (2.0 * kStep);
+  const double t = pose.thumb_contact_rad;
+  const Eigen::Vector2d ip = ThumbIp(t);
+  const Eigen::Vector2d on_proximal = ClosestOnSegment(pose.centre_xz, thumb_base_, ip);
+  const Eigen::Vector2d on_distal = ClosestOnSegment(pose.centre_xz, ip, ThumbTipCentre(t));
+  const Eigen::Vector2d nearest = (pose.centre_xz - on_proximal).norm() - kThumbProximalRadiusM <
+                                          (pose.centre_xz - on_distal).norm() - thumb_.tip_radius_m
+                                      ? on_proximal
+                                      : on_distal;
+  const Eigen::Vector2d towards = (pose.centre_xz - nearest).normalized();
+  const Eigen::Vector2d arm = nearest - thumb_base_;
+  pose.thumb_lever_arm_m = std::abs(arm.x() * towards.y() - arm.y() * towards.x());
+  return pose;
 }
 
 }  // namespace graspbed::sim

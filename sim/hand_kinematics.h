@@ -19,9 +19,27 @@ namespace graspbed::sim {
 /// A point of contact on a digit and the direction it faces, hand frame (x-z plane).
 struct DigitContact {
   Eigen::Vector2d point_xz{0.0, 0.0};  ///< contact point [m], (x, z) in H
-  /// Angle of the surface's outward normal from H +x, towards -z positive [rad]: 0 faces the thumb
+  /// Angle of the surface's outward normal from H +x, towards +z (the palm) positive [rad]: 0 faces the thumb
   /// squarely (index pad), pi faces the index (thumb tip).
   double normal_angle_rad = 0.0;
+};
+
+/// A wrap of an upright cylinder (its axis along H y) against the palm: where the cylinder sits in
+/// the hand and the driven joints' angles that meet it and that open around it.
+struct WrapPose {
+  Eigen::Vector2d centre_xz{0.0, 0.0};  ///< cylinder axis [m], (x, z) in H
+  double index_contact_rad = 0.0;       ///< MCP at which the pad's centre touches the cylinder [rad]
+  double thumb_contact_rad = 0.0;       ///< thumb flexion at which the thumb first touches it [rad]
+  double index_preshape_rad = 0.0;      ///< MCP opened until the whole index clears it by the clearance
+  double thumb_preshape_rad = 0.0;      ///< thumb flexion opened likewise [rad]
+  /// Clearance of the proximal and middle phalanges when the pad touches [m]: the pad meets the
+  /// cylinder first, so the sensorised phalanx is the one that presses it against the palm.
+  double index_link_clearance_m = 0.0;
+  /// Forces [N] per motor torque [N m] turned into the cylinder at contact: the pad's travel along
+  /// its own normal per radian of MCP (the PIP follows through the linkage), and the thumb's
+  /// contact point's travel towards the cylinder's axis per radian of flexion [m/rad].
+  double pad_lever_arm_m = 0.0;
+  double thumb_lever_arm_m = 0.0;
 };
 
 /// The hand's fixed design and the kinematics derived from it. Immutable after construction.
@@ -42,6 +60,12 @@ class ProstheticKinematics {
   /// The palm's palmar face is at H z = -kPalmDepthM; the MCP sits on it, the thumb base (placed by
   /// the nominal pinch) inside the palm above it.
   static constexpr double kPalmDepthM = 0.024;
+  /// Link radii [m]: the index's proximal and middle phalanx capsules, the thumb's proximal capsule
+  /// (and its base sphere); the holder's rounded tip reaches this far beyond the holder.
+  static constexpr double kProximalRadiusM = 0.0055;
+  static constexpr double kMiddleRadiusM = 0.004;
+  static constexpr double kThumbProximalRadiusM = 0.0075;
+  static constexpr double kTipCapLengthM = 0.005;
 
   /// `holder_length_m`, `holder_half_depth_m`: the distal phalanx from the layout; `mesa_height_m`:
   /// the pad's mesas stand this far proud of the holder surface. Throws std::invalid_argument if the
@@ -75,6 +99,20 @@ class ProstheticKinematics {
   double ThumbLeverArmM(double flexion_rad) const;
   /// Largest pinch aperture the pre-shape can open to [m].
   double MaxApertureM() const;
+
+  /// Smallest distance between the index (proximal and middle capsules, the holder as a capsule
+  /// of the pad's depth) and a circle of `radius_m` about `centre_xz` in the H x-z plane [m];
+  /// negative when they overlap. `links_only` leaves the holder out.
+  double IndexClearanceM(double mcp_rad, const Eigen::Vector2d& centre_xz, double radius_m,
+                         bool links_only = false) const;
+  /// The same for the thumb (base sphere, proximal and distal capsules) [m].
+  double ThumbClearanceM(double flexion_rad, const Eigen::Vector2d& centre_xz, double radius_m) const;
+  /// The wrap of a cylinder of `radius_m`: the pad's centre touches it when its surface is
+  /// `palm_gap_m` from the palmar face (the pad then presses it against the palm), and both digits
+  /// open until every link clears it by `clearance_m`. Throws std::invalid_argument when the
+  /// cylinder cannot be wrapped (too small or too large for the finger to meet it with its pad
+  /// first, or out of the thumb's reach).
+  WrapPose Wrap(double radius_m, double palm_gap_m, double clearance_m) const;
 
   /// Design constants, H frame [m].
   const Eigen::Vector2d& mcp_xz() const { return mcp_; }

@@ -30,10 +30,10 @@ constexpr double kMesaRootDepthM = 0.2e-3;  // mesa box reaches this far into it
 constexpr int kHolderSegments = 48;         // polygon sides of the elliptic holder mesh
 
 // Prosthetic hand [m]. The rounded fingertip: an ellipsoid cap on the holder's distal end.
-constexpr double kTipCapLengthM = 0.005;
-constexpr double kProximalRadiusM = 0.0055;  // proximal phalanx capsule
-constexpr double kMiddleRadiusM = 0.004;     // middle phalanx capsule
-constexpr double kThumbProximalRadiusM = 0.0075;
+constexpr double kTipCapLengthM = ProstheticKinematics::kTipCapLengthM;
+constexpr double kProximalRadiusM = ProstheticKinematics::kProximalRadiusM;
+constexpr double kMiddleRadiusM = ProstheticKinematics::kMiddleRadiusM;
+constexpr double kThumbProximalRadiusM = ProstheticKinematics::kThumbProximalRadiusM;
 constexpr double kPalmMarginM = 0.012;     // palm box beyond the MCP and the thumb base
 constexpr double kPalmHalfWidthM = 0.012;  // palm box along H y
 // Pinch height: a box or upright cylinder is pinched this far below its top, so the middle
@@ -41,6 +41,13 @@ constexpr double kPalmHalfWidthM = 0.012;  // palm box along H y
 // (holder half length + tip cap + 3 mm).
 constexpr double kPinchBelowTopM = 0.013;
 constexpr double kMinPadHeightM = 0.023;
+// Wrap: the hand's plane (H y = 0) at the cylinder's mid-height, the palm's edge never closer to the
+// table than 4 mm; the pad meets the cylinder when it stands this far from the palmar face, so the
+// pad's squeeze brings it against the palm.
+constexpr double kMinWrapPlaneHeightM = kPalmHalfWidthM + 0.004;
+constexpr double kWrapPalmGapM = 0.001;
+// Palm-sideways (wrap): H turned +90 deg about world x, H (x, y, z) -> world (x, -z, y); MJCF quat.
+constexpr const char* kWrapPalmQuat = "0.70710678 0.70710678 0 0";
 
 // Fixed-format numbers so the text (and the checked-in model) is reproducible.
 class Writer {
@@ -95,6 +102,10 @@ ProstheticKinematics MakeKinematics(const sensor::Layout& layout, const SceneCon
 // World height of the object's lowest point above its centre when resting [m] and of the pinch.
 double ObjectCentreZ(const ObjectConfig& object) {
   return object.initial_position_m[2] < 0.0 ? object.RestHalfHeightM() : object.initial_position_m[2];
+}
+
+double WrapPlaneHeightM(const ObjectConfig& object) {
+  return std::max(ObjectCentreZ(object), kMinWrapPlaneHeightM);
 }
 
 double PinchHeightM(const ObjectConfig& object) {
@@ -236,7 +247,10 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   const double palm_min_x = std::min(kin.mcp_xz().x(), kin.thumb_base_xz().x()) - kPalmMarginM;
   const double palm_max_x = std::max(kin.mcp_xz().x(), kin.thumb_base_xz().x()) + kPalmMarginM;
   const double half_depth = 0.5 * ProstheticKinematics::kPalmDepthM;
-  o << "      <body name=\"palm\" childclass=\"hand\">\n";
+  // The hand frame H is the palm's: level in a pinch, turned palm-sideways in a wrap.
+  o << "      <body name=\"palm\" childclass=\"hand\""
+    << (hand.grasp == GraspType::kWrap ? std::string(" quat=\"") + kWrapPalmQuat + "\"" : std::string())
+    << ">\n";
   o << "        <geom name=\"palm_geom\" type=\"box\" size=\""
     << w.Vec(0.5 * (palm_max_x - palm_min_x), kPalmHalfWidthM, half_depth) << "\" pos=\""
     << w.Vec(0.5 * (palm_min_x + palm_max_x), 0, -half_depth) << "\" mass=\"" << w.Num(hand.palm_mass_kg)
@@ -338,6 +352,14 @@ void WriteProstheticTransmission(Writer& w, const SceneConfig& scene, const Hand
   }
 }
 
+// Stall torque of each digit's motor so that it presses stall_pinch_force_n through `lever_arm_m`
+// [m]; no-load speeds so that the thumb's contact closes as fast as the pad.
+void SizeDigitMotors(const HandConfig& hand, const std::array<double, 2>& lever_arm_m, HandPlacement& place) {
+  for (int k = 0; k < 2; ++k) place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * lever_arm_m[k];
+  const double omega = hand.digit_motor.no_load_speed_rad_s;
+  place.no_load_speed = {omega, omega * lever_arm_m[0] / lever_arm_m[1]};
+}
+
 }  // namespace
 
 std::vector<std::string> GripMotorNames(HandModel model) {
@@ -367,6 +389,29 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     place.no_load_speed = {hand.motor.no_load_speed_m_s, hand.motor.no_load_speed_m_s};
     place.contact_joint = {0.5 * (place.open_gap_m - place.object_width_m),
                            0.5 * (place.open_gap_m - place.object_width_m)};
+  } else if (hand.grasp == GraspType::kWrap) {
+    const ProstheticKinematics kin = MakeKinematics(layout, scene);
+    const WrapPose wrap = kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, hand.preshape_clearance_m);
+    place.contact_joint = {wrap.index_contact_rad, wrap.thumb_contact_rad};
+    // The cylinder's axis at H (x, z) is at world (x, -z) from the wrist: H turned palm-sideways.
+    wrist = {object.initial_position_m[0] - wrap.centre_xz.x(),
+             object.initial_position_m[1] + wrap.centre_xz.y(), WrapPlaneHeightM(object)};
+    place.lever_arm_m = {wrap.pad_lever_arm_m, wrap.thumb_lever_arm_m};
+    // As in the pinch, the pad presses stall_pinch_force_n at stall in this grasp's posture; the
+    // thumb a share of it (its firmware's grip pattern), so that the pad's squeeze goes into the
+    // palm: at equal forces the thumb, closing round the cylinder's far side, would press it off
+    // the palm and hold it against the pad alone.
+    SizeDigitMotors(hand, place.lever_arm_m, place);
+    place.stall_effort[1] *= hand.digit_motor.wrap_thumb_share;
+    // Both digits meet the cylinder together (as in the pinch, where the thumb is geared for it):
+    // the one with less travel at its no-load speed opens further than its clearance.
+    const double travel_s =
+        std::max((wrap.index_contact_rad - wrap.index_preshape_rad) / place.no_load_speed[0],
+                 (wrap.thumb_contact_rad - wrap.thumb_preshape_rad) / place.no_load_speed[1]);
+    place.preshape_joint = {std::max(wrap.index_contact_rad - travel_s * place.no_load_speed[0],
+                                     ProstheticKinematics::kMcpMinRad),
+                            std::max(wrap.thumb_contact_rad - travel_s * place.no_load_speed[1],
+                                     ProstheticKinematics::kThumbMinRad)};
   } else {
     const ProstheticKinematics kin = MakeKinematics(layout, scene);
     const double max_aperture = kin.MaxApertureM();
@@ -389,10 +434,7 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     // grasp's contact posture: torque = force x lever arm there.
     place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),
                          std::abs(kin.ThumbLeverArmM(place.contact_joint[1]))};
-    for (int k = 0; k < 2; ++k)
-      place.stall_effort[k] = hand.digit_motor.stall_pinch_force_n * place.lever_arm_m[k];
-    const double omega = hand.digit_motor.no_load_speed_rad_s;
-    place.no_load_speed = {omega, omega * place.lever_arm_m[0] / place.lever_arm_m[1]};
+    SizeDigitMotors(hand, place.lever_arm_m, place);
   }
   for (int k = 0; k < 3; ++k) place.wrist_position_m[k] = std::isnan(wrist_set[k]) ? wrist[k] : wrist_set[k];
   return place;
@@ -406,8 +448,12 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
   const auto mm = [](double m) { return m * 1e3; };
   const auto deg = [](double rad) { return rad * 180.0 / std::numbers::pi; };
   o << "hand model " << ToString(scene.hand.model) << ", grasp " << ToString(scene.hand.grasp) << ", object "
-    << ToString(scene.object.shape) << " " << mm(place.object_width_m) << " mm across, pre-shape aperture "
-    << mm(place.open_gap_m) << " mm\n";
+    << ToString(scene.object.shape) << " " << mm(place.object_width_m) << " mm across, ";
+  if (scene.hand.grasp == GraspType::kWrap) {
+    o << "pre-shape clear of it by " << mm(scene.hand.preshape_clearance_m) << " mm\n";
+  } else {
+    o << "pre-shape aperture " << mm(place.open_gap_m) << " mm\n";
+  }
   o << "wrist start (world) [mm]: " << mm(place.wrist_position_m[0]) << " " << mm(place.wrist_position_m[1])
     << " " << mm(place.wrist_position_m[2]) << "\n";
   if (scene.hand.model == HandModel::kJaw) {
@@ -435,6 +481,28 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
     << " deg\n";
   const double mcp_square =
       (0.5 * std::numbers::pi - f.dip_flexion_rad - f.mcp_rest_angle_rad) / (1.0 + f.pip_mcp_ratio);
+  if (scene.hand.grasp == GraspType::kWrap) {
+    const WrapPose wrap =
+        kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, scene.hand.preshape_clearance_m);
+    o << "wrap: palm sideways (H z -> world -y, H y -> world z); cylinder axis at H x "
+      << mm(wrap.centre_xz.x()) << " z " << mm(wrap.centre_xz.y()) << " mm, " << mm(kWrapPalmGapM)
+      << " mm from the palm when the pad touches it; proximal and middle phalanges "
+      << mm(wrap.index_link_clearance_m) << " mm clear then\n";
+    o << "                     MCP [deg]  thumb [deg]  pad normal [deg]\n";
+    o << "pre-shape            " << std::setw(9) << deg(place.preshape_joint[0]) << "  " << std::setw(11)
+      << deg(place.preshape_joint[1]) << "  " << std::setw(16)
+      << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad) << "\n";
+    o << "contact              " << std::setw(9) << deg(place.contact_joint[0]) << "  " << std::setw(11)
+      << deg(place.contact_joint[1]) << "  " << std::setw(16)
+      << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad) << "\n";
+    o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm (along its normal), thumb "
+      << mm(place.lever_arm_m[1]) << " mm (towards the axis)\n";
+    o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
+      << " N m (thumb): at stall the pad presses " << place.stall_effort[0] / place.lever_arm_m[0]
+      << " N, the thumb " << place.stall_effort[1] / place.lever_arm_m[1] << " N\n";
+    o << "wrap height: hand plane " << mm(WrapPlaneHeightM(scene.object)) << " mm above the table\n";
+    return o.str();
+  }
   o << "nominal pinch: " << mm(ProstheticKinematics::kNominalWidthM)
     << " mm, pad square to the object at MCP " << deg(mcp_square) << " deg\n";
   o << "                     MCP [deg]  thumb [deg]  pad tilt [deg]\n";

@@ -38,7 +38,7 @@ const char* ToString(ObjectShape shape) {
 
 const char* ToString(HandModel model) { return model == HandModel::kJaw ? "jaw" : "prosthetic"; }
 
-const char* ToString(GraspType) { return "pinch"; }
+const char* ToString(GraspType grasp) { return grasp == GraspType::kWrap ? "wrap" : "pinch"; }
 
 double SceneConfig::ObjectWidthM() const {
   if (object.shape != ObjectShape::kBox) return object.size_m[0];
@@ -212,6 +212,9 @@ const common::FieldTable<DigitMotorConfig>& DigitMotorConfigFields() {
                         "reflected rotor + gearbox inertia on each driven joint"),
           Table::Number("damping_n_m_s", &C::damping_n_m_s, NumberRule::Between(0.0, 10.0), "N m s/rad",
                         "viscous friction on every finger joint (the back-EMF comes on top)"),
+          Table::Number("wrap_thumb_share", &C::wrap_thumb_share, NumberRule::Between(0.05, 1.0), "",
+                        "in a wrap, the thumb's stall force as a share of the pad's: the palm takes the rest "
+                        "of the pad's squeeze (at 1 the thumb presses the cylinder off the palm)"),
       });
   return table;
 }
@@ -229,10 +232,13 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
                         "`prosthetic`: index finger flexing at MCP and PIP (linkage), the holder as its "
                         "distal phalanx, opposable thumb, one DC motor per digit. `jaw`: the slide-joint "
                         "bench fixture (docs/simulation.md, \"The jaw fixture\")"),
-          Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}},
-                        "the grasp the pre-shape prepares: index fingertip pad against the thumb tip, near "
-                        "the object's top (a box or cylinder 13 mm below its top, a sphere at its equator); "
-                        "the only one built"),
+          Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}, {GraspType::kWrap, "wrap"}},
+                        "the grasp the pre-shape prepares. `pinch`: index fingertip pad against the thumb "
+                        "tip, near the object's top (a box or cylinder 13 mm below its top, a sphere at its "
+                        "equator). `wrap` (prosthetic hand, upright cylinder): the palm faces the cylinder "
+                        "from the side at its mid-height, the index curls round it until its pad presses it "
+                        "against the palm, the thumb closes round its other side (docs/simulation.md, "
+                        "\"The wrap\")"),
           Table::Number("open_gap_m", &C::open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM), "m",
                         "pre-shape aperture between the pad's mesa tops and the thumb's contact point. "
                         "Unset (auto), it follows the object: its width across the pinch + 2 x "
@@ -313,6 +319,20 @@ const common::FieldTable<SceneConfig>& SceneConfigFields() {
         if (scene.object.solref_timeconst_s < 2.0 * scene.physics.timestep_s) {
           Bad("object.solref_timeconst_s", scene.object.solref_timeconst_s,
               "must be >= 2 x physics.timestep_s");
+        }
+        if (scene.hand.grasp == GraspType::kWrap) {
+          const auto refuse = [](const std::string& key, const std::string& value, const std::string& why) {
+            throw common::ConfigError("", 0, key, value, why);
+          };
+          if (scene.hand.model != HandModel::kProsthetic)
+            refuse("hand.grasp", "wrap", "needs hand.model prosthetic (the jaw fixture only pinches)");
+          if (scene.object.shape != ObjectShape::kCylinder)
+            refuse(
+                "hand.grasp", "wrap",
+                std::string("needs an upright cylinder, not object.shape ") + ToString(scene.object.shape));
+          if (!std::isnan(scene.hand.open_gap_m))
+            Bad("hand.open_gap_m", scene.hand.open_gap_m,
+                "is the pinch's aperture; a wrap opens each digit by hand.preshape_clearance_m");
         }
         if (scene.OpenGapM() <= scene.ObjectWidthM()) {
           Bad("hand.open_gap_m", scene.OpenGapM(),

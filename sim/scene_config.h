@@ -100,13 +100,16 @@ enum class HandModel {
 /// "prosthetic" / "jaw".
 const char* ToString(HandModel model);
 
-/// The grasp the pre-shape prepares. Only the precision pinch exists so far (a wrap against the
-/// palm needs a palm and finger geometry that clears a cylinder in the pre-shape; not built yet).
+/// The grasp the pre-shape prepares.
 enum class GraspType {
   /// Index fingertip pad against the thumb tip, hand above the object, near its top.
   kPinch,
+  /// Power grasp of an upright cylinder against the palm (prosthetic hand only): the palm faces the
+  /// cylinder from the side, the index curls round it until its pad presses it against the palm,
+  /// the thumb closes round its other side.
+  kWrap,
 };
-/// "pinch".
+/// "pinch" / "wrap".
 const char* ToString(GraspType grasp);
 
 /// The jaw fixture's single grip motor, driving both digits through the linkage. The digits close in
@@ -164,6 +167,9 @@ struct DigitMotorConfig {
   double armature_kg_m2 = 2e-4;
   /// Viscous friction on every finger joint [N m s/rad].
   double damping_n_m_s = 0.002;
+  /// In a wrap, the thumb's stall force as a share of the pad's [-]: the thumb closes round the
+  /// cylinder's far side and the palm takes the rest of the pad's squeeze.
+  double wrap_thumb_share = 0.5;
 };
 
 /// The hand: geometry of the digits around the object and the wrist servo that scripts move.
@@ -171,9 +177,10 @@ struct HandConfig {
   HandModel model = HandModel::kProsthetic;
   GraspType grasp = GraspType::kPinch;
   /// Pre-shape aperture: gap between the finger's pad (mesa tops) and the thumb at the start [m].
-  /// NaN: follows the object (its width across the pinch + 2 x preshape_clearance_m).
+  /// NaN: follows the object (its width across the pinch + 2 x preshape_clearance_m). Pinch only:
+  /// a wrap opens each digit until it clears the cylinder by preshape_clearance_m.
   double open_gap_m = std::numeric_limits<double>::quiet_NaN();
-  /// Clearance on each side of the object in the automatic pre-shape [m].
+  /// Clearance on each side of the object in the automatic pre-shape [m]; in a wrap, of every link.
   double preshape_clearance_m = 0.0075;
   /// Mass of the palm (with the wrist carriage) [kg], of each digit [kg].
   double palm_mass_kg = 0.3;

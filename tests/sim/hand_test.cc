@@ -27,6 +27,11 @@ constexpr double kMinCoverage = 0.95;
 // (the array resolves 5 mm rows), or the flexing finger shows the array nothing new.
 constexpr double kMinCentroidShiftM = 2.5e-3;
 
+// The wrap: the pad meets the cylinder this far from the palm (sim/model_generator.cc), and the
+// diameters it must take, a 35 mm handle to a 90 mm jar.
+constexpr double kWrapPalmGapM = 1e-3;
+constexpr std::array<double, 4> kWrapDiametersM = {0.035, 0.05, 0.07, 0.09};
+
 class HandTest : public test_support::MujocoTest {
  protected:
   static ProstheticKinematics DefaultKinematics(const SceneConfig& scene) {
@@ -145,6 +150,85 @@ TEST_F(FrictionTest, TheObjectSlipsWithinFivePercentOfCoulombsLimit) {
   EXPECT_GT(onset.sliding_load_share, 1.0 - kCoulombBand);
   RecordProperty("ratio_at_onset", std::to_string(ratio_at_onset));
   EXPECT_NEAR(ratio_at_onset, 1.0, kCoulombBand) << "pull / (mu x normal force) at the onset of slip";
+}
+
+}  // namespace
+}  // namespace graspbed::sim
+
+namespace graspbed::sim {
+namespace {
+
+TEST_F(HandTest, TheWrapMeetsACylinderWithThePadFirstAndPressesItAgainstThePalm) {
+  const SceneConfig scene;
+  const ProstheticKinematics kin = DefaultKinematics(scene);
+  const double clearance = scene.hand.preshape_clearance_m;
+  for (const double diameter : kWrapDiametersM) {
+    SCOPED_TRACE(diameter);
+    const double r = 0.5 * diameter;
+    const WrapPose pose = kin.Wrap(r, kWrapPalmGapM, clearance);
+    // At contact the pad touches, the other phalanges do not, and the cylinder is the gap from the palm.
+    EXPECT_NEAR(kin.IndexClearanceM(pose.index_contact_rad, pose.centre_xz, r), 0.0, 1e-9);
+    EXPECT_GE(kin.IndexClearanceM(pose.index_contact_rad, pose.centre_xz, r, true), 1e-3);
+    EXPECT_NEAR(-ProstheticKinematics::kPalmDepthM - (pose.centre_xz.y() + r), kWrapPalmGapM, 1e-9);
+    // The pad pushes it towards the palm (its normal's +z share at least a half).
+    EXPECT_GE(std::sin(kin.IndexPad(pose.index_contact_rad).normal_angle_rad), 0.5);
+    EXPECT_NEAR(kin.ThumbClearanceM(pose.thumb_contact_rad, pose.centre_xz, r), 0.0, 1e-6);
+    // Opened, both digits clear it by the clearance.
+    EXPECT_NEAR(kin.IndexClearanceM(pose.index_preshape_rad, pose.centre_xz, r), clearance, 1e-6);
+    EXPECT_NEAR(kin.ThumbClearanceM(pose.thumb_preshape_rad, pose.centre_xz, r), clearance, 1e-6);
+    EXPECT_GT(pose.pad_lever_arm_m, 0.0);
+    EXPECT_GT(pose.thumb_lever_arm_m, 0.0);
+  }
+  EXPECT_THROW(kin.Wrap(0.01, kWrapPalmGapM, clearance), std::invalid_argument) << "20 mm: too small";
+  EXPECT_THROW(kin.Wrap(0.05, kWrapPalmGapM, clearance), std::invalid_argument) << "100 mm: too large";
+}
+
+TEST_F(HandTest, AWrappedCylinderIsPressedAgainstThePalmByTheSensedPadAndLiftedWithoutSlipping) {
+  // Closed at half effort (10 N at the pad on the default motors), then the wrist lifts 30 mm:
+  // the cylinder touches the palm, the mesas carry the pad's force, and it goes up with the hand.
+  for (const double diameter : kWrapDiametersM) {
+    SCOPED_TRACE(diameter);
+    SceneConfig scene;
+    scene.hand.grasp = GraspType::kWrap;
+    scene.object.shape = ObjectShape::kCylinder;
+    scene.object.size_m = {diameter, diameter, 0.1};
+    scene.object.mass_kg = 0.25;
+    Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
+    const mjModel* m = simulation.model();
+    const int palm = mj_name2id(m, mjOBJ_GEOM, "palm_geom");
+    const int object = mj_name2id(m, mjOBJ_GEOM, "object_geom");
+    simulation.SetGripEffort(0.5);
+    simulation.StepUntil(0.8);
+    const double start_z = simulation.data()->xpos[3 * m->geom_bodyid[object] + 2];
+    // The wrist rises at 60 mm/s (as a scenario's lift), then holds.
+    const double lift_m = 0.03;
+    const std::array<double, 3> start = simulation.wrist_target();
+    while (simulation.time_s() < 1.3 && !simulation.fault().occurred) {
+      std::array<double, 3> wrist = start;
+      wrist[2] += lift_m * std::min(1.0, (simulation.time_s() - 0.8) / 0.5);
+      simulation.SetWristTarget(wrist);
+      simulation.Step();
+    }
+    simulation.StepUntil(1.6);
+    ASSERT_FALSE(simulation.fault().occurred) << simulation.fault().cause_text();
+    const mjData* d = simulation.data();
+    double palm_n = 0.0;
+    for (int c = 0; c < d->ncon; ++c) {
+      const mjContact& contact = d->contact[c];
+      if ((contact.geom1 == palm && contact.geom2 == object) ||
+          (contact.geom2 == palm && contact.geom1 == object)) {
+        mjtNum force[6];
+        mj_contactForce(m, d, c, force);
+        palm_n += force[0];
+      }
+    }
+    const GroundTruth truth = simulation.truth();
+    EXPECT_GT(palm_n, 1.0) << "against the palm";
+    EXPECT_GT(truth.sensed_normal_force_n, 3.0) << "on the sensed pad";
+    EXPECT_GT(truth.thumb_normal_force_n, 1.0) << "the thumb round its other side";
+    const double risen = d->xpos[3 * m->geom_bodyid[object] + 2] - start_z;
+    EXPECT_NEAR(risen, lift_m, 2e-3) << "lifted with the hand, not left behind";
+  }
 }
 
 }  // namespace

@@ -63,6 +63,14 @@ TEST(SceneConfigTest, CrossFieldRulesNameTheLineOfTheKeyTheyBlame) {
   EXPECT_EQ(
       ErrorOf("hand:\n  open_gap_m: 0.02\n").rfind("scene.yaml:2: hand.open_gap_m = 0.02: the pre-shape", 0),
       0u);
+  // A wrap is built for the prosthetic hand around an upright cylinder, and opens by its clearance.
+  EXPECT_EQ(ErrorOf("hand:\n  grasp: wrap\n"),
+            "scene.yaml:2: hand.grasp = wrap: needs an upright cylinder, not object.shape box");
+  EXPECT_EQ(ErrorOf("object:\n  shape: cylinder\nhand:\n  model: jaw\n  grasp: wrap\n"),
+            "scene.yaml:5: hand.grasp = wrap: needs hand.model prosthetic (the jaw fixture only pinches)");
+  EXPECT_EQ(ErrorOf("object:\n  shape: cylinder\nhand:\n  grasp: wrap\n  open_gap_m: 0.08\n"),
+            "scene.yaml:5: hand.open_gap_m = 0.08: is the pinch's aperture; a wrap opens each digit by "
+            "hand.preshape_clearance_m");
   SceneConfig scene;
   scene.object.mass_kg = 20.0;
   try {
