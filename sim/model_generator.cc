@@ -481,6 +481,17 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
     << " deg\n";
   const double mcp_square =
       (0.5 * std::numbers::pi - f.dip_flexion_rad - f.mcp_rest_angle_rad) / (1.0 + f.pip_mcp_ratio);
+  // Pre-shape and contact angles, and the pad's normal (from H +x towards the palm) in each.
+  const auto joint_rows = [&](const std::string& pad_column) {
+    const int width = static_cast<int>(pad_column.size()) + 6;
+    o << "                     MCP [deg]  thumb [deg]  " << pad_column << " [deg]\n";
+    for (const auto& [label, joints] :
+         {std::pair{"pre-shape", place.preshape_joint}, {"contact", place.contact_joint}}) {
+      o << std::left << std::setw(21) << label << std::right << std::setw(9) << deg(joints[0]) << "  "
+        << std::setw(11) << deg(joints[1]) << "  " << std::setw(width)
+        << deg(kin.IndexPad(joints[0]).normal_angle_rad) << "\n";
+    }
+  };
   if (scene.hand.grasp == GraspType::kWrap) {
     const WrapPose wrap =
         kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, scene.hand.preshape_clearance_m);
@@ -488,13 +499,7 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
       << mm(wrap.centre_xz.x()) << " z " << mm(wrap.centre_xz.y()) << " mm, " << mm(kWrapPalmGapM)
       << " mm from the palm when the pad touches it; proximal and middle phalanges "
       << mm(wrap.index_link_clearance_m) << " mm clear then\n";
-    o << "                     MCP [deg]  thumb [deg]  pad normal [deg]\n";
-    o << "pre-shape            " << std::setw(9) << deg(place.preshape_joint[0]) << "  " << std::setw(11)
-      << deg(place.preshape_joint[1]) << "  " << std::setw(16)
-      << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad) << "\n";
-    o << "contact              " << std::setw(9) << deg(place.contact_joint[0]) << "  " << std::setw(11)
-      << deg(place.contact_joint[1]) << "  " << std::setw(16)
-      << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad) << "\n";
+    joint_rows("pad normal");
     o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm (along its normal), thumb "
       << mm(place.lever_arm_m[1]) << " mm (towards the axis)\n";
     o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
@@ -505,13 +510,7 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
   }
   o << "nominal pinch: " << mm(ProstheticKinematics::kNominalWidthM)
     << " mm, pad square to the object at MCP " << deg(mcp_square) << " deg\n";
-  o << "                     MCP [deg]  thumb [deg]  pad tilt [deg]\n";
-  o << "pre-shape            " << std::setw(9) << deg(place.preshape_joint[0]) << "  " << std::setw(11)
-    << deg(place.preshape_joint[1]) << "  " << std::setw(14)
-    << deg(kin.IndexPad(place.preshape_joint[0]).normal_angle_rad) << "\n";
-  o << "contact              " << std::setw(9) << deg(place.contact_joint[0]) << "  " << std::setw(11)
-    << deg(place.contact_joint[1]) << "  " << std::setw(14)
-    << deg(kin.IndexPad(place.contact_joint[0]).normal_angle_rad) << "\n";
+  joint_rows("pad tilt");
   o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm, thumb " << mm(place.lever_arm_m[1])
     << " mm\n";
   o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
