@@ -391,7 +391,12 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
                            0.5 * (place.open_gap_m - place.object_width_m)};
   } else if (hand.grasp == GraspType::kWrap) {
     const ProstheticKinematics kin = MakeKinematics(layout, scene);
-    const WrapPose wrap = kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, hand.preshape_clearance_m);
+    WrapPose wrap;
+    try {
+      wrap = kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, hand.preshape_clearance_m);
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument(std::string("object.size_m / hand.grasp wrap: ") + error.what());
+    }
     place.contact_joint = {wrap.index_contact_rad, wrap.thumb_contact_rad};
     // The cylinder's axis at H (x, z) is at world (x, -z) from the wrist: H turned palm-sideways.
     wrist = {object.initial_position_m[0] - wrap.centre_xz.x(),

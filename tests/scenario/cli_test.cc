@@ -160,6 +160,8 @@ TEST_F(CliTest, RunExitsOneWhenAnExpectationFailsAndJsonGoesToStdout) {
 TEST_F(CliTest, RunExitsTwoOnBadInputWithFileLineAndKeyAndWritesNothing) {
   const std::string good = dir_.Write("good.yaml", HeldBoxScenario(0.3));
   const std::string bad = dir_.Write("bad.yaml", "duration_s: 0.3\nobject:\n  shape: box\n  mas_kg: 0.1\n");
+  const std::string wrap =
+      dir_.Write("wrap.yaml", "duration_s: 0.3\nobject: {shape: cylinder}\nhand: {grasp: wrap}\n");
   const struct {
     std::string arguments;
     std::string message;
@@ -171,6 +173,9 @@ TEST_F(CliTest, RunExitsTwoOnBadInputWithFileLineAndKeyAndWritesNothing) {
       {"run " + good + " --set script[0].action=jump",
        "script[0].action = jump: unknown name; valid names: close"},
       {"run " + dir_.Path("missing.yaml"), dir_.Path("missing.yaml") + ": cannot open scenario file"},
+      // A wrap of a cylinder the hand cannot wrap names the keys and why.
+      {"run " + wrap + " --set \"object.size_m=[0.02,0.02,0.1]\"",
+       "object.size_m / hand.grasp wrap: a wrap of a 20 mm cylinder: too small"},
       {"run " + good + " --seed -1", ""},
       {"run", ""},
   };
