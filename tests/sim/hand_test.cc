@@ -233,3 +233,39 @@ TEST_F(HandTest, AWrappedCylinderIsPressedAgainstThePalmByTheSensedPadAndLiftedW
 
 }  // namespace
 }  // namespace graspbed::sim
+
+namespace graspbed::sim {
+namespace {
+
+TEST_F(HandTest, TheKinematicsTablePrintsThePlacementTheGeneratorUses) {
+  // `graspbed model --kinematics` (docs/simulation.md quotes it): the pinch's aperture and motors,
+  // and for a wrap the cylinder's place, the gap to the palm and the digits' forces at stall.
+  const SceneConfig pinch;
+  const std::string pinch_text = DescribeHand(DefaultLayout(), pinch);
+  EXPECT_NE(pinch_text.find("grasp pinch, object box 50.00 mm across, pre-shape aperture 65.00 mm"),
+            std::string::npos)
+      << pinch_text;
+  EXPECT_NE(pinch_text.find("= 20.00 N pinch"), std::string::npos) << pinch_text;
+  SceneConfig wrap;
+  wrap.hand.grasp = GraspType::kWrap;
+  wrap.object.shape = ObjectShape::kCylinder;
+  wrap.object.size_m = {0.05, 0.05, 0.1};
+  const std::string wrap_text = DescribeHand(DefaultLayout(), wrap);
+  const HandPlacement place = PlaceHand(DefaultLayout(), wrap);
+  EXPECT_NE(wrap_text.find("grasp wrap, object cylinder 50.00 mm across, pre-shape clear of it by 7.50 mm"),
+            std::string::npos)
+      << wrap_text;
+  EXPECT_NE(wrap_text.find("1.00 mm from the palm when the pad touches it"), std::string::npos) << wrap_text;
+  // Pad at the stall pinch force, thumb at its share of it.
+  EXPECT_NE(wrap_text.find("at stall the pad presses 20.00 N, the thumb 10.00 N"), std::string::npos)
+      << wrap_text;
+  EXPECT_NEAR(place.stall_effort[0] / place.lever_arm_m[0], wrap.hand.digit_motor.stall_pinch_force_n, 1e-9);
+  EXPECT_NEAR(place.stall_effort[1] / place.lever_arm_m[1],
+              wrap.hand.digit_motor.wrap_thumb_share * wrap.hand.digit_motor.stall_pinch_force_n, 1e-9);
+  // The wrist stands beside the cylinder at its mid-height (H turned palm-sideways).
+  EXPECT_NEAR(place.wrist_position_m[2], 0.05, 1e-12);
+  EXPECT_LT(place.wrist_position_m[1], -0.025) << "the palm faces the cylinder from -y";
+}
+
+}  // namespace
+}  // namespace graspbed::sim
