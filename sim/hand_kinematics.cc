@@ -89,9 +89,7 @@ ProstheticKinematics::ProstheticKinematics(const FingerConfig& finger, const Thu
       holder_length_m_(holder_length_m),
       pad_depth_m_(holder_half_depth_m + mesa_height_m) {
   // Nominal pinch: the distal phalanx points straight down, so the pad meets a vertical face squarely.
-  const double ratio = 1.0 + finger_.pip_mcp_ratio;
-  const double mcp_nominal =
-      (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) / ratio;
+  const double mcp_nominal = SquarePadMcpRad();
   if (!(mcp_nominal > kMcpMinRad && mcp_nominal < kMcpMaxRad)) {
     throw std::invalid_argument("hand.finger: the pad cannot meet an object squarely (MCP would need " +
                                 std::to_string(mcp_nominal) +
@@ -107,6 +105,11 @@ ProstheticKinematics::ProstheticKinematics(const FingerConfig& finger, const Thu
   thumb_base_ = {0.0, 0.0};
   const DigitContact tip = ThumbTip(thumb_nominal);
   thumb_base_ = {0.5 * kNominalWidthM - tip.point_xz.x(), pad_z - tip.point_xz.y()};
+}
+
+double ProstheticKinematics::SquarePadMcpRad() const {
+  return (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) /
+         (1.0 + finger_.pip_mcp_ratio);
 }
 
 Eigen::Vector2d ProstheticKinematics::Pip(double mcp_rad) const {
@@ -169,10 +172,6 @@ double ProstheticKinematics::MaxApertureM() const {
   return ThumbTip(kThumbMinRad).point_xz.x() - IndexPad(kMcpMinRad).point_xz.x();
 }
 
-}  // namespace graspbed::sim
-
-namespace graspbed::sim {
-
 double ProstheticKinematics::IndexClearanceM(double mcp_rad, const Eigen::Vector2d& centre_xz,
                                              double radius_m, bool links_only) const {
   const Eigen::Vector2d pip = Pip(mcp_rad);
@@ -211,8 +210,7 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
   };
   const auto palm_gap = [&](double q) { return -kPalmDepthM - (centre_for(q).y() + radius_m); };
   // From the square pinch to full flexion the pad curls under the palm and the gap closes.
-  const double mcp_square = (0.5 * std::numbers::pi - finger_.dip_flexion_rad - finger_.mcp_rest_angle_rad) /
-                            (1.0 + finger_.pip_mcp_ratio);
+  const double mcp_square = SquarePadMcpRad();
   if (palm_gap(kMcpMaxRad) > palm_gap_m) fail("too small: the pad cannot press it against the palm");
   if (palm_gap(mcp_square) < palm_gap_m) fail("too large: it reaches the palm before the pad curls under it");
   WrapPose pose;

@@ -88,6 +88,9 @@ class ProstheticKinematics {
   Eigen::Vector2d ThumbIp(double flexion_rad) const;
   Eigen::Vector2d ThumbTipCentre(double flexion_rad) const;
 
+  /// MCP angle at which the distal phalanx points straight down, the pad square to a vertical face
+  /// (the nominal pinch) [rad].
+  double SquarePadMcpRad() const;
   /// MCP angle at which the pad centre is at H x = `x_m` [rad] (bisection on the monotonic branch);
   /// clamped to the joint range.
   double McpForPadX(double x_m) const;

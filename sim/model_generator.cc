@@ -484,8 +484,7 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
     << " deg; opposition " << deg(scene.ThumbOppositionRad()) << " deg; flexion range "
     << deg(ProstheticKinematics::kThumbMinRad) << " .. " << deg(ProstheticKinematics::kThumbMaxRad)
     << " deg\n";
-  const double mcp_square =
-      (0.5 * std::numbers::pi - f.dip_flexion_rad - f.mcp_rest_angle_rad) / (1.0 + f.pip_mcp_ratio);
+  const double mcp_square = kin.SquarePadMcpRad();
   // Pre-shape and contact angles, and the pad's normal (from H +x towards the palm) in each.
   const auto joint_rows = [&](const std::string& pad_column) {
     const int width = static_cast<int>(pad_column.size()) + 6;
