@@ -5,10 +5,10 @@
 /// check the simulated hand against the geometry.
 ///
 /// Hand frame H (metres): origin at the wrist body, x from the index finger towards the thumb (the
-/// pinch direction), z up away from the palm's palmar face, y = z x x. In the pinch H is the world
-/// frame. Both digits flex in the H x-z
-/// plane at opposition 0. The nominal pinch (a `kNominalWidthM` wide object, pad square to it) is
-/// centred on x = 0.
+/// pinch direction), z up away from the palm's palmar face, y = z x x. In the pinch H is parallel to
+/// the world frame; in a wrap it is turned palm-sideways (H y along world z). Both digits flex in the
+/// H x-z plane at opposition 0. The nominal pinch (a `kNominalWidthM` wide object, pad square to it)
+/// is centred on x = 0.
 
 #include <Eigen/Core>
 
