@@ -34,6 +34,14 @@ constexpr std::array<double, 4> kWrapDiametersM = {0.035, 0.05, 0.07, 0.09};
 
 class HandTest : public test_support::MujocoTest {
  protected:
+  // The default scene turned into a wrap of an upright cylinder `diameter_m` across, 100 mm tall.
+  static SceneConfig WrapScene(double diameter_m) {
+    SceneConfig scene;
+    scene.hand.grasp = GraspType::kWrap;
+    scene.object.shape = ObjectShape::kCylinder;
+    scene.object.size_m = {diameter_m, diameter_m, 0.1};
+    return scene;
+  }
   static ProstheticKinematics DefaultKinematics(const SceneConfig& scene) {
     const sensor::Layout& layout = DefaultLayout();
     return ProstheticKinematics(scene.hand.finger, scene.hand.thumb, layout.holder.length_m,
@@ -152,12 +160,6 @@ TEST_F(FrictionTest, TheObjectSlipsWithinFivePercentOfCoulombsLimit) {
   EXPECT_NEAR(ratio_at_onset, 1.0, kCoulombBand) << "pull / (mu x normal force) at the onset of slip";
 }
 
-}  // namespace
-}  // namespace graspbed::sim
-
-namespace graspbed::sim {
-namespace {
-
 TEST_F(HandTest, TheWrapMeetsACylinderWithThePadFirstAndPressesItAgainstThePalm) {
   const SceneConfig scene;
   const ProstheticKinematics kin = DefaultKinematics(scene);
@@ -188,10 +190,7 @@ TEST_F(HandTest, AWrappedCylinderIsPressedAgainstThePalmByTheSensedPadAndLiftedW
   // the cylinder touches the palm, the mesas carry the pad's force, and it goes up with the hand.
   for (const double diameter : kWrapDiametersM) {
     SCOPED_TRACE(diameter);
-    SceneConfig scene;
-    scene.hand.grasp = GraspType::kWrap;
-    scene.object.shape = ObjectShape::kCylinder;
-    scene.object.size_m = {diameter, diameter, 0.1};
+    SceneConfig scene = WrapScene(diameter);
     scene.object.mass_kg = 0.25;
     Simulation& simulation = MakeSimulation(DefaultLayout(), scene);
     const mjModel* m = simulation.model();
@@ -231,12 +230,6 @@ TEST_F(HandTest, AWrappedCylinderIsPressedAgainstThePalmByTheSensedPadAndLiftedW
   }
 }
 
-}  // namespace
-}  // namespace graspbed::sim
-
-namespace graspbed::sim {
-namespace {
-
 TEST_F(HandTest, TheKinematicsTablePrintsThePlacementTheGeneratorUses) {
   // `graspbed model --kinematics` (docs/simulation.md quotes it): the pinch's aperture and motors,
   // and for a wrap the cylinder's place, the gap to the palm and the digits' forces at stall.
@@ -246,10 +239,7 @@ TEST_F(HandTest, TheKinematicsTablePrintsThePlacementTheGeneratorUses) {
             std::string::npos)
       << pinch_text;
   EXPECT_NE(pinch_text.find("= 20.00 N pinch"), std::string::npos) << pinch_text;
-  SceneConfig wrap;
-  wrap.hand.grasp = GraspType::kWrap;
-  wrap.object.shape = ObjectShape::kCylinder;
-  wrap.object.size_m = {0.05, 0.05, 0.1};
+  const SceneConfig wrap = WrapScene(0.05);
   const std::string wrap_text = DescribeHand(DefaultLayout(), wrap);
   const HandPlacement place = PlaceHand(DefaultLayout(), wrap);
   EXPECT_NE(wrap_text.find("grasp wrap, object cylinder 50.00 mm across, pre-shape clear of it by 7.50 mm"),
