@@ -391,12 +391,12 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
                            0.5 * (place.open_gap_m - place.object_width_m)};
   } else if (hand.grasp == GraspType::kWrap) {
     const ProstheticKinematics kin = MakeKinematics(layout, scene);
-    WrapPose wrap;
     try {
-      wrap = kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, hand.preshape_clearance_m);
+      place.wrap = kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, hand.preshape_clearance_m);
     } catch (const std::invalid_argument& error) {
       throw std::invalid_argument(std::string("object.size_m / hand.grasp wrap: ") + error.what());
     }
+    const WrapPose& wrap = *place.wrap;
     place.contact_joint = {wrap.index_contact_rad, wrap.thumb_contact_rad};
     // The cylinder's axis at H (x, z) is at world (x, -z) from the wrist: H turned palm-sideways.
     wrist = {object.initial_position_m[0] - wrap.centre_xz.x(),
@@ -496,9 +496,8 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
         << deg(kin.IndexPad(joints[0]).normal_angle_rad) << "\n";
     }
   };
-  if (scene.hand.grasp == GraspType::kWrap) {
-    const WrapPose wrap =
-        kin.Wrap(0.5 * place.object_width_m, kWrapPalmGapM, scene.hand.preshape_clearance_m);
+  if (place.wrap) {
+    const WrapPose& wrap = *place.wrap;
     o << "wrap: palm sideways (H z -> world -y, H y -> world z); cylinder axis at H x "
       << mm(wrap.centre_xz.x()) << " z " << mm(wrap.centre_xz.y()) << " mm, " << mm(kWrapPalmGapM)
       << " mm from the palm when the pad touches it; proximal and middle phalanges "

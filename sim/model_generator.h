@@ -18,10 +18,12 @@
 /// equality digit_coupling and grip_brake.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "sensor/layout.h"
+#include "sim/hand_kinematics.h"
 #include "sim/scene_config.h"
 
 namespace graspbed::sim {
@@ -43,6 +45,9 @@ struct HandPlacement {
   /// No-load speed per grip motor [rad/s] (prosthetic: the thumb's scaled so that its tip closes
   /// as fast as the pad, and both digits meet the object together) or [m/s] (jaw).
   std::array<double, 2> no_load_speed{1.0, 1.0};
+  /// In a wrap, the pose the kinematics solved (cylinder axis, contact and clearance angles, lever
+  /// arms; preshape_joint above is that pre-shape opened further so both digits arrive together).
+  std::optional<WrapPose> wrap;
 };
 
 /// Computes the start pose and motor sizing that GenerateMjcf uses. Throws std::invalid_argument
