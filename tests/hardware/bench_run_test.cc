@@ -39,12 +39,15 @@ using graspbed::test_support::ReadText;
 using graspbed::test_support::RunCli;
 using graspbed::test_support::TempDir;
 
-// A shipped scenario whose script is an intent and a lift: close at 0.15 s, lift 60 mm at 0.8 s.
-// (Not scenarios/default.yaml: there the grip-slip controller's grasp turns on one millisecond of
-// latency -- at sensor.latency_s 0 the simulation flags a false slip at the lift's onset and regrips
-// to 10 N, at 0.001 s it holds at 1.5 N through the lift, as it does over the wire, whose loop sees
-// each frame about one period late. docs/hardware.md, "The bench workflow".)
+// A shipped scenario whose script is an intent and a lift: close at 0.15 s, lift 60 mm at 0.8 s,
+// run with the open-loop controller on both sides. The comparison is of the backends, so it needs a
+// grasp that does not turn on when a frame arrives. The grip-slip controller's does: the closing
+// impact rings at about 500 Hz, and whether the frame with its shear peak reaches the controller
+// decides whether its coupling drives the grip to the 10 N ceiling (over the wire, 1 run in 6 with
+// the simulation's 10 N path, 5 at 4.9 to 5.0 N; docs/hardware.md). The emulator + hw test
+// (end_to_end_test.cc) runs the grip-slip controller over the wire for its outcome.
 constexpr char kScenario[] = "scenarios/lift_unknown_mass.yaml";
+constexpr char kController[] = "open_loop";
 // The emulator runs longer than the host, so the host's session ends with the device still there.
 constexpr char kEmulatorDurationS[] = "3.6";
 constexpr char kFramePeriodText[] = "0.001";  // the scenario's 1 kHz sensor
@@ -192,12 +195,12 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
   // The reference simulates the one frame period the hardware path's loop sees each frame late
   // (docs/hardware.md, "The bench workflow": compare like with like).
   const CliResult sim =
-      RunCli(std::string("run ") + kScenario + " --set sensor.latency_s=" + kFramePeriodText +
-             " --no-plots --out " + Path("sim"));
+      RunCli(std::string("run ") + kScenario + " --controller " + kController +
+             " --set sensor.latency_s=" + kFramePeriodText + " --no-plots --out " + Path("sim"));
   ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
   auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS, "--json"});
-  ChildProcess host({binary_, "run", kScenario, "--backend", "serial", "--port", Path("dev"),
-                     "--prompt-actions", "--log", Path("frames.csv"), "--out", Path("serial")},
+  ChildProcess host({binary_, "run", kScenario, "--controller", kController, "--backend", "serial", "--port",
+                     Path("dev"), "--prompt-actions", "--log", Path("frames.csv"), "--out", Path("serial")},
                     Path("host.out"), Path("host.err"));
   ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
   ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
@@ -230,8 +233,9 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
     EXPECT_EQ(serial.numeric.count(column), 1u) << column;
   }
 
-  // Like e2e: a machine too busy to feed the host every frame makes its state stale, and the
-  // controller then holds on purpose (safe hold), another grasp, not a wrong one.
+  // A machine too busy to feed the host every frame makes its state stale; the open-loop
+  // controller's command does not depend on the frames (in safe hold it keeps its effort), so the
+  // grasp is the same and is compared all the same.
   // Stale ticks once frames flowed (the first ticks, before any frame, are stale by definition).
   int stale_ticks = 0;
   bool fresh_seen = false;
@@ -239,58 +243,30 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
     fresh_seen = fresh_seen || stale == 0.0;
     if (fresh_seen && stale != 0.0) ++stale_ticks;
   }
-  if (bench.at("stale_periods").get<int>() != 0 || bench.at("dropped").get<int>() != 0 || stale_ticks > 0) {
-    std::printf(
-        "[   NOTE   ] the serial run fell behind real time (%d stale periods, %d dropped, %d stale ticks): "
-        "its phases and grip are not compared with the simulation's\n",
-        bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
-    return;
-  }
-  // The phases, in order, agree up to the first slip flag of either run. Whether the lift itself is
-  // flagged is a marginal call on this hand: the object leaving the table passes the vibration cue's
-  // high-pass at about its threshold (with the controller of 20c5678, 0.092 N against 0.077 N in the
-  // simulation, 0.086 N against 0.090 N over the wire, the floors learned over a grasp that began at
-  // another instant). From there the runs may part (a slip response raises the grip to the ceiling),
-  // so the grip is compared while both still hold before the lift, and at the end only when both took
-  // the same path; otherwise the tail is reported.
-  const auto before_first_slip = [](std::vector<std::string> phases) {
-    phases.erase(std::find(phases.begin(), phases.end(), "slip"), phases.end());
-    return phases;
-  };
+  std::printf("[   INFO   ] serial run: %d stale periods, %d dropped frames, %d stale ticks\n",
+              bench.at("stale_periods").get<int>(), bench.at("dropped").get<int>(), stale_ticks);
+  // The same phases in the same order, the same grasp (peak, before the lift, held at the end).
   const std::vector<std::string> sim_phases = PhaseSequence(simulated);
   const std::vector<std::string> bench_phases = PhaseSequence(serial);
   std::printf("[   INFO   ] phases, simulation: %s; serial: %s\n", Join(sim_phases).c_str(),
               Join(bench_phases).c_str());
-  const std::vector<std::string> sim_head = before_first_slip(sim_phases);
-  const std::vector<std::string> bench_head = before_first_slip(bench_phases);
-  const size_t common = std::min(sim_head.size(), bench_head.size());
-  EXPECT_EQ(Join({bench_head.begin(), bench_head.begin() + static_cast<std::ptrdiff_t>(common)}),
-            Join({sim_head.begin(), sim_head.begin() + static_cast<std::ptrdiff_t>(common)}));
-  EXPECT_EQ(Join(sim_head).substr(0, std::string("safe_hold idle closing loading holding").size()),
-            "safe_hold idle closing loading holding")
-      << "the simulation flagged slip before it held the box: nothing above was compared";
+  EXPECT_EQ(Join(bench_phases), Join(sim_phases));
   const double sim_peak_n = *std::max_element(simulated.numeric.at("est_total_fn_n").begin(),
                                               simulated.numeric.at("est_total_fn_n").end());
   const double bench_peak_n = bench.at("peak_est_total_fn_n").get<double>();
   EXPECT_NEAR(bench_peak_n, sim_peak_n, kGripTolFraction * sim_peak_n);
-  // Held before the lift (announced at 0.8 s): no slip flag in either run by then.
-  for (const Csv* run : {&simulated, &serial}) {
-    const std::vector<double>& time = run->numeric.at("time_s");
-    const std::vector<double>& flag = run->numeric.at("slip_flag");
-    for (size_t i = 0; i < time.size() && time[i] < kLiftS; ++i) ASSERT_EQ(flag[i], 0.0) << "t = " << time[i];
-  }
   const double sim_before_lift_n = MeanBetween(simulated, "est_total_fn_n", kLiftS - kHoldWindowS, kLiftS);
   const double bench_before_lift_n = MeanBetween(serial, "est_total_fn_n", kLiftS - kHoldWindowS, kLiftS);
   ASSERT_GT(sim_before_lift_n, 1.0) << "the simulation does not hold the box";
   EXPECT_NEAR(bench_before_lift_n, sim_before_lift_n, kGripTolFraction * sim_before_lift_n);
   const double sim_hold_n = MeanAtEnd(simulated, "est_total_fn_n", kHoldWindowS);
   const double bench_hold_n = MeanAtEnd(serial, "est_total_fn_n", kHoldWindowS);
-  if (sim_phases == bench_phases) EXPECT_NEAR(bench_hold_n, sim_hold_n, kGripTolFraction * sim_hold_n);
+  ASSERT_GT(sim_hold_n, 1.0) << "the simulation does not hold the lifted box";
+  EXPECT_NEAR(bench_hold_n, sim_hold_n, kGripTolFraction * sim_hold_n);
   std::printf(
       "[   INFO   ] sensed grip, simulation vs serial: peak %.3f vs %.3f N, before the lift %.3f vs %.3f N, "
-      "held at the end %.3f vs %.3f N (compared: %s)\n",
-      sim_peak_n, bench_peak_n, sim_before_lift_n, bench_before_lift_n, sim_hold_n, bench_hold_n,
-      sim_phases == bench_phases ? "yes" : "no, the runs parted");
+      "held at the end %.3f vs %.3f N\n",
+      sim_peak_n, bench_peak_n, sim_before_lift_n, bench_before_lift_n, sim_hold_n, bench_hold_n);
 }
 
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
