@@ -131,6 +131,9 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("slip_grip_rate_n_per_s", slip_grip_rate_n_per_s, 0.0, 10000.0, "N/s",
                     "while the cues keep reporting slip after a response, the slip floor keeps rising this "
                     "fast; 0 = off"),
+      GRASPBED_BIND("ratio_ceiling_rearm_s", ratio_ceiling_rearm_s, 0.0, 10.0, "s",
+                    "with the target at its ceiling, a ratio cue rising again within this time of falling "
+                    "continues its episode instead of being a new slip; 0 = every rise is new"),
       GRASPBED_BIND("sample_rate_hz", slip.sample_rate_hz, 10.0, 100000.0, "Hz",
                     "tactile frame rate the detector filters are designed for"),
       GRASPBED_BIND("grid_columns", slip.grid_columns, 1, 64, "units",
@@ -333,6 +336,7 @@ void GripSlipController::Reset() {
   ratio_counts_ = false;
   centroid_counts_ = false;
   ratio_rise_s_ = 0.0;
+  ratio_fall_s_ = -1.0e9;
   last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
@@ -392,6 +396,9 @@ void GripSlipController::UpdateHoldTarget(double dt_s) {
   coupled_target_n_ = coupled >= coupled_target_n_
                           ? coupled
                           : std::max(coupled, coupled_target_n_ - config_.grip_decrease_rate_n_per_s * dt_s);
+  // Stored above the ceiling (an impact's shear spike coupled at once), the target would sit at
+  // the ceiling until it had decayed all the way down from there: it falls from the ceiling.
+  coupled_target_n_ = std::min(coupled_target_n_, CeilingN());
   slip_floor_n_ = std::max(0.0, slip_floor_n_ - config_.slip_floor_decay_n_per_s * dt_s);
 }
 
@@ -535,7 +542,15 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       // nor does the centroid cue, whose check on a rolling pad is that same load ratio (the pad
       // deforms under the load); the vibration cue still does. Held up, it hid every later slip
       // (a flag already up when a slip begins detects nothing) and kept the flag up for seconds.
-      if (signals.ratio_slip && !ratio_was_up_) ratio_rise_s_ = time_s;
+      // Hysteresis does not stop a load that hovers at the threshold at the ceiling from crossing
+      // it again and again (pouring: a rise every few ms): a rise soon after the last fall continues
+      // the episode, so it is held at once.
+      if (signals.ratio_slip && !ratio_was_up_) {
+        const bool continues =
+            target_n_ >= ceiling_n && time_s - ratio_fall_s_ <= config_.ratio_ceiling_rearm_s;
+        if (!continues) ratio_rise_s_ = time_s;
+      }
+      if (!signals.ratio_slip && ratio_was_up_) ratio_fall_s_ = time_s;
       ratio_was_up_ = signals.ratio_slip;
       const bool ratio_held =
           signals.ratio_slip && target_n_ >= ceiling_n && time_s - ratio_rise_s_ > config_.slip_refractory_s;
@@ -570,6 +585,7 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
   // Outside the phases that watch for slip the cues are silent: a ratio cue up again later rose anew.
   if (phase_ != Phase::kLoading && phase_ != Phase::kHolding && phase_ != Phase::kSlip) {
     ratio_was_up_ = false;
+    ratio_fall_s_ = -1.0e9;
     ratio_counts_ = false;
     centroid_counts_ = false;
   }

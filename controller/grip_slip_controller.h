@@ -72,6 +72,10 @@ struct GripSlipConfig {
   /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
   /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
   double slip_grip_rate_n_per_s = 100.0;
+  /// With the target at its ceiling, a ratio cue that rises again within this time of falling
+  /// continues the episode it rose in (a load hovering at the threshold), rather than being a new
+  /// slip [s]; 0 = every rise is new.
+  double ratio_ceiling_rearm_s = 0.25;
 
   SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
 
@@ -157,7 +161,8 @@ class GripSlipController final : public GraspController {
   bool ratio_was_up_ = false;     ///< the ratio cue was up in the last frame
   bool ratio_counts_ = false;     ///< the ratio cue counts as slip now (not held at the ceiling)
   bool centroid_counts_ = false;  ///< the centroid cue counts as slip now (likewise)
-  double ratio_rise_s_ = 0.0;     ///< when the ratio cue last rose [s]
+  double ratio_rise_s_ = 0.0;     ///< when the ratio cue's current episode began [s]
+  double ratio_fall_s_ = -1.0e9;  ///< when the ratio cue last fell [s]
   hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;

@@ -508,6 +508,88 @@ TEST(GripSlipControllerTest, RatioCueHeldAtTheCeilingStopsCountingAsSlip) {
   EXPECT_EQ(flagged_late_ticks, 0);
 }
 
+/// A load that hovers at the ratio cue's threshold with the target at the ceiling (pouring into a
+/// held cup): the cue falls and rises again every 80 ms, past its hysteresis, while the (grippier)
+/// object does not move. Each rise soon after a fall continues the episode: one flag, not one per
+/// crossing; with ratio_ceiling_rearm_s 0 every rise is a new flag.
+TEST(GripSlipControllerTest, ALoadHoveringAtTheThresholdAtTheCeilingIsOneFlag) {
+  const auto flag_rises = [](double rearm_s, int* ratio_rises) {
+    HandPlant::Options plant;
+    plant.friction = 1.2;  // the object holds: no slip whatever the estimate says
+    GripSlipConfig config = DefaultConfig();
+    config.ratio_ceiling_rearm_s = rearm_s;
+    ClosedLoop loop(config, plant, {});
+    loop.controller.SetGripCeiling(3.0);
+    loop.Grasp(0.2, 1.0);
+    int rises = 0;
+    bool was_flagged = false;
+    bool ratio_was_up = false;
+    *ratio_rises = 0;
+    // At 3 N the cue rises above a load of 1.35 N (0.9 x 0.5 x 3) and falls below 0.85 of that.
+    loop.RunUntil(
+        2.5,
+        [](double t) {
+          if (t < 1.2) return 0.2;
+          return static_cast<int>((t - 1.2) / 0.08) % 2 == 0 ? 1.8 : 0.6;
+        },
+        [&](double) {
+          const bool flagged = loop.controller.telemetry().slip_detected;
+          rises += flagged && !was_flagged;
+          was_flagged = flagged;
+          const bool ratio_up = loop.controller.diagnostics().signals.ratio_slip;
+          *ratio_rises += ratio_up && !ratio_was_up;
+          ratio_was_up = ratio_up;
+        });
+    EXPECT_FALSE(loop.plant.dropped());
+    EXPECT_LT(loop.plant.slip_distance_m(), 0.5e-3) << "the object was meant to hold";
+    return rises;
+  };
+  int ratio_rises = 0;
+  const int flags = flag_rises(DefaultConfig().ratio_ceiling_rearm_s, &ratio_rises);
+  std::printf("[ measure  ] ratio cue rose %d times, flag rose %d times\n", ratio_rises, flags);
+  // The cue did cross again and again, so one flag is the rearm window at work.
+  EXPECT_GE(ratio_rises, 5);
+  EXPECT_EQ(flags, 1);
+  int ratio_rises_without = 0;
+  EXPECT_EQ(flag_rises(0.0, &ratio_rises_without), ratio_rises_without);
+}
+
+/// The closing impact's shear, coupled at once while the cues are still settling, asks for more than
+/// the ceiling; the coupled target then falls from the ceiling at grip_decrease_rate_n_per_s, not
+/// from the 8 N the spike asked for (which would hold the grip at a 4 N ceiling for 2 s more).
+TEST(GripSlipControllerTest, AnImpactSpikeAboveTheCeilingDecaysFromTheCeiling) {
+  HandPlant::Options plant;
+  plant.friction = 1.2;  // the object holds: no slip whatever the estimate says
+  const GripSlipConfig config = DefaultConfig();
+  ClosedLoop loop(config, plant, {});
+  constexpr double kCeilingN = 4.0;
+  loop.controller.SetGripCeiling(kCeilingN);
+  loop.controller.SetIntent(GraspIntent::kClose);
+  double contact_s = -1.0;
+  double target_at_ceiling_until_s = -1.0;
+  loop.RunUntil(
+      1.5,
+      [&](double t) {
+        const std::string phase = loop.controller.telemetry().phase;
+        if (contact_s < 0.0 && (phase == "loading" || phase == "holding")) contact_s = t;
+        // 3 N of shear for 5 ms as contact is made: 3 / 0.5 x 1.4 = 8.4 N coupled.
+        return contact_s > 0.0 && t - contact_s < 0.005 ? 3.0 : 0.1;
+      },
+      [&](double t) {
+        if (loop.controller.telemetry().grip_target_n >= kCeilingN - 1e-9) target_at_ceiling_until_s = t;
+      });
+  ASSERT_GT(contact_s, 0.0) << "no contact made";
+  ASSERT_GT(target_at_ceiling_until_s, contact_s) << "the spike was meant to take the target to the ceiling";
+  std::printf("[ measure  ] contact at %.3f s, target at the ceiling until %.3f s, target %.2f N at 1.5 s\n",
+              contact_s, target_at_ceiling_until_s, loop.controller.telemetry().grip_target_n);
+  EXPECT_EQ(loop.controller.telemetry().slip_events, 0) << "a slip response would hold the target up itself";
+  // From the ceiling down to the 1.5 N floor at 2 N/s: about 1.25 s, so at 1.5 s it is well below.
+  EXPECT_LT(target_at_ceiling_until_s - contact_s, 0.1);
+  EXPECT_LT(loop.controller.telemetry().grip_target_n,
+            kCeilingN - config.grip_decrease_rate_n_per_s * (1.5 - contact_s - 0.1) + 0.1);
+  EXPECT_FALSE(loop.plant.dropped());
+}
+
 /// Friction is learned from a slip at the friction limit, not from a jolt: a vibration burst under
 /// a light load (ratio 0.1 against the estimate 0.5) is flagged but teaches nothing; the same burst
 /// with the load at 0.4 lowers the estimate to about that ratio.
