@@ -192,7 +192,7 @@ void PrintPhysicsOptions(const std::vector<PhysicsOption>& options) {
   }
 }
 
-// The physics settings before the speed work (issue 16): 0.5 ms steps, 3 noslip iterations, impratio 10.
+// The physics settings before the speed work: 0.5 ms steps, 3 noslip iterations, impratio 10.
 PhysicsConfig PhysicsBefore() {
   PhysicsConfig physics;
   physics.timestep_s = 0.0005;

@@ -149,7 +149,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
 
 /// The same figures per sensor (profile and sensitivity source of each run's resolved config): one
 /// line per (sensor, controller) with runs, slip events detected, latency p95, false flags per
-/// minute held, flag-up share, drops and median grip ratio. The targets are per profile.
+/// minute held, flag-up share, drops and median grip ratio: the reference's targets hold per profile.
 std::string ScorecardBySensorTable(const Scorecard& scorecard);
 
 /// The same figures per base scenario of the set (a run `pull_ramp.v3` counts for `pull_ramp`), to

@@ -53,7 +53,7 @@ constexpr char kEmulatorDurationS[] = "3.6";
 constexpr char kFramePeriodText[] = "0.001";  // the scenario's 1 kHz sensor
 constexpr double kStartupDeadlineS = 30.0;
 constexpr double kRunDeadlineS = 60.0;
-// The grip the sensor reports, bench against simulation (the 5 %). The emulator is the same
+// The grip the sensor reports, bench against simulation (5 %). The emulator is the same
 // physics fed the same commands; what differs is timing: the host ticks on frame arrival over the
 // pty, not in lockstep with the physics.
 constexpr double kGripTolFraction = 0.05;
