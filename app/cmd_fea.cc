@@ -38,7 +38,7 @@ void PrintTable(const fea::FeaResults& r, const fea::FeaConfig& config) {
 }
 
 void RunFea(const FeaOptions& options) {
-  const fea::FeaConfig config = fea::LoadFeaConfig(options.config_path);
+  const fea::FeaConfig config = fea::LoadFeaConfigFile(options.config_path);
   const fea::FeaResults results = fea::RunUnitAnalysis(config);
   if (options.json) {
     std::cout << fea::SummaryJson(results, config);

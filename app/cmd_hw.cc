@@ -56,7 +56,7 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
   const common::YamlMap root =
       path.empty() ? common::YamlMap(no_file, "(no --config)", "") : common::YamlMap::LoadFile(path);
   HwRunConfig config;
-  if (const auto section = root.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*section);
+  if (const auto section = root.GetMap("serial")) config.serial = hardware::LoadHardwareConfig(*section);
   if (const auto section = root.GetMap("controller")) {
     config.controller = scenario::LoadControllerOptions(*section, "grip_slip");
   } else {

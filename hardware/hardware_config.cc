@@ -59,7 +59,7 @@ const common::FieldTable<HardwareConfig>& HardwareConfigFields() {
 
 void HardwareConfig::Validate() const { HardwareConfigFields().Validate(*this); }
 
-HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map) {
+HardwareConfig LoadHardwareConfig(const common::YamlMap& map) {
   HardwareConfig config;
   HardwareConfigFields().Load(map, &config);
   return config;

@@ -35,6 +35,6 @@ const common::FieldTable<HardwareConfig>& HardwareConfigFields();
 /// Reads a hardware config from `map` (keys as the field names; the `serial:` section of a
 /// `graspbed hw --config` file, docs/hardware.md "Configuration"); unknown keys are refused.
 /// @throws common::ConfigError naming file, line, key and value.
-HardwareConfig HardwareConfigFromYaml(const common::YamlMap& map);
+HardwareConfig LoadHardwareConfig(const common::YamlMap& map);
 
 }  // namespace graspbed::hardware

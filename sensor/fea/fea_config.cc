@@ -170,13 +170,13 @@ const common::FieldTable<FeaConfig>& FeaConfigFields() {
 
 void FeaConfig::Validate() const { FeaConfigFields().Validate(*this); }
 
-FeaConfig FeaConfigFromYaml(const YamlMap& root) {
+FeaConfig LoadFeaConfig(const YamlMap& root) {
   FeaConfig config;
   FeaConfigFields().Load(root, &config);
   return config;
 }
 
-FeaConfig LoadFeaConfig(const std::string& path) { return FeaConfigFromYaml(YamlMap::LoadFile(path)); }
+FeaConfig LoadFeaConfigFile(const std::string& path) { return LoadFeaConfig(YamlMap::LoadFile(path)); }
 
 std::string DefaultFeaConfigPath() { return common::DataPath("sensor/fea/unit_fea.yaml"); }
 

@@ -87,10 +87,10 @@ const common::FieldTable<FeaConfig>& FeaConfigFields();
 /// Reads a config from YAML (every key optional, defaults as above, unknown keys refused).
 /// @throws common::ConfigError naming the file, line, key and value, the cross-checks included
 ///   (a check on a key the file leaves at its default names no line and marks the value "(default)").
-FeaConfig FeaConfigFromYaml(const common::YamlMap& root);
+FeaConfig LoadFeaConfig(const common::YamlMap& root);
 /// Loads and validates the YAML file at `path`.
-/// @throws common::ConfigError as FeaConfigFromYaml, or when the file cannot be read.
-FeaConfig LoadFeaConfig(const std::string& path);
+/// @throws common::ConfigError as LoadFeaConfig, or when the file cannot be read.
+FeaConfig LoadFeaConfigFile(const std::string& path);
 /// Path of the shipped default config, sensor/fea/unit_fea.yaml under common::DataDir().
 std::string DefaultFeaConfigPath();
 

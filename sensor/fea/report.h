@@ -15,7 +15,7 @@ namespace graspbed::fea {
 std::string SummaryJson(const FeaResults& results, const FeaConfig& config);
 
 /// The config as YAML in the layout of sensor/fea/unit_fea.yaml (every value spelled out, from
-/// FeaConfigFields(); LoadFeaConfig reads it back to the same config).
+/// FeaConfigFields(); LoadFeaConfigFile reads it back to the same config).
 std::string ConfigYaml(const FeaConfig& config);
 
 /// Writes into `directory` (created if missing): fea_profile.csv, fea_sweep.csv, fea_profile.png,

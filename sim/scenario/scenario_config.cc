@@ -305,7 +305,7 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
     }
     // The unit's geometry and material decide kn and kt (about 0.1 s of analysis).
     const fea::Sensitivities analysed = fea::ComputeSensitivities(
-        fea::LoadFeaConfig(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
+        fea::LoadFeaConfigFile(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
     if (!(analysed.kn_per_n > 0.0) || !(analysed.kt_per_n > 0.0)) {
       std::ostringstream reason;
       reason << "the unit in " << (s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config)
@@ -585,7 +585,7 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   config.backend = backend == "serial"   ? Backend::kSerial
                    : backend == "replay" ? Backend::kReplay
                                          : Backend::kSim;
-  if (auto serial_map = map.GetMap("serial")) config.serial = hardware::HardwareConfigFromYaml(*serial_map);
+  if (auto serial_map = map.GetMap("serial")) config.serial = hardware::LoadHardwareConfig(*serial_map);
   config.log = map.GetString("log", "");
   if (config.backend == Backend::kReplay && config.log.empty()) {
     map.Fail("backend", "replay needs the recording to replay: log: PATH (or graspbed run --log PATH)");

@@ -21,11 +21,11 @@ std::string ErrorOf(const std::function<void()>& action) {
 }
 
 std::string LoadError(const std::string& yaml) {
-  return ErrorOf([&] { FeaConfigFromYaml(common::YamlMap::LoadString(yaml, "unit.yaml")); });
+  return ErrorOf([&] { LoadFeaConfig(common::YamlMap::LoadString(yaml, "unit.yaml")); });
 }
 
 TEST(FeaConfigTest, ShippedFileHoldsThePaperValuesAndTheStatedChoices) {
-  const FeaConfig config = LoadFeaConfig(DefaultFeaConfigPath());
+  const FeaConfig config = LoadFeaConfigFile(DefaultFeaConfigPath());
   const FeaConfig defaults;
   EXPECT_DOUBLE_EQ(config.material.youngs_modulus_gpa, 197.0);
   EXPECT_DOUBLE_EQ(config.material.poisson_ratio, 0.3);
@@ -103,7 +103,8 @@ TEST(FeaConfigTest, ValidateNamesKeyAndValueForProgrammaticConfigs) {
 }
 
 TEST(FeaConfigTest, MissingFileNamesThePath) {
-  EXPECT_THAT(ErrorOf([] { LoadFeaConfig("/nonexistent/unit.yaml"); }), HasSubstr("/nonexistent/unit.yaml"));
+  EXPECT_THAT(ErrorOf([] { LoadFeaConfigFile("/nonexistent/unit.yaml"); }),
+              HasSubstr("/nonexistent/unit.yaml"));
 }
 
 }  // namespace

@@ -48,7 +48,7 @@ TEST(SensitivitiesTest, PaperIsTheDefault) {
 TEST(SensitivitiesTest, FeaTakesKnAndKtFromTheAnalysisOfTheShippedUnit) {
   const ScenarioConfig config = LoadScenarioFromString("sensor: {sensitivities: fea}\n", "t.yaml");
   const fea::Sensitivities analysed =
-      fea::ComputeSensitivities(fea::LoadFeaConfig(fea::DefaultFeaConfigPath()));
+      fea::ComputeSensitivities(fea::LoadFeaConfigFile(fea::DefaultFeaConfigPath()));
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.nominal.kn_per_n, analysed.kn_per_n);
   EXPECT_DOUBLE_EQ(config.sensor.strain_model.nominal.kt_per_n, analysed.kt_per_n);
   EXPECT_NE(analysed.kn_per_n, kPaperKn);
