@@ -269,6 +269,42 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
       sim_peak_n, bench_peak_n, sim_before_lift_n, bench_before_lift_n, sim_hold_n, bench_hold_n);
 }
 
+/// The regression check on real data: a session recorded over the wire (the emulator standing in
+/// for the hand) replays through the readout, inversion and the recorded controller command for
+/// command; another controller on the same frames commands otherwise.
+TEST_F(BenchRunTest, ASessionRecordedOverTheWireReplaysCommandForCommand) {
+  auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS, "--json"});
+  ChildProcess host({binary_, "run", kScenario, "--controller", "grip_slip", "--backend", "serial", "--port",
+                     Path("dev"), "--prompt-actions", "--no-plots", "--out", Path("session")},
+                    Path("host.out"), Path("host.err"));
+  ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
+  ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
+  const auto replay = [&](const std::string& controller, const std::string& out) {
+    const CliResult run =
+        RunCli("run " + Path("session") + "/config.yaml --backend replay --log " + Path("session") +
+               "/signals.csv --controller " + controller + " --no-plots --out " + Path(out));
+    EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+    return nlohmann::json::parse(ReadText(Path(out) + "/summary.json")).at("bench");
+  };
+  const Csv session = ReadCsv(Path("session") + "/signals.csv");
+  const size_t rows = session.numeric.at("time_s").size();
+  ASSERT_GT(rows, 1000u) << "the session was meant to last about 3 s at 1 kHz";
+  double effort_sum = 0.0;
+  for (double effort : session.numeric.at("grip_effort")) effort_sum += std::abs(effort);
+  ASSERT_GT(effort_sum, 0.0) << "the session commanded nothing: the replay would compare zeros";
+
+  const nlohmann::json same = replay("grip_slip", "replay");
+  EXPECT_EQ(same.at("commands_compared").get<size_t>(), rows) << same.dump(2);
+  EXPECT_EQ(same.at("commands_differing").get<size_t>(), 0u) << same.dump(2);
+  EXPECT_EQ(same.at("max_effort_difference").get<double>(), 0.0);
+  const Csv replayed = ReadCsv(Path("replay") + "/signals.csv");
+  EXPECT_EQ(replayed.numeric.at("grip_effort"), session.numeric.at("grip_effort"));
+  EXPECT_EQ(replayed.numeric.at("est_total_fn_n"), session.numeric.at("est_total_fn_n"));
+
+  const nlohmann::json other = replay("open_loop", "replay_open_loop");
+  EXPECT_GT(other.at("commands_differing").get<size_t>(), 0u) << other.dump(2);
+}
+
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
   const CliResult refused =
       RunCli("run scenarios/pull_ramp.yaml --backend serial --port " + Path("no-device"));
