@@ -120,6 +120,8 @@ const std::vector<Binding>& Bindings() {
                     "effort cap = this x effort_per_newton x grip ceiling (guards against a blind sensor)"),
       GRASPBED_BIND("grip_filter_s", grip_filter_s, 0.0, 0.1, "s",
                     "low-pass time constant of the measured grip"),
+      GRASPBED_BIND("ceiling_deadband_n", ceiling_deadband_n, 0.0, 10.0, "N",
+                    "with the target at its ceiling the P term acts only on the grip error beyond this band"),
       GRASPBED_BIND("slip_grip_gain", slip_grip_gain, 0.0, 5.0, "",
                     "on slip: grip target = max(target, grip) x (1 + slip_grip_gain) + slip_grip_step_n"),
       GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N",
@@ -369,7 +371,14 @@ double GripSlipController::ForceLoop(double target_n, double grip_n, double dt_s
   const double effort_cap = EffortCap();
   const double error_n = target_n - grip_n;
   const double feed_forward = config_.effort_per_newton * target_n;
-  const double proportional = config_.kp_effort_per_n * error_n;
+  // At the ceiling the grip may rise no further, and a P term there answers the summed noise of all
+  // the units frame by frame: the finger shakes the contact and the vibration cue reads it as slip.
+  // There it acts only on the error beyond a band (a motor stronger than the feed-forward assumes
+  // still pushes past the ceiling and is pulled back).
+  const bool at_ceiling = target_n >= CeilingN();
+  const double band_n = at_ceiling ? config_.ceiling_deadband_n : 0.0;
+  const double proportional =
+      config_.kp_effort_per_n * std::copysign(std::max(std::abs(error_n) - band_n, 0.0), error_n);
   double effort = feed_forward + proportional + integrator_;
   // Anti-windup: integrate only while the output is not pinned in the direction the error pushes,
   // and keep the integral term bounded.

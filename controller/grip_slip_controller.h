@@ -63,6 +63,9 @@ struct GripSlipConfig {
   double max_effort = 1.0;          ///< largest closing effort ever commanded [-]
   double ceiling_effort_margin = 1.0;  ///< effort cap = this x effort_per_newton x grip ceiling
   double grip_filter_s = 0.002;        ///< low-pass time constant of the measured grip [s]
+  /// With the target at its ceiling the P term acts only on the grip error beyond this band [N]: a P
+  /// term answering the units' summed noise there shakes the contact (docs/controller.md).
+  double ceiling_deadband_n = 0.15;
 
   // Slip response.
   double slip_grip_gain = 0.25;           ///< on slip, grip target = grip x (1 + this) + step

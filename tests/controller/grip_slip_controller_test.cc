@@ -590,6 +590,53 @@ TEST(GripSlipControllerTest, AnImpactSpikeAboveTheCeilingDecaysFromTheCeiling) {
   EXPECT_FALSE(loop.plant.dropped());
 }
 
+/// Held at its ceiling on a noisy readout, the force loop leaves the units' summed noise alone: the
+/// effort moves frame to frame far less than with the P term answering it, and the grip still sits
+/// at the ceiling.
+TEST(GripSlipControllerTest, AtTheCeilingTheForceLoopDoesNotAnswerTheReadoutsNoise) {
+  const auto hold = [](double deadband_n, double* grip_n) {
+    HandPlant::Options plant;
+    plant.friction = 1.2;  // held whatever the estimate says
+    // Stronger than the feed-forward assumes (20 N): the effort cap allows 3.6 N, so the force loop
+    // regulates the ceiling rather than the cap pinning the effort.
+    plant.stall_force_n = 24.0;
+    SyntheticTactile::Options sensor;
+    sensor.noise_fn_n = 0.03;  // 20 units: 0.13 N (1 sigma) on the summed grip, under the band
+    GripSlipConfig config = DefaultConfig();
+    config.ceiling_deadband_n = deadband_n;
+    ClosedLoop loop(config, plant, sensor);
+    loop.controller.SetGripCeiling(3.0);
+    loop.Grasp(1.8, 1.0);  // a load ratio of 0.6 at 3 N: the target sits at the ceiling
+    double previous = loop.command.grip_effort;
+    double square_sum = 0.0;
+    int ticks = 0;
+    double grip_sum = 0.0;
+    loop.RunUntil(
+        2.0, [](double) { return 1.8; },
+        [&](double) {
+          const double step = loop.command.grip_effort - previous;
+          previous = loop.command.grip_effort;
+          square_sum += step * step;
+          grip_sum += loop.plant.grip_n();
+          ++ticks;
+        });
+    EXPECT_DOUBLE_EQ(loop.controller.telemetry().grip_target_n, 3.0)
+        << "not at the ceiling: nothing compared";
+    EXPECT_FALSE(loop.plant.dropped());
+    *grip_n = grip_sum / ticks;
+    return std::sqrt(square_sum / ticks);
+  };
+  double grip_with_band_n = 0.0;
+  double grip_without_n = 0.0;
+  const double with_band = hold(DefaultConfig().ceiling_deadband_n, &grip_with_band_n);
+  const double without = hold(0.0, &grip_without_n);
+  std::printf(
+      "[ measure  ] effort step RMS at the ceiling: %.5f with the band, %.5f without; grip %.2f / %.2f N\n",
+      with_band, without, grip_with_band_n, grip_without_n);
+  EXPECT_LT(with_band, 0.5 * without);
+  EXPECT_NEAR(grip_with_band_n, 3.0, kCeilingTolN);
+}
+
 /// Friction is learned from a slip at the friction limit, not from a jolt: a vibration burst under
 /// a light load (ratio 0.1 against the estimate 0.5) is flagged but teaches nothing; the same burst
 /// with the load at 0.4 lowers the estimate to about that ratio.
