@@ -243,11 +243,11 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   EXPECT_EQ(reference.at("drops"), 0);
 }
 
-// The reference controller over the whole shipped set (41 runs, about 6 s on 2 cores), against the
-// reference's targets (docs/controller.md, "Scorecard") that it meets: nothing dropped or crushed,
-// every run finished without a physics fault, the median peak / needed grip at most 2. The other targets (>=
-// 95 % of slip events flagged, p95 latency <= 50 ms, <= 1 false flag per minute held) are not met; the
-// figures are printed and docs/controller.md ("Scorecard") records them.
+// The reference controller over the whole shipped set (41 runs, about 6 s on 2 cores), against
+// the reference's targets (docs/controller.md, "Scorecard") that it meets: nothing dropped or
+// crushed, every run finished without a physics fault, the median peak / needed grip at most 2.
+// The other targets (>= 95 % of slip events flagged, p95 latency <= 50 ms, <= 1 false flag per
+// minute held) are not met; the figures are printed and docs/controller.md records them.
 TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndGripsAtMostTwiceTheNeed) {
   ScorecardOptions options;
   options.controllers = {"grip_slip"};
