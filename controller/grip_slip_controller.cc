@@ -338,7 +338,7 @@ void GripSlipController::Reset() {
   ratio_counts_ = false;
   centroid_counts_ = false;
   ratio_rise_s_ = 0.0;
-  ratio_fall_s_ = -1.0e9;
+  ratio_fall_s_ = kNeverS;
   last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
@@ -594,7 +594,7 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
   // Outside the phases that watch for slip the cues are silent: a ratio cue up again later rose anew.
   if (phase_ != Phase::kLoading && phase_ != Phase::kHolding && phase_ != Phase::kSlip) {
     ratio_was_up_ = false;
-    ratio_fall_s_ = -1.0e9;
+    ratio_fall_s_ = kNeverS;
     ratio_counts_ = false;
     centroid_counts_ = false;
   }

@@ -11,6 +11,7 @@
 /// counted at the rated range) with feed-forward + PI and anti-windup, since the motor effort to
 /// force map depends on the object. Sees only TactileState, time and intent.
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -165,7 +166,9 @@ class GripSlipController final : public GraspController {
   bool ratio_counts_ = false;     ///< the ratio cue counts as slip now (not held at the ceiling)
   bool centroid_counts_ = false;  ///< the centroid cue counts as slip now (likewise)
   double ratio_rise_s_ = 0.0;     ///< when the ratio cue's current episode began [s]
-  double ratio_fall_s_ = -1.0e9;  ///< when the ratio cue last fell [s]
+  /// A time before any other: a cue that never fell did not fall "just now".
+  static constexpr double kNeverS = -std::numeric_limits<double>::infinity();
+  double ratio_fall_s_ = kNeverS;  ///< when the ratio cue last fell [s]
   hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;
