@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "sensor/raw_frame.h"
 #include "sim/hand_kinematics.h"
@@ -360,6 +362,52 @@ void SizeDigitMotors(const HandConfig& hand, const std::array<double, 2>& lever_
   place.no_load_speed = {omega, omega * lever_arm_m[0] / lever_arm_m[1]};
 }
 
+// Names of the geoms an MJCF fragment declares, in order (the order MuJoCo numbers them in).
+std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
+  static constexpr std::string_view kOpening = "<geom name=\"";
+  std::vector<std::string> names;
+  for (size_t at = mjcf_fragment.find(kOpening); at != std::string::npos;
+       at = mjcf_fragment.find(kOpening, at)) {
+    at += kOpening.size();
+    const size_t end = mjcf_fragment.find('"', at);
+    names.push_back(mjcf_fragment.substr(at, end - at));
+  }
+  return names;
+}
+
+// Every geom pair that can touch, listed for `collision="predefined"`: the object with each hand
+// geom and the table, the table with each hand geom (never the hand with itself, as its contype /
+// conaffinity say). MuJoCo then skips its broad phase, which was 12 % of a held step. Each pair
+// carries the parameters MuJoCo's dynamic collision would mix from the two geoms (the object's
+// priority: its condim, friction and compliance; table and hand: the shared defaults), in the
+// order it would test them (world geom first, then by body), so the contacts are the same, in the
+// same order (ModelTest.ThePredefinedPairsGiveTheContactsOfDynamicCollision). Simulation updates
+// the object pairs' friction with the object's.
+void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<std::string>& hand_geoms) {
+  const ObjectConfig& object = scene.object;
+  std::ostringstream& o = w.out();
+  const std::string compliance = "\" solref=\"" + w.Num(object.solref_timeconst_s) + " " +
+                                 w.Num(object.solref_dampratio) + "\" solimp=\"" + w.Num(object.solimp[0]) +
+                                 " " + w.Num(object.solimp[1]) + " " + w.Num(object.solimp[2]) + " " +
+                                 w.Num(object.solimp[3]) + " " + w.Num(object.solimp[4]) + "\"";
+  // MuJoCo spreads a geom's (slide, spin, roll) friction over the contact's five directions.
+  const auto friction = [&](double slide, double spin) {
+    return "\" friction=\"" + w.Num(slide) + " " + w.Num(slide) + " " + w.Num(spin) + " 0.0001 0.0001";
+  };
+  const std::string with_object = " condim=\"" + std::to_string(scene.physics.condim) +
+                                  friction(object.friction, object.torsional_friction) + compliance;
+  const std::string table_hand = " condim=\"3" + friction(scene.hand.friction, 0.005) + compliance;
+  o << "  <contact>\n";
+  if (scene.physics.table) {
+    for (const std::string& geom : hand_geoms)
+      o << "    <pair geom1=\"table_geom\" geom2=\"" << geom << "\"" << table_hand << "/>\n";
+    o << "    <pair geom1=\"table_geom\" geom2=\"object_geom\"" << with_object << "/>\n";
+  }
+  for (const std::string& geom : hand_geoms)
+    o << "    <pair geom1=\"" << geom << "\" geom2=\"object_geom\"" << with_object << "/>\n";
+  o << "  </contact>\n";
+}
+
 }  // namespace
 
 std::vector<std::string> GripMotorNames(HandModel model) {
@@ -549,7 +597,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << w.Num(-physics.gravity_m_s2) << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal")
     << "\" impratio=\"" << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations
     << "\" iterations=\"" << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
-    << "\" solver=\"Newton\" integrator=\"Euler\"/>\n";
+    << "\" solver=\"Newton\" integrator=\"Euler\" collision=\"predefined\"/>\n";
   // Sized from use with a wide margin: over the shipped suite and the scorecard set the most seen at
   // once were 21 contacts, 65 constraint rows and 1.7k stack doubles (mjData.maxuse_*). MuJoCo 2.x
   // allocates and clears njmax^2 doubles for the solver when a run starts: njmax 1000 and nstack 1e6
@@ -582,15 +630,15 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "  <worldbody>\n";
   o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
   if (physics.table) {
-    o << "    <body name=\"table\">\n";
     // A plane, not a box: MuJoCo tests a plane against every geom with cheap analytic functions,
     // while a box this large overlaps every geom's bounding sphere and sends each hand geom to a
-    // box-box or general convex test every step; and a box resting on the plane gets its four
-    // corner contacts, not two (docs/simulation.md, "Where a step's time goes").
-    o << "      <geom name=\"table_geom\" type=\"plane\" size=\"0.3 0.3 0.02\" rgba=\"0.55 "
+    // box-box or general convex test every step (docs/simulation.md, "Where a step's time goes").
+    // A world geom, not a body of its own: MuJoCo 2.2.2's dynamic broad phase pairs a static body
+    // holding a plane with every body and then again wherever the boxes overlap, which doubled each
+    // contact of an object resting over the table's origin.
+    o << "    <geom name=\"table_geom\" type=\"plane\" size=\"0.3 0.3 0.02\" rgba=\"0.55 "
          "0.45 0.35 1\""
       << " contype=\"1\" conaffinity=\"3\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
-    o << "    </body>\n";
   }
 
   // Wrist carriage on three stiff position servos; the hand hangs below it.
@@ -601,11 +649,13 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     o << "      <joint name=\"wrist_" << axis << "\" type=\"slide\" axis=\"" << dir << "\" damping=\""
       << w.Num(hand.wrist_damping_n_s_m) << "\"/>\n";
   }
+  const std::string before_hand = o.str();
   if (hand.model == HandModel::kJaw) {
     WriteJawHand(w, layout, scene, place);
   } else {
     WriteProstheticHand(w, layout, scene, place);
   }
+  const std::vector<std::string> hand_geoms = GeomNames(o.str().substr(before_hand.size()));
   o << "    </body>\n";
 
   // The object: a free body whose geom has contact priority, so its friction and compliance govern.
@@ -633,6 +683,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << " 0.0001\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   o << "    </body>\n";
   o << "  </worldbody>\n";
+  WriteContactPairs(w, scene, hand_geoms);
 
   if (hand.model == HandModel::kJaw) {
     WriteJawTransmission(w, scene);

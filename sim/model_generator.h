@@ -5,9 +5,12 @@
 ///
 /// Names the rest of sim/ relies on (docs/simulation.md, "One source of truth"), both hand models:
 ///   bodies  wrist, palm, finger (root of the sensorised digit), holder (its distal phalanx, the
-///           holder frame), thumb (root of the thumb), object, table
+///           holder frame), thumb (root of the thumb), object
 ///   geoms   unit_0 .. unit_{N-1} (one mesa box per layout unit, layout order, holder frame),
 ///           holder_shell (the elliptic holder, a convex mesh), thumb_pad, object_geom, table_geom
+///           (a plane in the world body)
+///   contact one pair per geom pair that can touch (collision="predefined"): object x hand,
+///           table x hand, table x object
 ///   sites   finger_pad (holder centre on the palmar mesa tops), thumb_pad (the thumb's contact face)
 ///   joints  wrist_x, wrist_y, wrist_z (slides); object_free
 ///   actuators wrist_x_servo, wrist_y_servo, wrist_z_servo (position); the grip motors (GripMotorNames)

@@ -52,11 +52,10 @@ void CheckInitialPenetration(const Simulation& simulation) {
   const mjModel* m = simulation.model();
   const mjData* d = simulation.data();
   const int object_body = mj_name2id(m, mjOBJ_BODY, "object");
-  const int table_body = mj_name2id(m, mjOBJ_BODY, "table");
   const auto part_of = [&](int geom) {
     const int body = m->geom_bodyid[geom];
     if (body == object_body) return Part::kObject;
-    if (body == 0 || body == table_body) return Part::kTable;
+    if (body == 0) return Part::kTable;
     return Part::kHand;
   };
   Overlap object_hand;

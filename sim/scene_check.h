@@ -1,8 +1,7 @@
 #pragma once
 /// Checks of a simulated scene's starting state that no YAML loader can make, because they need the
 /// generated model: bodies that start inside each other. Independent of how the hand is built: the
-/// object is the body "object", the table the body "table" (and any world geom), the hand every
-/// other body.
+/// object is the body "object", the table any world geom (table_geom), the hand every other body.
 
 #include "sim/simulation.h"
 

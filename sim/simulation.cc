@@ -10,7 +10,11 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
+#include <tuple>
+#include <type_traits>
+#include <vector>
 
 #include "sim/model_generator.h"
 
@@ -102,10 +106,43 @@ class CompiledModels {
   std::list<Entry> entries_;
 };
 
+// Puts the model's contact pairs in the order MuJoCo's dynamic collision would test them: by body
+// pair (signature), then by geom ids. The compiler sorts them by signature only, with an unstable
+// sort, which scrambles the pairs within a body pair (the holder's 22 geoms against the object); the
+// contact order then differs from the dynamic one, and with it the solver's rounding.
+void OrderContactPairs(mjModel* m) {
+  std::vector<int> order(static_cast<size_t>(m->npair));
+  std::iota(order.begin(), order.end(), 0);
+  std::ranges::sort(order, [m](int a, int b) {
+    return std::tie(m->pair_signature[a], m->pair_geom1[a], m->pair_geom2[a]) <
+           std::tie(m->pair_signature[b], m->pair_geom1[b], m->pair_geom2[b]);
+  });
+  const auto permute = [&order](auto* values, int width) {
+    using Value = std::remove_pointer_t<decltype(values)>;
+    const std::vector<Value> copy(values, values + order.size() * static_cast<size_t>(width));
+    for (size_t to = 0; to < order.size(); ++to) {
+      const size_t from = static_cast<size_t>(order[to]);
+      std::copy_n(copy.begin() + static_cast<std::ptrdiff_t>(from * width), width,
+                  values + to * static_cast<size_t>(width));
+    }
+  };
+  permute(m->pair_dim, 1);
+  permute(m->pair_geom1, 1);
+  permute(m->pair_geom2, 1);
+  permute(m->pair_signature, 1);
+  permute(m->pair_solref, mjNREF);
+  permute(m->pair_solimp, mjNIMP);
+  permute(m->pair_margin, 1);
+  permute(m->pair_gap, 1);
+  permute(m->pair_friction, 5);
+  permute(m->name_pairadr, 1);
+}
+
 }  // namespace
 
 mjModel* CompileMjcf(const std::string& mjcf) {
-  auto vfs = std::make_unique<mjVFS>();
+  // mj_defaultVFS clears the 2 MB structure itself: no value-initialisation before it.
+  auto vfs = std::make_unique_for_overwrite<mjVFS>();
   mj_defaultVFS(vfs.get());
   constexpr const char* kFileName = "graspbed_scene.xml";
   if (mj_makeEmptyFileVFS(vfs.get(), kFileName, static_cast<int>(mjcf.size())) != 0) {
@@ -125,6 +162,7 @@ mjModel* CompileMjcf(const std::string& mjcf) {
   mj_deleteVFS(vfs.get());
   if (model == nullptr)
     throw std::runtime_error(std::string("MuJoCo could not load the generated model: ") + error);
+  OrderContactPairs(model);
   return model;
 }
 
@@ -144,6 +182,10 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   const mjModel* m = model_.get();
   object_body_ = RequireId(m, mjOBJ_BODY, "object");
   object_geom_ = RequireId(m, mjOBJ_GEOM, "object_geom");
+  for (int pair = 0; pair < m->npair; ++pair) {
+    if (m->pair_geom1[pair] == object_geom_ || m->pair_geom2[pair] == object_geom_)
+      object_pairs_.push_back(pair);
+  }
   holder_body_ = RequireId(m, mjOBJ_BODY, "holder");
   holder_shell_geom_ = RequireId(m, mjOBJ_GEOM, "holder_shell");
   const int finger_body = RequireId(m, mjOBJ_BODY, "finger");
@@ -294,6 +336,11 @@ void Simulation::SetObjectFriction(double friction) {
     throw std::invalid_argument("object friction = " + std::to_string(friction) + ": must be > 0");
   }
   model_->geom_friction[3 * object_geom_] = friction;
+  // The listed contact pairs carry their own friction (sliding along both tangents).
+  for (const int pair : object_pairs_) {
+    model_->pair_friction[5 * pair] = friction;
+    model_->pair_friction[5 * pair + 1] = friction;
+  }
 }
 
 void Simulation::ApplyControls() {

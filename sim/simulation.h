@@ -101,6 +101,7 @@ struct GroundTruth {
 /// Compiles MJCF text (e.g. GenerateMjcf's) with MuJoCo's XML loader, one load at a time
 /// process-wide. The caller owns the model (mj_deleteModel). Simulation compiles through a
 /// per-process cache on top of it; tests and tools that need a model compiled directly call it.
+/// Its contact pairs come in the order dynamic collision would test them (body pair, then geom ids).
 /// @throws std::runtime_error with MuJoCo's message when the text does not load.
 mjModel_* CompileMjcf(const std::string& mjcf);
 
@@ -192,6 +193,7 @@ class Simulation {
   // Ids resolved once at construction.
   int object_body_ = -1;
   int object_geom_ = -1;
+  std::vector<int> object_pairs_;  ///< the contact pairs (model pair ids) that include the object
   int holder_body_ = -1;
   int holder_shell_geom_ = -1;
   int wrist_body_ = -1;
