@@ -204,7 +204,8 @@ PhysicsConfig PhysicsBefore() {
 std::vector<scenario::Override> PhysicsOverrides(const PhysicsConfig& physics) {
   return {{"physics.timestep_s", std::to_string(physics.timestep_s)},
           {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
-          {"physics.impratio", std::to_string(physics.impratio)}};
+          {"physics.impratio", std::to_string(physics.impratio)},
+          {"physics.contact_pairs", physics.contact_pairs ? "true" : "false"}};
 }
 
 double Median(std::vector<double> values) {
@@ -237,66 +238,88 @@ ProcessTime TimeProcess(const std::vector<std::string>& argv, int repeats) {
   return {Median(walls), Median(cpus), ok};
 }
 
+// One physics setting of the scenario-speed table and what was measured for it.
+struct SpeedRow {
+  std::string label;
+  PhysicsConfig physics;
+  scenario::ScenarioConfig config;                  ///< the default scenario
+  std::vector<scenario::ScenarioConfig> suite;      ///< the shipped suite
+  std::vector<std::string> process_argv;            ///< `graspbed run` of the default scenario
+  std::vector<double> walls, cpus;                  ///< in-process runs [s]
+  std::vector<double> process_walls, process_cpus;  ///< whole-process runs [s]
+  std::vector<double> runs_per_min[2];              ///< suite on 1 and 2 worker threads
+  bool passed = true;
+  bool process_ok = true;
+  int suite_passed = 0;
+};
+
 // Real-time factors of the default scenario and the shipped suite's runs per minute, with the
-// contact model's figures beside them, for one set of physics settings.
-void PrintScenarioSpeed(const char* label, const PhysicsConfig& physics, const std::string& cli) {
+// contact model's figures beside them, for each set of physics settings. The settings take turns
+// round by round, so this VM's changes of speed (it runs at two speeds, about 1.45x apart, and
+// switches between them within seconds) fall on all of them alike rather than on one row.
+void PrintScenarioSpeedRows(std::vector<SpeedRow>& rows, const std::string& cli) {
   const std::string out = (std::filesystem::temp_directory_path() / "graspbed_sim_bench").string();
   const std::string default_yaml = common::DataPath("scenarios/default.yaml");
-  const std::vector<scenario::Override> overrides = PhysicsOverrides(physics);
-  const scenario::ScenarioConfig config = scenario::LoadScenario(default_yaml, overrides);
-
-  // In this process: the run as a suite or sweep makes it (outputs written, no plots).
-  constexpr int kRepeats = 5;
-  std::vector<double> walls;
-  std::vector<double> cpus;
-  bool passed = true;
-  for (int i = 0; i < kRepeats; ++i) {
-    scenario::RunOptions options;
-    options.out_dir = out + "/default";
-    options.write_plots = false;
-    const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = common::ThreadCpuSeconds();
-    const scenario::RunResult result = scenario::RunScenario(config, options);
-    cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
-    walls.push_back(WallSeconds(start));
-    passed = passed && result.passed;
-  }
-  // The whole process, as a user starts it.
-  ProcessTime process{};
-  if (!cli.empty()) {
-    std::vector<std::string> argv = {cli, "run", default_yaml, "--no-plots", "--out", out + "/process"};
+  for (SpeedRow& row : rows) {
+    const std::vector<scenario::Override> overrides = PhysicsOverrides(row.physics);
+    row.config = scenario::LoadScenario(default_yaml, overrides);
+    row.suite =
+        scenario::LoadScenarios(scenario::ListScenarioFiles(common::DataPath("scenarios")), overrides);
+    row.process_argv = {cli, "run", default_yaml, "--no-plots", "--out", out + "/process"};
     for (const scenario::Override& o : overrides) {
-      argv.push_back("--set");
-      argv.push_back(o.key + "=" + o.value);
+      row.process_argv.push_back("--set");
+      row.process_argv.push_back(o.key + "=" + o.value);
     }
-    process = TimeProcess(argv, kRepeats);
   }
-  // The suite on 1 and 2 worker threads.
-  const std::vector<scenario::ScenarioConfig> suite =
-      scenario::LoadScenarios(scenario::ListScenarioFiles(common::DataPath("scenarios")), overrides);
-  double runs_per_min[2] = {0.0, 0.0};
-  int suite_passed = 0;
-  for (int jobs = 1; jobs <= 2; ++jobs) {
-    scenario::SuiteOptions options;
-    options.jobs = jobs;
-    options.out_dir = out + "/suite";
-    options.write_plots = false;
-    const scenario::SuiteResult result = scenario::RunSuite(suite, options);
-    runs_per_min[jobs - 1] = 60.0 * static_cast<double>(suite.size()) / result.wall_s;
-    suite_passed = result.passed;
+  constexpr int kRunRounds = 5;    // default scenario, in process and as a process
+  constexpr int kSuiteRounds = 3;  // the suite on 1 and 2 threads
+  for (int round = 0; round < kRunRounds; ++round) {
+    for (SpeedRow& row : rows) {
+      // In this process: the run as a suite or sweep makes it (outputs written, no plots).
+      scenario::RunOptions options;
+      options.out_dir = out + "/default";
+      options.write_plots = false;
+      const auto start = std::chrono::steady_clock::now();
+      const double cpu_start = common::ThreadCpuSeconds();
+      const scenario::RunResult result = scenario::RunScenario(row.config, options);
+      row.cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
+      row.walls.push_back(WallSeconds(start));
+      row.passed = row.passed && result.passed;
+      // The whole process, as a user starts it.
+      if (!cli.empty()) {
+        const ProcessTime process = TimeProcess(row.process_argv, 1);
+        row.process_walls.push_back(process.wall_s);
+        row.process_cpus.push_back(process.cpu_s);
+        row.process_ok = row.process_ok && process.ok;
+      }
+      if (round >= kSuiteRounds) continue;
+      for (int jobs = 1; jobs <= 2; ++jobs) {
+        scenario::SuiteOptions suite_options;
+        suite_options.jobs = jobs;
+        suite_options.out_dir = out + "/suite";
+        suite_options.write_plots = false;
+        const scenario::SuiteResult suite = scenario::RunSuite(row.suite, suite_options);
+        row.runs_per_min[jobs - 1].push_back(60.0 * static_cast<double>(row.suite.size()) / suite.wall_s);
+        row.suite_passed = suite.passed;
+      }
+    }
   }
-  SceneConfig scene;
-  scene.physics = physics;
-  const CreepCheck creep = MeasureCreep(Layout(), scene);
-  const double onset = MeasureSlipOnset(Layout(), scene).ratio;
-  const PinchCheck pinch = MeasurePinch(Layout(), scene, 0.8, 0.2);
-  const double duration = config.duration_s;
-  std::printf("  %-40s %7.1fx %7.1fx %7.1fx %7.1fx %9.1f %9.1f %4d/%-3zu %6.2fum %7.4f %6.3f %s\n", label,
-              duration / Median(walls), duration / Median(cpus),
-              process.wall_s > 0.0 ? duration / process.wall_s : 0.0,
-              process.cpu_s > 0.0 ? duration / process.cpu_s : 0.0, runs_per_min[0], runs_per_min[1],
-              suite_passed, suite.size(), creep.drift_m_s * 1e6, onset, pinch.sensed_share,
-              passed && (cli.empty() || process.ok) ? "" : " (default scenario FAILED)");
+  for (SpeedRow& row : rows) {
+    SceneConfig scene;
+    scene.physics = row.physics;
+    const CreepCheck creep = MeasureCreep(Layout(), scene);
+    const double onset = MeasureSlipOnset(Layout(), scene).ratio;
+    const PinchCheck pinch = MeasurePinch(Layout(), scene, 0.8, 0.2);
+    const double duration = row.config.duration_s;
+    const auto factor = [duration](const std::vector<double>& seconds) {
+      return seconds.empty() ? 0.0 : duration / Median(seconds);
+    };
+    std::printf("  %-44s %7.1fx %7.1fx %7.1fx %7.1fx %9.1f %9.1f %4d/%-3zu %6.2fum %7.4f %6.3f %s\n",
+                row.label.c_str(), factor(row.walls), factor(row.cpus), factor(row.process_walls),
+                factor(row.process_cpus), Median(row.runs_per_min[0]), Median(row.runs_per_min[1]),
+                row.suite_passed, row.suite.size(), creep.drift_m_s * 1e6, onset, pinch.sensed_share,
+                row.passed && (cli.empty() || row.process_ok) ? "" : " (default scenario FAILED)");
+  }
 }
 
 void PrintScenarioSpeeds(const std::string& cli) {
@@ -304,14 +327,24 @@ void PrintScenarioSpeeds(const std::string& cli) {
       "\nScenario speed: the default scenario's real-time factor (outputs written, no plots; median of 5) "
       "in\n"
       "this process and as a whole `graspbed run` process, wall and CPU; the shipped suite's runs per\n"
-      "minute on 1 and 2 worker threads and how many passed; the contact model's figures beside them:\n");
-  std::printf("  %-40s %8s %8s %8s %8s %9s %9s %8s %8s %7s %6s\n", "physics", "run wall", "run CPU",
+      "minute on 1 and 2 worker threads (median of 3) and how many passed; the rows take turns round by\n"
+      "round; the contact model's figures beside them:\n");
+  std::printf("  %-44s %8s %8s %8s %8s %9s %9s %8s %8s %7s %6s\n", "physics", "run wall", "run CPU",
               "proc wall", "proc CPU", "suite/min", "2 cores", "passed", "creep", "slip/C", "cover");
-  PrintScenarioSpeed("before: 0.5 ms, noslip 3, impratio 10", PhysicsBefore(), cli);
   PhysicsConfig half_ms;
   half_ms.timestep_s = 0.0005;
-  PrintScenarioSpeed("0.5 ms, noslip 0, impratio 1000", half_ms, cli);
-  PrintScenarioSpeed("now: 1 ms, noslip 0, impratio 1000", PhysicsConfig{}, cli);
+  PhysicsConfig broad_phase;
+  broad_phase.contact_pairs = false;
+  std::vector<SpeedRow> rows(4);
+  rows[0].label = "before: 0.5 ms, noslip 3, impratio 10";
+  rows[0].physics = PhysicsBefore();
+  rows[1].label = "0.5 ms, noslip 0, impratio 1000";
+  rows[1].physics = half_ms;
+  rows[2].label = "1 ms, ..., broad phase (contact_pairs false)";
+  rows[2].physics = broad_phase;
+  rows[3].label = "now: 1 ms, noslip 0, impratio 1000, pairs";
+  rows[3].physics = PhysicsConfig{};
+  PrintScenarioSpeedRows(rows, cli);
   if (cli.empty()) return;
   // What a user waits for by default: the same run writing its PNG plots too.
   const std::string default_yaml = common::DataPath("scenarios/default.yaml");
@@ -345,6 +378,7 @@ int main(int argc, char** argv) {
     add("default: 1 ms, noslip 0, impratio 1000", [](SceneConfig&) {});
     add("before: 0.5 ms, noslip 3, impratio 10",
         [](SceneConfig& s) { s.physics = graspbed::sim::PhysicsBefore(); });
+    add("broad phase (contact_pairs false)", [](SceneConfig& s) { s.physics.contact_pairs = false; });
     add("timestep 0.5 ms", [](SceneConfig& s) { s.physics.timestep_s = 0.0005; });
     add("timestep 2 ms, object solref 4 ms", [](SceneConfig& s) {
       s.physics.timestep_s = 0.002;

@@ -597,7 +597,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << w.Num(-physics.gravity_m_s2) << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal")
     << "\" impratio=\"" << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations
     << "\" iterations=\"" << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
-    << "\" solver=\"Newton\" integrator=\"Euler\" collision=\"predefined\"/>\n";
+    << "\" solver=\"Newton\" integrator=\"Euler\" collision=\""
+    << (physics.contact_pairs ? "predefined" : "dynamic") << "\"/>\n";
   // Sized from use with a wide margin: over the shipped suite and the scorecard set the most seen at
   // once were 21 contacts, 65 constraint rows and 1.7k stack doubles (mjData.maxuse_*). MuJoCo 2.x
   // allocates and clears njmax^2 doubles for the solver when a run starts: njmax 1000 and nstack 1e6
@@ -683,7 +684,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << " 0.0001\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   o << "    </body>\n";
   o << "  </worldbody>\n";
-  WriteContactPairs(w, scene, hand_geoms);
+  if (physics.contact_pairs) WriteContactPairs(w, scene, hand_geoms);
 
   if (hand.model == HandModel::kJaw) {
     WriteJawTransmission(w, scene);

@@ -298,6 +298,9 @@ const common::FieldTable<PhysicsConfig>& PhysicsConfigFields() {
           Table::Number("gravity_m_s2", &C::gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2), "m/s^2",
                         "along -z; 0 = off"),
           Table::Bool("table", &C::table, "include the table (off for free-floating tests)"),
+          Table::Bool("contact_pairs", &C::contact_pairs,
+                      "list the geom pairs that can touch; false: MuJoCo's broad phase finds them (same "
+                      "contacts, slower)"),
       },
       [](const C& p) {
         if (p.condim != 3 && p.condim != 4 && p.condim != 6) Bad("condim", p.condim, "must be 3, 4 or 6");

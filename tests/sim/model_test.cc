@@ -84,8 +84,9 @@ TEST_F(ModelTest, TheObjectsMassAndFrictionSetAfterLoadingGiveTheModelCompiledWi
 }
 
 // The generated model lists its contact pairs (collision="predefined": no broad phase) with the
-// parameters MuJoCo's dynamic collision mixes from the geoms. The same MJCF switched to dynamic
-// collision (the geoms' contype / conaffinity decide) must then give the same contacts, in the same
+// parameters MuJoCo's dynamic collision mixes from the geoms. The model generated with
+// physics.contact_pairs false (dynamic collision: the geoms' contype / conaffinity decide) must
+// then give the same contacts, in the same
 // order, with the same parameters, and the same trajectory to the last bit: a grasp closing on the
 // object on the table and lifting it, for both hands, three shapes and the wrap.
 TEST_F(ModelTest, ThePredefinedPairsGiveTheContactsOfDynamicCollision) {
@@ -111,15 +112,14 @@ TEST_F(ModelTest, ThePredefinedPairsGiveTheContactsOfDynamicCollision) {
   cases.push_back({"jaw", jaw});
 
   for (const Case& c : cases) {
-    const std::string predefined = GenerateMjcf(DefaultLayout(), c.scene);
-    std::string dynamic = predefined;
-    const std::string option = "collision=\"predefined\"";
-    const size_t at = dynamic.find(option);
-    ASSERT_NE(at, std::string::npos) << c.name;
-    dynamic.replace(at, option.size(), "collision=\"dynamic\"");
-    mjModel* models[2] = {CompileMjcf(predefined), CompileMjcf(dynamic)};
+    SceneConfig broad_phase = c.scene;
+    broad_phase.physics.contact_pairs = false;
+    mjModel* models[2] = {CompileMjcf(GenerateMjcf(DefaultLayout(), c.scene)),
+                          CompileMjcf(GenerateMjcf(DefaultLayout(), broad_phase))};
     mjData* data[2] = {mj_makeData(models[0]), mj_makeData(models[1])};
     EXPECT_GT(models[0]->npair, 20) << c.name;
+    EXPECT_EQ(models[0]->opt.collision, mjCOL_PAIR) << c.name;
+    EXPECT_EQ(models[1]->opt.collision, mjCOL_DYNAMIC) << c.name;
     const int wrist_z = mj_name2id(models[0], mjOBJ_ACTUATOR, "wrist_z_servo");
     const int object_geom = mj_name2id(models[0], mjOBJ_GEOM, "object_geom");
     int steps_with_mesa_contact = 0;
