@@ -362,7 +362,7 @@ void SizeDigitMotors(const HandConfig& hand, const std::array<double, 2>& lever_
   place.no_load_speed = {omega, omega * lever_arm_m[0] / lever_arm_m[1]};
 }
 
-// Names of the geoms an MJCF fragment declares, in order (the order MuJoCo numbers them in).
+// Names of the geoms an MJCF fragment declares, in the order they are written.
 std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
   static constexpr std::string_view kOpening = "<geom name=\"";
   std::vector<std::string> names;
@@ -377,12 +377,12 @@ std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
 
 // Every geom pair that can touch, listed for `collision="predefined"`: the object with each hand
 // geom and the table, the table with each hand geom (never the hand with itself, as its contype /
-// conaffinity say). MuJoCo then skips its broad phase, which was 12 % of a held step. Each pair
+// conaffinity say). MuJoCo then skips its broad phase, 10 to 14 % of a held step. Each pair
 // carries the parameters MuJoCo's dynamic collision would mix from the two geoms (the object's
-// priority: its condim, friction and compliance; table and hand: the shared defaults), in the
-// order it would test them (world geom first, then by body), so the contacts are the same, in the
-// same order (ModelTest.ThePredefinedPairsGiveTheContactsOfDynamicCollision). Simulation updates
-// the object pairs' friction with the object's.
+// priority: its condim, friction and compliance; table and hand: the shared defaults); CompileMjcf
+// puts them in the order dynamic collision tests them, so the contacts are the same, in the same
+// order (ModelTest.ThePredefinedPairsGiveTheContactsOfDynamicCollision). Simulation updates the
+// object pairs' friction with the object's.
 void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<std::string>& hand_geoms) {
   const ObjectConfig& object = scene.object;
   std::ostringstream& o = w.out();
