@@ -60,6 +60,7 @@ void MetricsTracker::CloseEvent() {
     worst_latency_s_ = std::max(worst_latency_s_, current_.latency_s);
   } else {
     ++missed_;
+    if (!current_.sensed) ++missed_unsensed_;
   }
   if (event_count_ < kMaxEvents) events_[event_count_] = current_;
   ++event_count_;
@@ -177,6 +178,9 @@ void MetricsTracker::Update(const TickSample& sample) {
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
+      for (const sensor::UnitLoad& load : sample.true_loads) {
+        if (load.fn_n >= contact_threshold_n_) current_.sensed = true;
+      }
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
       // Sliding that goes on after the event is a creep of its own from here, not one that began
@@ -268,6 +272,7 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.crushed = copy.crush_limit_n_ > 0.0 && copy.peak_grip_n_ > copy.crush_limit_n_;
   m.slip_events = copy.event_count_;
   m.missed_slip_events = copy.missed_;
+  m.missed_unsensed_slip_events = copy.missed_unsensed_;
   if (copy.event_count_ > 0 && copy.worst_latency_s_ >= 0.0)
     m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
   m.controller_slip_flags = copy.flags_;

@@ -25,7 +25,12 @@ struct SlipEvent {
   double peak_speed_m_s = 0.0;  ///< [m/s]
   double distance_m = 0.0;      ///< slip distance accumulated during the event [m]
   bool detected = false;        ///< a controller slip flag matched the event
-  double latency_s = 0.0;       ///< flag time - onset, >= 0 (0 for an early flag) [s]
+  /// Some unit carried a normal force of at least the contact threshold at a tick of the event's
+  /// sliding (from the tick it opened, a creep's back-dated onset aside, to its end). An event
+  /// without is one the tactile sensor had nothing to report on (the object sliding on an unsensed
+  /// part of the finger, e.g. the fingertip cap while a grasp forms).
+  bool sensed = false;
+  double latency_s = 0.0;  ///< flag time - onset, >= 0 (0 for an early flag) [s]
 };
 
 /// The metrics of one run.
@@ -49,9 +54,10 @@ struct Metrics {
   std::optional<double> grip_efficiency_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
-  int slip_events = 0;            ///< ground-truth slip events while held
-  int missed_slip_events = 0;     ///< of those, never flagged by the controller
-  int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
+  int slip_events = 0;                  ///< ground-truth slip events while held
+  int missed_slip_events = 0;           ///< of those, never flagged by the controller
+  int missed_unsensed_slip_events = 0;  ///< of the missed, those with no unit loaded (SlipEvent::sensed)
+  int controller_slip_flags = 0;        ///< rising edges of the controller's slip flag while held
   /// Flags matching no slip event with no contact sliding at the friction limit (above creep speed)
   /// in the early_detection_window_s before them: the contact was not slipping at all.
   int false_slip_flags = 0;
@@ -171,6 +177,7 @@ class MetricsTracker {
   std::array<PendingFlag, 64> pending_flags_{};
   int pending_count_ = 0;
   int missed_ = 0;
+  int missed_unsensed_ = 0;
   double worst_latency_s_ = -1.0;
 
   double fn_square_sum_ = 0.0;

@@ -512,6 +512,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"held_s", m.held_s},
       {"slip_events", m.slip_events},
       {"missed_slip_events", m.missed_slip_events},
+      {"missed_unsensed_slip_events", m.missed_unsensed_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
       {"false_slip_flags", m.false_slip_flags},
       {"incipient_slip_flags", m.incipient_slip_flags},
@@ -535,6 +536,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
          {"peak_speed_mm_s", e.peak_speed_m_s * 1e3},
          {"distance_mm", e.distance_m * 1e3},
          {"detected", e.detected},
+         {"sensed", e.sensed},
          {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
   }
   // When each script action fired; for event actions also when it was armed and saw its event.

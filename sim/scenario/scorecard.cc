@@ -224,6 +224,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     if (result->passed) ++score.passed;
     score.slip_events += metrics.slip_events;
     score.slip_detected += metrics.slip_events - metrics.missed_slip_events;
+    score.missed_unsensed += metrics.missed_unsensed_slip_events;
     for (const SlipEvent& event : metrics.events) {
       if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
     }
@@ -365,6 +366,11 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return nlohmann::json(s.slip_events); }},
       {"slip events flagged", "slip_detected", [](const ControllerScore& s) { return Int(s.slip_detected); },
        [](const ControllerScore& s) { return nlohmann::json(s.slip_detected); }},
+      {"missed, no unit loaded", "missed_unsensed",
+       [](const ControllerScore& s) {
+         return Int(s.missed_unsensed) + " of " + Int(s.slip_events - s.slip_detected);
+       },
+       [](const ControllerScore& s) { return nlohmann::json(s.missed_unsensed); }},
       {"detection latency p50", "latency_p50_ms",
        [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p50_ms); }},

@@ -68,12 +68,14 @@ std::vector<ScorecardRun> ExpandScorecardSet(const ScorecardSet& set);
 /// The pooled figures of one controller over the runs of a set.
 struct ControllerScore {
   std::string controller;
-  int runs = 0;                        ///< runs that ran to their end (errors and interrupted runs excluded)
-  int errors = 0;                      ///< runs that threw or were interrupted
-  int passed = 0;                      ///< runs that met every expectation of their scenario
-  int slip_events = 0;                 ///< ground-truth slip events while held, all runs
-  int slip_detected = 0;               ///< of those, flagged by the controller
-  std::optional<double> detected_pct;  ///< 100 * detected / events; nullopt with no event [%]
+  int runs = 0;           ///< runs that ran to their end (errors and interrupted runs excluded)
+  int errors = 0;         ///< runs that threw or were interrupted
+  int passed = 0;         ///< runs that met every expectation of their scenario
+  int slip_events = 0;    ///< ground-truth slip events while held, all runs
+  int slip_detected = 0;  ///< of those, flagged by the controller
+  /// Of the events not flagged, those during which no unit was loaded (SlipEvent::sensed false).
+  int missed_unsensed = 0;
+  std::optional<double> detected_pct;    ///< 100 * detected / events; nullopt with no event [%]
   std::optional<double> latency_p50_ms;  ///< over detected events [ms]
   std::optional<double> latency_p95_ms;
   int false_flags = 0;

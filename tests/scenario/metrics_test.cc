@@ -261,6 +261,48 @@ TEST_F(TrackerTest, EarlyFlagCountsAsZeroLatencyAndUnmatchedFlagsAreFalseAlarms)
   EXPECT_NEAR(m.false_slip_per_min, 1.0 / (m.held_s / 60.0), 1e-9);
 }
 
+// A slip while no unit carries load (the object sliding on an unsensed part of the finger) is
+// missed like any other, and counted apart as one the sensor could not report; a slip during which
+// a unit reaches the contact threshold, even for one tick, was sensed.
+TEST_F(TrackerTest, AMissedSlipWithNoUnitLoadedIsCountedApart) {
+  Run(0.5, 0.0);
+  loads_[0].fn_n = 0.049;  // just under the 0.05 N contact threshold
+  Run(0.55, 0.01);         // unflagged slip, nothing on the sensor
+  Run(0.7, 0.0);
+  Run(0.75, 0.01);  // a second unflagged slip, which reaches the threshold on its last tick
+  loads_[0].fn_n = 0.05;
+  Run(0.751, 0.01);
+  loads_[0].fn_n = 0.0;
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  ASSERT_EQ(m.slip_events, 2);
+  EXPECT_EQ(m.missed_slip_events, 2);
+  EXPECT_EQ(m.missed_unsensed_slip_events, 1);
+  ASSERT_EQ(m.events.size(), 2u);
+  EXPECT_FALSE(m.events[0].sensed);
+  EXPECT_TRUE(m.events[1].sensed);
+  // Flagged, an unsensed slip is a detection and not counted apart.
+  MetricsTracker flagged(MetricsConfig{}, 8.0, 0.05);
+  TickSample sample;
+  truth_.sliding_load_share = 1.0;
+  for (int tick = 0; tick < 300; ++tick) {
+    const double t = 0.5 + tick * kTickS;
+    truth_.time_s = t;
+    truth_.slip_speed_m_s = truth_.sliding_speed_m_s = tick < 50 ? 0.0 : 0.01;
+    sample.time_s = t;
+    sample.intent = controller::GraspIntent::kClose;
+    sample.truth = &truth_;
+    sample.state = &state_;
+    sample.true_loads = loads_;
+    sample.controller_slip = tick >= 60;
+    flagged.Update(sample);
+  }
+  const Metrics f = flagged.Finish(0.8, 0.1, 0.0);
+  EXPECT_EQ(f.slip_events, 1);
+  EXPECT_EQ(f.missed_slip_events, 0);
+  EXPECT_EQ(f.missed_unsensed_slip_events, 0);
+}
+
 TEST_F(TrackerTest, UnflaggedSlipIsMissedAndCreepIsNoSlip) {
   Run(0.5, 0.0003);  // below the creep speed: no slip distance
   Run(0.6, 0.01);    // never flagged

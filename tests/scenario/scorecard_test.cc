@@ -71,6 +71,7 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   a.metrics.estimation_samples = 300;
   RunResult b = FinishedRun(2, 1, {30.0}, 2, 30.0);
   b.metrics.dropped = true;
+  b.metrics.missed_unsensed_slip_events = 1;
   b.metrics.grip_efficiency_ratio = 3.0;
   b.metrics.fn_rmse_n = 0.2;
   b.metrics.estimation_samples = 100;
@@ -82,6 +83,7 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   EXPECT_EQ(score.passed, 2);
   EXPECT_EQ(score.slip_events, 4);
   EXPECT_EQ(score.slip_detected, 3);
+  EXPECT_EQ(score.missed_unsensed, 1);
   EXPECT_NEAR(*score.detected_pct, 75.0, kTol);
   EXPECT_NEAR(*score.latency_p50_ms, 20.0, kTol);
   EXPECT_NEAR(*score.latency_p95_ms, 29.0, kTol);
