@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace graspbed::scenario {
 namespace {
@@ -66,7 +67,7 @@ void MetricsTracker::CloseEvent() {
   ++event_count_;
 }
 
-void MetricsTracker::OnControllerFlag(double time_s) {
+void MetricsTracker::OnControllerFlag(double time_s, const char* cues) {
   ++flags_;
   if (event_open_) {
     if (!current_.detected) {
@@ -80,14 +81,26 @@ void MetricsTracker::OnControllerFlag(double time_s) {
     std::copy(pending_flags_.begin() + 1, pending_flags_.end(), pending_flags_.begin());
     --pending_count_;
   }
-  pending_flags_[pending_count_++] = {time_s, last_sliding_s_ >= time_s - config_.early_detection_window_s};
+  pending_flags_[pending_count_++] = {time_s, last_sliding_s_ >= time_s - config_.early_detection_window_s,
+                                      cues != nullptr ? cues : ""};
 }
 
 void MetricsTracker::JudgeUnmatchedFlag(const PendingFlag& flag) {
   if (flag.after_sliding) {
     ++incipient_flags_;
+    return;
+  }
+  ++false_flags_;
+  for (int i = 0; i < cue_labels_; ++i) {
+    if (std::strcmp(false_by_cue_[static_cast<size_t>(i)].cues, flag.cues) == 0) {
+      ++false_by_cue_[static_cast<size_t>(i)].false_flags;
+      return;
+    }
+  }
+  if (cue_labels_ < kMaxCueLabels) {
+    false_by_cue_[static_cast<size_t>(cue_labels_++)] = {flag.cues, 1};
   } else {
-    ++false_flags_;
+    ++false_other_cues_;
   }
 }
 
@@ -191,7 +204,7 @@ void MetricsTracker::Update(const TickSample& sample) {
     // slowly for an event, makes it an incipient-slip flag rather than a false one. Sliding after
     // the flag does not: the controller's own response (a grip step rolling the pad) could cause it.
     if (!seating && sliding > config_.creep_speed_m_s) last_sliding_s_ = t;
-    if (rising_flag && !seating) OnControllerFlag(t);
+    if (rising_flag && !seating) OnControllerFlag(t, sample.controller_cues);
     if (flag && !seating && !event_open_) false_flag_s_ += dt;
     // Flags that fell out of the early window can no longer match an event, unless a creep that may
     // still become one began after them.
@@ -277,6 +290,11 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
     m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
   m.controller_slip_flags = copy.flags_;
   m.false_slip_flags = copy.false_flags_;
+  for (int i = 0; i < copy.cue_labels_; ++i) {
+    const CueCount& count = copy.false_by_cue_[static_cast<size_t>(i)];
+    m.false_slip_flags_by_cue[count.cues[0] != '\0' ? count.cues : "(none)"] += count.false_flags;
+  }
+  if (copy.false_other_cues_ > 0) m.false_slip_flags_by_cue["(other)"] = copy.false_other_cues_;
   m.incipient_slip_flags = copy.incipient_flags_;
   m.held_s = copy.held_s_;
   m.false_slip_per_min = copy.held_s_ > 0.0 ? copy.false_flags_ / (copy.held_s_ / 60.0) : 0.0;

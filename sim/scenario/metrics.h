@@ -5,6 +5,7 @@
 /// Update() allocates nothing (fixed-capacity event storage).
 
 #include <array>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -61,6 +62,9 @@ struct Metrics {
   /// Flags matching no slip event with no contact sliding at the friction limit (above creep speed)
   /// in the early_detection_window_s before them: the contact was not slipping at all.
   int false_slip_flags = 0;
+  /// false_slip_flags by the controller's slip_cues label at the flag's rise ("" as "(none)"; past
+  /// MetricsTracker::kMaxCueLabels labels, "(other)").
+  std::map<std::string, int> false_slip_flags_by_cue;
   double false_slip_per_min = 0.0;  ///< false_slip_flags per minute held [1/min]
   /// Flags matching no slip event but raised at most early_detection_window_s after a contact slid
   /// at the friction limit faster than creep_speed_m_s (and slower than slip_speed_m_s): an
@@ -94,7 +98,8 @@ struct TickSample {
   const sensor::TactileState* state = nullptr;
   /// True unit loads at the sample time of `state`, layout order (estimation error reference).
   std::span<const sensor::UnitLoad> true_loads;
-  bool controller_slip = false;  ///< telemetry().slip_detected at this tick
+  bool controller_slip = false;      ///< telemetry().slip_detected at this tick
+  const char* controller_cues = "";  ///< telemetry().slip_cues at this tick (a static string)
 };
 
 /// Accumulates the metrics tick by tick.
@@ -106,6 +111,8 @@ class MetricsTracker {
   /// contact threshold. Below it (an object grasped but never lifted needs ~1e-6 N) the ratio
   /// would only measure MuJoCo's residual contact forces.
   static constexpr double kMinNeededGripN = 0.05;
+  /// Distinct slip_cues labels whose false flags are counted apart.
+  static constexpr int kMaxCueLabels = 8;
 
   /// `contact_threshold_n`: per-unit Fn above which a (tick, unit) pair enters the RMSEs [N].
   MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n);
@@ -128,12 +135,18 @@ class MetricsTracker {
   struct PendingFlag {
     double time_s = 0.0;
     bool after_sliding = false;  ///< a contact slid above creep speed within the window before it
+    const char* cues = "";       ///< the controller's slip_cues at the rise
+  };
+  /// False flags of one slip_cues label.
+  struct CueCount {
+    const char* cues = "";
+    int false_flags = 0;
   };
   /// Opens an event at `time_s` whose onset was `onset_s` (earlier for a creep, which becomes an event
   /// only once it has crept MetricsConfig::creep_event_m).
   void OpenEvent(double time_s, double onset_s);
   void CloseEvent();
-  void OnControllerFlag(double time_s);
+  void OnControllerFlag(double time_s, const char* cues);
   /// A flag that matched no event: false, or incipient when a contact slid just before it.
   void JudgeUnmatchedFlag(const PendingFlag& flag);
 
@@ -171,6 +184,9 @@ class MetricsTracker {
   double last_rise_s_ = -1e9;  ///< time of the flag's latest rising edge [s]
   int flags_ = 0;
   int false_flags_ = 0;
+  std::array<CueCount, kMaxCueLabels> false_by_cue_{};
+  int cue_labels_ = 0;
+  int false_other_cues_ = 0;  ///< false flags of labels beyond kMaxCueLabels
   int incipient_flags_ = 0;
   double last_sliding_s_ = -1e9;  ///< latest held tick with a contact sliding above creep speed [s]
   double false_flag_s_ = 0.0;

@@ -350,6 +350,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     sample.state = &state;
     sample.true_loads = true_loads;
     sample.controller_slip = telemetry.slip_detected;
+    sample.controller_cues = telemetry.slip_cues;
     tracker.Update(sample);
     player.Observe(t, state, telemetry.slip_detected);
 
@@ -515,6 +516,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"missed_unsensed_slip_events", m.missed_unsensed_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
       {"false_slip_flags", m.false_slip_flags},
+      {"false_slip_flags_by_cue", m.false_slip_flags_by_cue},
       {"incipient_slip_flags", m.incipient_slip_flags},
       {"estimation_samples", m.estimation_samples},
       {"physics_fault", m.physics_fault},

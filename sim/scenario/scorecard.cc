@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include <yaml-cpp/yaml.h>
 
@@ -229,6 +230,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
       if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
     }
     score.false_flags += metrics.false_slip_flags;
+    for (const auto& [cues, count] : metrics.false_slip_flags_by_cue) score.false_flags_by_cue[cues] += count;
     score.incipient_flags += metrics.incipient_slip_flags;
     score.held_min += metrics.held_s / 60.0;
     score.false_flag_min += metrics.false_slip_flag_s / 60.0;
@@ -451,6 +453,18 @@ std::string ScorecardTable(const Scorecard& scorecard) {
     }
     out << "\n";
   }
+  // Where each controller's false flags came from, by its own cue labels, most first.
+  for (const ControllerScore& score : scorecard.scores) {
+    if (score.false_flags_by_cue.empty()) continue;
+    std::vector<std::pair<std::string, int>> by_cue(score.false_flags_by_cue.begin(),
+                                                    score.false_flags_by_cue.end());
+    std::stable_sort(by_cue.begin(), by_cue.end(),
+                     [](const auto& a, const auto& b) { return a.second > b.second; });
+    out << "  false flags by cue, " << score.controller << ":";
+    for (size_t i = 0; i < by_cue.size(); ++i)
+      out << (i ? ", " : " ") << by_cue[i].first << " " << by_cue[i].second;
+    out << "\n";
+  }
   return out.str();
 }
 
@@ -551,6 +565,7 @@ nlohmann::json ScorecardJson(const Scorecard& scorecard) {
   for (const ControllerScore& score : scorecard.scores) {
     nlohmann::json entry = {{"controller", score.controller}};
     for (const Figure& figure : Figures()) entry[figure.column] = figure.json(score);
+    entry["false_flags_by_cue"] = score.false_flags_by_cue;
     json["controllers"].push_back(entry);
   }
   json["runs"] = nlohmann::json::array();

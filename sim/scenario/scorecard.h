@@ -79,6 +79,8 @@ struct ControllerScore {
   std::optional<double> latency_p50_ms;  ///< over detected events [ms]
   std::optional<double> latency_p95_ms;
   int false_flags = 0;
+  /// false_flags by the controller's slip_cues label (Metrics::false_slip_flags_by_cue, pooled).
+  std::map<std::string, int> false_flags_by_cue;
   double held_min = 0.0;                    ///< time held, all runs [min]
   std::optional<double> false_per_min;      ///< false_flags / held_min [1/min]
   int incipient_flags = 0;                  ///< flags near a contact sliding below the event speed

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -215,6 +216,7 @@ class TrackerTest : public ::testing::Test {
       sample.state = &state_;
       sample.true_loads = loads_;
       sample.controller_slip = flag;
+      sample.controller_cues = cues_;
       tracker_.Update(sample);
       time_s_ += kTickS;
     }
@@ -226,6 +228,7 @@ class TrackerTest : public ::testing::Test {
   std::array<sensor::UnitLoad, 1> loads_{};
   double time_s_ = 0.0;
   double sliding_share_ = 1.0;  ///< share of the digit's force on the sliding contacts, while sliding
+  const char* cues_ = "";       ///< the controller's slip_cues label on the next ticks
 };
 
 TEST_F(TrackerTest, SlipEventDetectedLateGivesItsLatencyAndDistance) {
@@ -301,6 +304,36 @@ TEST_F(TrackerTest, AMissedSlipWithNoUnitLoadedIsCountedApart) {
   EXPECT_EQ(f.slip_events, 1);
   EXPECT_EQ(f.missed_slip_events, 0);
   EXPECT_EQ(f.missed_unsensed_slip_events, 0);
+}
+
+// False flags are counted by the controller's cue label at their rise; a flag after sliding
+// (incipient) and a flag that detects an event are not false and not counted.
+TEST_F(TrackerTest, FalseFlagsAreCountedByTheControllersCueLabel) {
+  const auto flag = [&](double from_s, const char* cues) {
+    Run(from_s, 0.0);
+    cues_ = cues;
+    Run(from_s + 0.01, 0.0, true);
+    cues_ = "";
+  };
+  Run(0.3, 0.0);
+  flag(0.3, "vibration");
+  flag(0.5, "centroid");
+  flag(0.7, "vibration");
+  flag(0.9, "");
+  Run(1.1, 0.001);  // sliding at 1 mm/s: above creep speed, below an event
+  cues_ = "ratio";
+  Run(1.11, 0.0, true);  // incipient, not false
+  cues_ = "vibration";
+  Run(1.3, 0.0);
+  Run(1.4, 0.01, true);  // detects the slip: not false
+  Run(1.6, 0.0);
+  const Metrics m = tracker_.Finish(1.6, 0.1, 0.0);
+  EXPECT_EQ(m.false_slip_flags, 4);
+  EXPECT_EQ(m.incipient_slip_flags, 1);
+  EXPECT_EQ(m.slip_events, 1);
+  EXPECT_EQ(m.missed_slip_events, 0);
+  const std::map<std::string, int> expected = {{"vibration", 2}, {"centroid", 1}, {"(none)", 1}};
+  EXPECT_EQ(m.false_slip_flags_by_cue, expected);
 }
 
 TEST_F(TrackerTest, UnflaggedSlipIsMissedAndCreepIsNoSlip) {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <set>
 #include <sstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,8 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   RunResult b = FinishedRun(2, 1, {30.0}, 2, 30.0);
   b.metrics.dropped = true;
   b.metrics.missed_unsensed_slip_events = 1;
+  a.metrics.false_slip_flags_by_cue = {{"vibration", 1}};
+  b.metrics.false_slip_flags_by_cue = {{"vibration", 1}, {"ratio", 1}};
   b.metrics.grip_efficiency_ratio = 3.0;
   b.metrics.fn_rmse_n = 0.2;
   b.metrics.estimation_samples = 100;
@@ -84,6 +87,8 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   EXPECT_EQ(score.slip_events, 4);
   EXPECT_EQ(score.slip_detected, 3);
   EXPECT_EQ(score.missed_unsensed, 1);
+  const std::map<std::string, int> by_cue = {{"vibration", 2}, {"ratio", 1}};
+  EXPECT_EQ(score.false_flags_by_cue, by_cue);
   EXPECT_NEAR(*score.detected_pct, 75.0, kTol);
   EXPECT_NEAR(*score.latency_p50_ms, 20.0, kTol);
   EXPECT_NEAR(*score.latency_p95_ms, 29.0, kTol);
@@ -243,6 +248,14 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   ASSERT_FALSE(reference.at("latency_p50_ms").is_null());
   EXPECT_LE(reference.at("latency_p50_ms").get<double>(), 50.0);
   EXPECT_EQ(reference.at("drops"), 0);
+  // The false flags by cue add up to the false flags, and the table names them when there are any;
+  // the misses with no unit loaded are some of the misses.
+  int by_cue = 0;
+  for (const auto& [cues, count] : reference.at("false_flags_by_cue").items()) by_cue += count.get<int>();
+  EXPECT_EQ(by_cue, reference.at("false_flags").get<int>());
+  EXPECT_EQ(result.out.find("false flags by cue, grip_slip:") != std::string::npos, by_cue > 0) << result.out;
+  EXPECT_LE(reference.at("missed_unsensed").get<int>(),
+            reference.at("slip_events").get<int>() - reference.at("slip_detected").get<int>());
 }
 
 // The reference controller over the whole shipped set (41 runs, about 6 s on 2 cores), against
