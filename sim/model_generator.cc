@@ -362,13 +362,18 @@ void SizeDigitMotors(const HandConfig& hand, const std::array<double, 2>& lever_
   place.no_load_speed = {omega, omega * lever_arm_m[0] / lever_arm_m[1]};
 }
 
-// Names of the geoms an MJCF fragment declares, in the order they are written.
+// Names of the geoms an MJCF fragment declares, in the order they are written. Every geom must be
+// named first thing: an unnamed one would get no contact pair and pass through everything.
 std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
-  static constexpr std::string_view kOpening = "<geom name=\"";
+  static constexpr std::string_view kGeom = "<geom ";
+  static constexpr std::string_view kNamed = "<geom name=\"";
   std::vector<std::string> names;
-  for (size_t at = mjcf_fragment.find(kOpening); at != std::string::npos;
-       at = mjcf_fragment.find(kOpening, at)) {
-    at += kOpening.size();
+  for (size_t at = mjcf_fragment.find(kGeom); at != std::string::npos; at = mjcf_fragment.find(kGeom, at)) {
+    if (mjcf_fragment.compare(at, kNamed.size(), kNamed) != 0) {
+      throw std::logic_error("model generator: a hand geom without a leading name attribute: " +
+                             mjcf_fragment.substr(at, 60));
+    }
+    at += kNamed.size();
     const size_t end = mjcf_fragment.find('"', at);
     names.push_back(mjcf_fragment.substr(at, end - at));
   }
