@@ -30,6 +30,10 @@ constexpr double kStrokeMarginM = 0.002;  // digits stop this far short of touch
 // Shared by both hands.
 constexpr double kMesaRootDepthM = 0.2e-3;  // mesa box reaches this far into its groove
 constexpr int kHolderSegments = 48;         // polygon sides of the elliptic holder mesh
+// Torsional friction of the hand and the table, and rolling friction of every geom (MuJoCo's
+// geom friction is slide, spin, roll).
+constexpr double kHandSpinFriction = 0.005;
+constexpr double kRollingFriction = 0.0001;
 
 // Prosthetic hand [m]. The rounded fingertip: an ellipsoid cap on the holder's distal end.
 constexpr double kTipCapLengthM = ProstheticKinematics::kTipCapLengthM;
@@ -72,6 +76,13 @@ class Writer {
  private:
   std::ostringstream out_;
 };
+
+// ` solref="..." solimp="..."` of the object's contact compliance, which every geom and pair shares.
+std::string ComplianceAttributes(Writer& w, const ObjectConfig& object) {
+  return " solref=\"" + w.Num(object.solref_timeconst_s) + " " + w.Num(object.solref_dampratio) +
+         "\" solimp=\"" + w.Num(object.solimp[0]) + " " + w.Num(object.solimp[1]) + " " +
+         w.Num(object.solimp[2]) + " " + w.Num(object.solimp[3]) + " " + w.Num(object.solimp[4]) + "\"";
+}
 
 double MesaTopOffset(const sensor::Layout& layout) {
   return 0.5 * layout.holder.minor_axis_m + layout.unit.mesa_height_m;
@@ -391,17 +402,17 @@ std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
 void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<std::string>& hand_geoms) {
   const ObjectConfig& object = scene.object;
   std::ostringstream& o = w.out();
-  const std::string compliance = "\" solref=\"" + w.Num(object.solref_timeconst_s) + " " +
-                                 w.Num(object.solref_dampratio) + "\" solimp=\"" + w.Num(object.solimp[0]) +
-                                 " " + w.Num(object.solimp[1]) + " " + w.Num(object.solimp[2]) + " " +
-                                 w.Num(object.solimp[3]) + " " + w.Num(object.solimp[4]) + "\"";
+  const std::string compliance = ComplianceAttributes(w, object);
   // MuJoCo spreads a geom's (slide, spin, roll) friction over the contact's five directions.
   const auto friction = [&](double slide, double spin) {
-    return "\" friction=\"" + w.Num(slide) + " " + w.Num(slide) + " " + w.Num(spin) + " 0.0001 0.0001";
+    const std::string roll = w.Num(kRollingFriction);
+    return "\" friction=\"" + w.Num(slide) + " " + w.Num(slide) + " " + w.Num(spin) + " " + roll + " " +
+           roll + "\"";
   };
   const std::string with_object = " condim=\"" + std::to_string(scene.physics.condim) +
                                   friction(object.friction, object.torsional_friction) + compliance;
-  const std::string table_hand = " condim=\"3" + friction(scene.hand.friction, 0.005) + compliance;
+  const std::string table_hand =
+      " condim=\"3" + friction(scene.hand.friction, kHandSpinFriction) + compliance;
   o << "  <contact>\n";
   if (scene.physics.table) {
     for (const std::string& geom : hand_geoms)
@@ -612,10 +623,9 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "  <size nconmax=\"100\" njmax=\"300\" nstack=\"100000\"/>\n";
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
-  o << "    <geom solref=\"" << w.Num(object.solref_timeconst_s) << " " << w.Num(object.solref_dampratio)
-    << "\" solimp=\"" << w.Num(object.solimp[0]) << " " << w.Num(object.solimp[1]) << " "
-    << w.Num(object.solimp[2]) << " " << w.Num(object.solimp[3]) << " " << w.Num(object.solimp[4])
-    << "\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
+  const std::string hand_friction =
+      w.Num(hand.friction) + " " + w.Num(kHandSpinFriction) + " " + w.Num(kRollingFriction);
+  o << "    <geom" << ComplianceAttributes(w, object) << " friction=\"" << hand_friction << "\"/>\n";
   // Prosthetic hand geoms (class "hand"): contype 2 / conaffinity 1 touch the object and the table
   // (contype 1 / conaffinity 3) but never each other: the linkage, not contact, keeps the digits
   // apart, and every pair the collision check skips is time saved.
@@ -644,7 +654,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     // contact of an object resting over the table's origin.
     o << "    <geom name=\"table_geom\" type=\"plane\" size=\"0.3 0.3 0.02\" rgba=\"0.55 "
          "0.45 0.35 1\""
-      << " contype=\"1\" conaffinity=\"3\" friction=\"" << w.Num(hand.friction) << " 0.005 0.0001\"/>\n";
+      << " contype=\"1\" conaffinity=\"3\" friction=\"" << hand_friction << "\"/>\n";
   }
 
   // Wrist carriage on three stiff position servos; the hand hangs below it.
@@ -655,13 +665,13 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     o << "      <joint name=\"wrist_" << axis << "\" type=\"slide\" axis=\"" << dir << "\" damping=\""
       << w.Num(hand.wrist_damping_n_s_m) << "\"/>\n";
   }
-  const std::string before_hand = o.str();
+  const std::streamoff hand_start = o.tellp();
   if (hand.model == HandModel::kJaw) {
     WriteJawHand(w, layout, scene, place);
   } else {
     WriteProstheticHand(w, layout, scene, place);
   }
-  const std::vector<std::string> hand_geoms = GeomNames(o.str().substr(before_hand.size()));
+  const std::vector<std::string> hand_geoms = GeomNames(o.str().substr(static_cast<size_t>(hand_start)));
   o << "    </body>\n";
 
   // The object: a free body whose geom has contact priority, so its friction and compliance govern.
@@ -685,8 +695,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
       break;
   }
   o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim
-    << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction)
-    << " 0.0001\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+    << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " "
+    << w.Num(kRollingFriction) << "\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   o << "    </body>\n";
   o << "  </worldbody>\n";
   if (physics.contact_pairs) WriteContactPairs(w, scene, hand_geoms);

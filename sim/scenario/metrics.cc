@@ -191,9 +191,8 @@ void MetricsTracker::Update(const TickSample& sample) {
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
-      for (const sensor::UnitLoad& load : sample.true_loads) {
-        if (load.fn_n >= contact_threshold_n_) current_.sensed = true;
-      }
+      for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
+        current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
       // Sliding that goes on after the event is a creep of its own from here, not one that began
