@@ -20,6 +20,9 @@ using sensor::UnitValidity;
 constexpr double kMaxStepS = 0.01;
 /// Loading ends once the measured grip reaches this fraction of the target.
 constexpr double kLoadedFraction = 0.9;
+/// Times closer than this are equal [s]: a clock summed frame by frame lands a hair either side of
+/// the instant a hold ends.
+constexpr double kTimeToleranceS = 1e-9;
 
 /// Static name of the cues that count as slip (telemetry; no allocation).
 const char* CueNames(bool ratio, bool vibration, bool centroid) {
@@ -136,6 +139,9 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("ratio_ceiling_rearm_s", ratio_ceiling_rearm_s, 0.0, 10.0, "s",
                     "with the target at its ceiling, a ratio cue rising again within this time of falling "
                     "continues its episode instead of being a new slip; 0 = every rise is new"),
+      GRASPBED_BIND("slip_flag_hold_s", slip_flag_hold_s, 0.0, 1.0, "s",
+                    "the reported slip flag stays up this long after the cues last counted as slip (one "
+                    "flag per episode); 0 = it follows the cues frame by frame"),
       GRASPBED_BIND("sample_rate_hz", slip.sample_rate_hz, 10.0, 100000.0, "Hz",
                     "tactile frame rate the detector filters are designed for"),
       GRASPBED_BIND("grid_columns", slip.grid_columns, 1, 64, "units",
@@ -339,6 +345,8 @@ void GripSlipController::Reset() {
   centroid_counts_ = false;
   ratio_rise_s_ = 0.0;
   ratio_fall_s_ = kNeverS;
+  flag_until_s_ = kNeverS;
+  flag_cues_ = "";
   last_good_command_ = hand::HandCommand{.grip_effort = 0.0};
   telemetry_ = ControllerTelemetry{};
   telemetry_.friction_estimate = friction_;
@@ -597,13 +605,21 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
     ratio_fall_s_ = kNeverS;
     ratio_counts_ = false;
     centroid_counts_ = false;
+    flag_until_s_ = kNeverS;
   }
+  // The reported flag is held past the last frame a cue counted (slip_flag_hold_s): a cue flickering
+  // about its threshold within one episode is one flag; the response above follows the cues.
+  if (slip_now) {
+    flag_until_s_ = time_s + config_.slip_flag_hold_s;
+    flag_cues_ = CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_);
+  }
+  const bool flag_up = slip_now || time_s < flag_until_s_ - kTimeToleranceS;
   if (data_ok) last_good_command_ = command;
   telemetry_.phase = PhaseName(phase_);
   telemetry_.grip_target_n = target_n_;
   telemetry_.friction_estimate = friction_;
-  telemetry_.slip_detected = slip_now;
-  telemetry_.slip_cues = slip_now ? CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_) : "";
+  telemetry_.slip_detected = flag_up;
+  telemetry_.slip_cues = flag_up ? flag_cues_ : "";
   diagnostics_.effort = command.grip_effort;
   diagnostics_.integrator = integrator_;
   diagnostics_.ceiling_n = ceiling_n;

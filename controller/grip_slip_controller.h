@@ -80,6 +80,10 @@ struct GripSlipConfig {
   /// continues the episode it rose in (a load hovering at the threshold), rather than being a new
   /// slip [s]; 0 = every rise is new.
   double ratio_ceiling_rearm_s = 0.25;
+  /// The reported slip flag stays up this long after the last frame a cue counted as slip, so a
+  /// cue flickering about its threshold within one episode is one flag, not one per crossing [s];
+  /// 0 = the flag follows the cues frame by frame. The grip response follows the cues either way.
+  double slip_flag_hold_s = 0.005;
 
   SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
 
@@ -169,6 +173,8 @@ class GripSlipController final : public GraspController {
   /// A time before any other: a cue that never fell did not fall "just now".
   static constexpr double kNeverS = -std::numeric_limits<double>::infinity();
   double ratio_fall_s_ = kNeverS;  ///< when the ratio cue last fell [s]
+  double flag_until_s_ = kNeverS;  ///< the reported slip flag stays up until then [s]
+  const char* flag_cues_ = "";     ///< cues named by the reported flag while it is held [-]
   hand::HandCommand last_good_command_;
 
   ControllerTelemetry telemetry_;

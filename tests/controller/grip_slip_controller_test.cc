@@ -554,6 +554,68 @@ TEST(GripSlipControllerTest, ALoadHoveringAtTheThresholdAtTheCeilingIsOneFlag) {
   EXPECT_EQ(flag_rises(0.0, &ratio_rises_without), ratio_rises_without);
 }
 
+/// slip_flag_hold_s: the reported flag stays up until the cues have counted no slip for the hold
+/// time, so a cue flickering about its threshold is one flag per episode, and it is up whenever a
+/// cue counts. A vibration cue set to fire on the readout's own noise (factor 1, one frame to
+/// confirm; the other cues off) flickers frame by frame.
+TEST(GripSlipControllerTest, TheSlipFlagIsHeldThroughACueFlickeringWithinAnEpisode) {
+  struct Count {
+    int flag_rises = 0;
+    int cue_episodes = 0;  ///< cue rises after at least the hold time without it
+    int short_gaps = 0;    ///< cue rises after less than the hold time without it
+    int flag_down_with_cue = 0;
+    int flag_up_late = 0;  ///< frames flagged more than the hold time after the cue was last up
+  };
+  const auto run = [](double hold_s) {
+    GripSlipConfig config = DefaultConfig();
+    config.slip.vibration_factor = 1.0;
+    config.slip.vibration_confirm_frames = 1;
+    config.slip.ratio_enabled = false;
+    config.slip.centroid_enabled = false;
+    config.slip_flag_hold_s = hold_s;
+    SyntheticTactile::Options sensor;
+    sensor.seed = 11;
+    ClosedLoop loop(config, {}, sensor);
+    loop.controller.SetGripCeiling(4.0);
+    loop.Grasp(0.3, 1.0);
+    Count count;
+    bool was_flagged = loop.controller.telemetry().slip_detected;
+    double cue_last_s = -1.0;
+    loop.RunUntil(
+        3.0, [](double) { return 0.3; },
+        [&](double t) {
+          const bool cue = loop.controller.diagnostics().signals.vibration_slip;
+          const bool flagged = loop.controller.telemetry().slip_detected;
+          if (cue && !flagged) ++count.flag_down_with_cue;
+          if (cue && cue_last_s >= 0.0 && t - cue_last_s > 1.5 * kPeriodS) {
+            ++(t - cue_last_s > hold_s + 0.5 * kPeriodS ? count.cue_episodes : count.short_gaps);
+          }
+          if (cue) cue_last_s = t;
+          if (flagged && !cue && (cue_last_s < 0.0 || t - cue_last_s > hold_s + 0.5 * kPeriodS))
+            ++count.flag_up_late;
+          count.flag_rises += flagged && !was_flagged;
+          was_flagged = flagged;
+        });
+    return count;
+  };
+  const double hold_s = DefaultConfig().slip_flag_hold_s;
+  ASSERT_GE(hold_s, 2.0 * kPeriodS);
+  const Count held = run(hold_s);
+  std::printf("[ measure  ] hold %.0f ms: cue episodes %d, rises within one %d, flag rises %d\n",
+              hold_s * 1e3, held.cue_episodes, held.short_gaps, held.flag_rises);
+  EXPECT_GE(held.short_gaps, 20) << "the cue was meant to flicker";
+  EXPECT_EQ(held.flag_down_with_cue, 0);
+  EXPECT_EQ(held.flag_up_late, 0);
+  // The first rise of the window may continue an episode begun before it.
+  EXPECT_LE(held.flag_rises, held.cue_episodes + 1);
+  EXPECT_GE(held.flag_rises, held.cue_episodes);
+  const Count frame_by_frame = run(0.0);
+  EXPECT_EQ(frame_by_frame.flag_down_with_cue, 0);
+  EXPECT_EQ(frame_by_frame.flag_up_late, 0);
+  EXPECT_GE(frame_by_frame.flag_rises, frame_by_frame.cue_episodes + frame_by_frame.short_gaps);
+  EXPECT_GT(frame_by_frame.flag_rises, held.flag_rises);
+}
+
 /// The closing impact's shear, coupled at once while the cues are still settling, asks for more than
 /// the ceiling; the coupled target then falls from the ceiling at grip_decrease_rate_n_per_s, not
 /// from the 8 N the spike asked for (which would hold the grip at a 4 N ceiling for 2 s more).
