@@ -63,8 +63,9 @@ class ParameterError : public std::invalid_argument {
 }  // namespace graspbed::controller
 
 /// Version of the controller API these headers describe (an integer, raised on every change a
-/// compiled plugin could notice; see above). Version 1: graspbed 0.1.
-#define GRASPBED_CONTROLLER_API_VERSION 1
+/// compiled plugin could notice; see above). Version 1: graspbed 0.1; 2: GraspController's
+/// diagnostic_channels() and ReadDiagnostics().
+#define GRASPBED_CONTROLLER_API_VERSION 2
 
 /// Name of the symbol every plugin exports (extern "C", returns const GraspbedControllerPlugin*).
 #define GRASPBED_CONTROLLER_PLUGIN_SYMBOL "graspbed_controller_plugin"

@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -59,6 +60,17 @@ struct ControllerTelemetry {
   bool safe_hold = false;  ///< holding because data are stale or too few units are valid
 };
 
+/// One internal signal a controller logs beside its telemetry (a cue's statistic, its threshold):
+/// column "ctl_<name>" of signals.csv on every backend, so a flag can be traced to what raised it.
+struct DiagnosticChannel {
+  /// Static; lower-case letters, digits and '_', ending in its unit ("vibration_rms_n", "load_ratio").
+  const char* name;
+  const char* doc;  ///< static; what it is, with its unit
+};
+
+/// Most diagnostic channels a controller may declare (their columns are reserved with the run's).
+inline constexpr size_t kMaxDiagnosticChannels = 32;
+
 /// One tunable parameter of a controller: its name, default, unit and meaning (for docs and
 /// validation of scenario files).
 struct ControllerParameter {
@@ -88,6 +100,12 @@ class GraspController {
   virtual void SetGripCeiling(double ceiling_n) = 0;
   virtual ControllerTelemetry telemetry() const = 0;
   virtual std::string name() const = 0;
+  /// The internal signals this controller logs (none by default); the same for its lifetime, at most
+  /// kMaxDiagnosticChannels, names unique.
+  virtual std::span<const DiagnosticChannel> diagnostic_channels() const { return {}; }
+  /// Their values after the latest Update() into `values`, in the order of diagnostic_channels()
+  /// (values.size() is their count). Must not allocate.
+  virtual void ReadDiagnostics(std::span<double> values) const { (void)values; }
 };
 
 /// Names of the built-in controllers, sorted. Any "plugin:LIBRARY" name is valid besides them

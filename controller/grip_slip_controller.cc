@@ -354,6 +354,56 @@ void GripSlipController::Reset() {
   diagnostics_.ceiling_n = CeilingN();
 }
 
+namespace {
+
+/// The logged signals, in the order ReadDiagnostics() writes them.
+constexpr DiagnosticChannel kDiagnosticChannels[] = {
+    {"measured_grip_n", "filtered grip force the loop closes on [N]"},
+    {"slip_floor_n", "grip raised by the last slip response, decaying [N]"},
+    {"load_ratio", "filtered load ratio, the load added since the grasp settled over the grip [-]"},
+    {"ratio_threshold", "load ratio above which the ratio cue fires [-]"},
+    {"vibration_rms_n", "RMS of the contact's high-passed shear, per unit [N]"},
+    {"vibration_threshold_n", "vibration RMS above which the vibration cue counts frames [N]"},
+    {"vibration_noise_n", "learned RMS of high-passed shear noise per unit [N]"},
+    {"centroid_shift_pitch", "centroid movement over the window [unit pitches]"},
+    {"centroid_shift_threshold_pitch", "threshold of the windowed movement [unit pitches]"},
+    {"centroid_drift_pitch", "centroid movement since the drift reference [unit pitches]"},
+    {"centroid_drift_threshold_pitch", "threshold of the drift [unit pitches]"},
+    {"ratio_cue", "1 while the ratio cue is up (before the ceiling's hold) [-]"},
+    {"vibration_cue", "1 while the vibration cue is up [-]"},
+    {"centroid_cue", "1 while the centroid cue is up (before the ceiling's hold) [-]"},
+    {"settled", "1 once the cues are armed after contact [-]"},
+    {"shear_blind", "1 while the readout's shear noise is above shear_blind_noise_n [-]"},
+};
+
+}  // namespace
+
+std::span<const DiagnosticChannel> GripSlipController::diagnostic_channels() const {
+  return kDiagnosticChannels;
+}
+
+void GripSlipController::ReadDiagnostics(std::span<double> values) const {
+  const SlipSignals& s = diagnostics_.signals;
+  const double all[] = {diagnostics_.measured_grip_n,
+                        diagnostics_.slip_floor_n,
+                        s.load_ratio,
+                        s.ratio_threshold,
+                        s.vibration_rms_n,
+                        s.vibration_threshold_n,
+                        s.noise_rms_n,
+                        s.centroid_shift_units,
+                        s.centroid_shift_threshold,
+                        s.centroid_drift_units,
+                        s.centroid_drift_threshold,
+                        s.ratio_slip ? 1.0 : 0.0,
+                        s.vibration_slip ? 1.0 : 0.0,
+                        s.centroid_slip ? 1.0 : 0.0,
+                        s.settled ? 1.0 : 0.0,
+                        s.shear_blind ? 1.0 : 0.0};
+  static_assert(std::size(all) == std::size(kDiagnosticChannels));
+  std::copy_n(all, std::min(values.size(), std::size(all)), values.begin());
+}
+
 void GripSlipController::SetIntent(GraspIntent intent) { intent_ = intent; }
 
 void GripSlipController::SetGripCeiling(double ceiling_n) {

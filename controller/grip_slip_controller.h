@@ -124,6 +124,10 @@ class GripSlipController final : public GraspController {
   void SetGripCeiling(double ceiling_n) override;
   ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return "grip_slip"; }
+  /// The detector's statistics and thresholds, the measured grip and the slip floor
+  /// (docs/controller.md, "Slip cues").
+  std::span<const DiagnosticChannel> diagnostic_channels() const override;
+  void ReadDiagnostics(std::span<double> values) const override;
 
   const GripSlipDiagnostics& diagnostics() const { return diagnostics_; }
   const GripSlipConfig& config() const { return config_; }

@@ -255,6 +255,9 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   }
   const size_t recorded_first = columns.size();
   if (replay) columns.insert(columns.end(), std::begin(kRecordedNames), std::end(kRecordedNames));
+  const size_t diagnostics_first = columns.size();
+  const std::vector<std::string> diagnostic_columns = DiagnosticColumns(*grasp);
+  columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
   std::vector<std::string> text_columns = {"intent", "phase", "slip_cues"};
   if (replay) text_columns.push_back("recorded_phase");
   // Without an output directory (`graspbed hw`, possibly until Ctrl-C) no rows are kept.
@@ -330,6 +333,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     text[1] = telemetry.phase;
     text[2] = telemetry.slip_cues;
     WriteLoopCells(row, time_s, loop, telemetry);
+    WriteDiagnosticCells(row, diagnostics_first, diagnostic_columns.size(), *grasp);
     const sensor::RawFrame& frame = loop.frame();
     const sensor::TactileState& state = loop.state();
     for (int u = 0; u < units; ++u) {

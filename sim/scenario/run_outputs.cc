@@ -52,6 +52,30 @@ const char* const kLoopColumnNames[kLoopColumnCount] = {"time_s",
                                                         "frame_flags",
                                                         "session"};
 
+std::vector<std::string> DiagnosticColumns(const controller::GraspController& controller) {
+  const std::span<const controller::DiagnosticChannel> channels = controller.diagnostic_channels();
+  const auto refuse = [&controller](const std::string& what) {
+    throw std::invalid_argument("controller '" + controller.name() + "': " + what);
+  };
+  if (channels.size() > controller::kMaxDiagnosticChannels) {
+    refuse("declares " + std::to_string(channels.size()) + " diagnostic channels (at most " +
+           std::to_string(controller::kMaxDiagnosticChannels) + ")");
+  }
+  std::vector<std::string> columns;
+  for (const controller::DiagnosticChannel& channel : channels) {
+    const std::string name = channel.name != nullptr ? channel.name : "";
+    const bool valid = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    });
+    if (!valid) refuse("diagnostic channel '" + name + "': a name is lower-case letters, digits and '_'");
+    const std::string column = "ctl_" + name;
+    if (std::find(columns.begin(), columns.end(), column) != columns.end())
+      refuse("diagnostic channel '" + name + "' declared twice");
+    columns.push_back(column);
+  }
+  return columns;
+}
+
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry) {
   const hand::HandCommand& command = loop.command();

@@ -4,6 +4,7 @@
 /// in signals.csv, and the plots drawn from them. Internal to graspbed_scenario.
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,17 @@ extern const char* const kLoopColumnNames[kLoopColumnCount];
 /// Fills the kLoopColumnCount loop cells of `row` for the tick at `time_s` [s] that just ran.
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry);
+
+/// The signals.csv columns of `controller`'s diagnostic channels, "ctl_<name>" each, after the
+/// backend's own. @throws std::invalid_argument naming the controller when it declares more than
+/// controller::kMaxDiagnosticChannels, a name that is empty, repeated or not lower-case letters,
+/// digits and '_'.
+std::vector<std::string> DiagnosticColumns(const controller::GraspController& controller);
+/// Fills `count` cells of `row` from `first` on with the controller's diagnostics.
+inline void WriteDiagnosticCells(double* row, size_t first, size_t count,
+                                 const controller::GraspController& controller) {
+  if (count > 0) controller.ReadDiagnostics(std::span<double>(row + first, count));
+}
 
 /// A chart with its labels.
 plot::Chart MakeChart(const std::string& title, const std::string& x_label, const std::string& y_label);

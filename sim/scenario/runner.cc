@@ -149,7 +149,7 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
                 const std::string& dir) {
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
-  const int units = static_cast<int>((log.numeric_column_count() - kFixedCount) / kPerUnit);
+  const int units = layout.unit_count();
   const std::string title = result.config.name + " (" + result.config.controller.name + ")";
 
   plot::Figure forces;
@@ -303,7 +303,11 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   // The loop ticks at most once per physics step (the loader bounds this storage, kMaxSignalBytes).
   const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
   const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * ticks_per_s)) + 16;
-  SignalLog log(NumericColumns(units), {"intent", "phase", "slip_cues"}, capacity_rows);
+  std::vector<std::string> columns = NumericColumns(units);
+  const size_t diagnostics_first = columns.size();
+  const std::vector<std::string> diagnostic_columns = internal::DiagnosticColumns(rig->controller());
+  columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
+  SignalLog log(std::move(columns), {"intent", "phase", "slip_cues"}, capacity_rows);
   const size_t ring_capacity =
       static_cast<size_t>(std::ceil((MaxLatencyS(config) + config.controller.stale_timeout_s + 0.05) *
                                     config.controller.rate_hz)) +
@@ -361,6 +365,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       text[1] = telemetry.phase;
       text[2] = telemetry.slip_cues;
       internal::WriteLoopCells(row, t, rig->loop(), telemetry);
+      internal::WriteDiagnosticCells(row, diagnostics_first, diagnostic_columns.size(), rig->controller());
       double sensed = 0.0;
       for (const sensor::UnitLoad& load : true_loads) sensed += load.fn_n;
       row[kTrueSensedFn] = sensed;

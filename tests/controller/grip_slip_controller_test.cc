@@ -8,7 +8,10 @@
 #include <functional>
 #include <memory>
 #include <stdexcept>
+#include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "tests/controller/synthetic_tactile.h"
 #include "tests/support/error_of.h"
@@ -842,6 +845,23 @@ TEST(GripSlipControllerTest, TelemetryFilledEveryUpdate) {
   EXPECT_EQ(loop.controller.name(), "grip_slip");
   EXPECT_GT(loop.controller.diagnostics().signals.tangential_load_n, 0.5);
   EXPECT_TRUE(loop.controller.diagnostics().signals.orientation_consistent);
+  // The logged diagnostic channels read the same diagnostics, by name.
+  const std::span<const DiagnosticChannel> channels = loop.controller.diagnostic_channels();
+  std::vector<double> values(channels.size(), -1.0);
+  loop.controller.ReadDiagnostics(values);
+  const auto value = [&](std::string_view name) {
+    for (size_t i = 0; i < channels.size(); ++i) {
+      if (name == channels[i].name) return values[i];
+    }
+    ADD_FAILURE() << "no channel " << name;
+    return -1.0;
+  };
+  const GripSlipDiagnostics& diagnostics = loop.controller.diagnostics();
+  EXPECT_EQ(value("measured_grip_n"), diagnostics.measured_grip_n);
+  EXPECT_EQ(value("load_ratio"), diagnostics.signals.load_ratio);
+  EXPECT_EQ(value("vibration_threshold_n"), diagnostics.signals.vibration_threshold_n);
+  EXPECT_EQ(value("centroid_drift_threshold_pitch"), diagnostics.signals.centroid_drift_threshold);
+  EXPECT_EQ(value("settled"), 1.0);
   loop.controller.Reset();
   EXPECT_STREQ(loop.controller.telemetry().phase, "idle");
   EXPECT_EQ(loop.controller.telemetry().slip_events, 0);

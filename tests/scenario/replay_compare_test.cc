@@ -95,9 +95,10 @@ TEST_F(ReplayCompareTest, ReplayWithTheRecordedControllerReproducesEveryCommandB
   EXPECT_EQ(bench.at("commands_differing").get<size_t>(), 0u) << bench.dump(2);
   EXPECT_EQ(bench.at("max_effort_difference").get<double>(), 0.0);
   EXPECT_EQ(bench.at("intent_from").get<std::string>(), "recording");
-  // The same text, cell by cell: the commands, the controller's target and the estimate.
-  for (const char* column :
-       {"grip_effort", "grip_target_n", "est_total_fn_n", "phase", "intent", "slip_flag"}) {
+  // The same text, cell by cell: the commands, the controller's target, the estimate and the
+  // controller's own diagnostics.
+  for (const char* column : {"grip_effort", "grip_target_n", "est_total_fn_n", "phase", "intent", "slip_flag",
+                             "ctl_vibration_rms_n", "ctl_load_ratio", "ctl_centroid_drift_pitch"}) {
     EXPECT_TRUE(ColumnText(Path("sim") + "/signals.csv", column) ==
                 ColumnText(Path("replay") + "/signals.csv", column))
         << column << " differs between the run and its replay";
