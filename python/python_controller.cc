@@ -2,6 +2,7 @@
 
 #include <pybind11/numpy.h>
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -45,6 +46,21 @@ PythonController::PythonController(py::object controller, std::string label)
   }
   update_ = controller_.attr("update");
   telemetry_method_ = py::getattr(controller_, "telemetry", py::none());
+  const py::object declared = py::getattr(controller_, "diagnostic_channels", py::none());
+  if (!declared.is_none()) {
+    if (!py::isinstance<py::sequence>(declared) || py::isinstance<py::str>(declared)) {
+      throw std::invalid_argument("Python controller " + label_ + ".diagnostic_channels = " +
+                                  std::string(py::repr(declared)) + ": expected a sequence of names");
+    }
+    for (const py::handle name : declared) channel_names_.push_back(py::str(name).cast<std::string>());
+    for (const std::string& name : channel_names_) channels_.push_back({name.c_str(), "declared in Python"});
+    diagnostic_values_.assign(channels_.size(), 0.0);
+    diagnostics_method_ = py::getattr(controller_, "diagnostics", py::none());
+    if (diagnostics_method_.is_none() && !channels_.empty()) {
+      throw std::invalid_argument("Python controller " + label_ +
+                                  " declares diagnostic_channels but has no method diagnostics()");
+    }
+  }
   view_object_ = py::cast(TactileStateView{});
   view_ = &view_object_.cast<TactileStateView&>();
   Reset();
@@ -54,6 +70,7 @@ PythonController::~PythonController() {
   py::gil_scoped_acquire gil;
   update_ = py::object();
   telemetry_method_ = py::object();
+  diagnostics_method_ = py::object();
   view_object_ = py::object();
   last_phase_ = py::object();
   last_slip_cues_ = py::object();
@@ -175,6 +192,28 @@ void PythonController::ReadTelemetry(const py::handle& result) {
   }
 }
 
+void PythonController::ReadDiagnosticValues(const py::handle& result) {
+  if (!py::isinstance<py::sequence>(result) || py::isinstance<py::str>(result) ||
+      py::len(result) != diagnostic_values_.size()) {
+    Fail("diagnostics()", "returned " + std::string(py::repr(result)) + ": expected " +
+                              std::to_string(diagnostic_values_.size()) +
+                              " numbers, one per diagnostic_channels entry");
+  }
+  size_t i = 0;
+  for (const py::handle value : result) {
+    try {
+      diagnostic_values_[i] = value.cast<double>();
+    } catch (const py::cast_error&) {
+      Fail("diagnostics()", channel_names_[i] + " = " + std::string(py::repr(value)) + ": not a number");
+    }
+    ++i;
+  }
+}
+
+void PythonController::ReadDiagnostics(std::span<double> values) const {
+  std::copy_n(diagnostic_values_.begin(), std::min(values.size(), diagnostic_values_.size()), values.begin());
+}
+
 controller::HandCommand PythonController::Update(const sensor::TactileState& state, double time_s) {
   py::gil_scoped_acquire gil;
   *view_->state = state;
@@ -184,11 +223,19 @@ controller::HandCommand PythonController::Update(const sensor::TactileState& sta
   } catch (py::error_already_set& error) {
     Fail("update()", error.what());
   }
-  if (telemetry_method_.is_none()) return command;
-  try {
-    ReadTelemetry(telemetry_method_());
-  } catch (py::error_already_set& error) {
-    Fail("telemetry()", error.what());
+  if (!telemetry_method_.is_none()) {
+    try {
+      ReadTelemetry(telemetry_method_());
+    } catch (py::error_already_set& error) {
+      Fail("telemetry()", error.what());
+    }
+  }
+  if (!channels_.empty()) {
+    try {
+      ReadDiagnosticValues(diagnostics_method_());
+    } catch (py::error_already_set& error) {
+      Fail("diagnostics()", error.what());
+    }
   }
   return command;
 }

@@ -7,7 +7,9 @@
 /// The Python object: reset(), set_intent(intent: "idle" | "close" | "open"), update(state, t) ->
 /// command (a graspbed.HandCommand, a number taken as grip_effort, or a dict with grip_effort,
 /// enable, brake); optionally telemetry() -> dict (phase, grip_target_n, friction_estimate,
-/// slip_detected, slip_cues, slip_events, safe_hold) and set_grip_ceiling(newtons). Anything it raises, or a
+/// slip_detected, slip_cues, slip_events, safe_hold), set_grip_ceiling(newtons), and
+/// diagnostic_channels (a sequence of names) with diagnostics() -> as many numbers, logged as
+/// signals.csv columns ctl_<name> every tick. Anything it raises, or a
 /// return that is no command (wrong type, effort not finite or outside [-1, 1]), ends the run with
 /// ControllerError naming the controller and the method.
 
@@ -17,6 +19,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "controller/grasp_controller.h"
 
@@ -52,19 +55,26 @@ class PythonController final : public controller::GraspController {
   void SetGripCeiling(double ceiling_n) override;
   controller::ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return label_; }
+  std::span<const controller::DiagnosticChannel> diagnostic_channels() const override { return channels_; }
+  void ReadDiagnostics(std::span<double> values) const override;
 
  private:
   /// Raises ControllerError for a Python error in `method` (call with the GIL held).
   [[noreturn]] void Fail(const char* method, const std::string& message) const;
   controller::HandCommand ToCommand(const pybind11::handle& result) const;
   void ReadTelemetry(const pybind11::handle& result);
+  void ReadDiagnosticValues(const pybind11::handle& result);
 
   std::string label_;
   pybind11::object controller_;
-  pybind11::object update_;            ///< bound method, looked up once
-  pybind11::object telemetry_method_;  ///< bound method or None
-  pybind11::object view_object_;       ///< the TactileStateView handed to update()
-  TactileStateView* view_ = nullptr;   ///< owned by view_object_
+  pybind11::object update_;                 ///< bound method, looked up once
+  pybind11::object telemetry_method_;       ///< bound method or None
+  pybind11::object diagnostics_method_;     ///< bound method, or None without diagnostic_channels
+  std::vector<std::string> channel_names_;  ///< diagnostic_channels, as declared
+  std::vector<controller::DiagnosticChannel> channels_;  ///< pointing into channel_names_
+  std::vector<double> diagnostic_values_;                ///< the last diagnostics(), one per channel
+  pybind11::object view_object_;                         ///< the TactileStateView handed to update()
+  TactileStateView* view_ = nullptr;                     ///< owned by view_object_
   controller::ControllerTelemetry telemetry_;
   /// A telemetry string as a pointer that stays valid (kept in strings_); `last` caches the object.
   const char* Intern(const pybind11::handle& value, pybind11::object* last, const char* current);

@@ -81,6 +81,41 @@ def test_telemetry_reaches_the_signals(short_grasp):
     np.testing.assert_array_equal(signals["slip_flag"][~holding], 0.0)
 
 
+def test_diagnostic_channels_reach_the_signals(short_grasp):
+    class Traced(ThresholdGrip):
+        diagnostic_channels = ("sensed_fn_n", "units_in_contact")
+
+        def update(self, state, t):
+            self.last = (state.total_fn_n, state.contact_count)
+            return super().update(state, t)
+
+        def diagnostics(self):
+            return self.last
+
+    signals = graspbed.run(short_grasp(0.4), controller=Traced())["signals"]
+    # What the controller saw, tick by tick, is what the loop logged from the same state.
+    np.testing.assert_array_equal(signals["ctl_sensed_fn_n"], signals["est_total_fn_n"])
+    assert signals["ctl_units_in_contact"].max() >= 1.0
+    assert not any(name.startswith("ctl_") for name in graspbed.run(
+        short_grasp(0.2), controller=ThresholdGrip())["signals"])
+
+
+@pytest.mark.parametrize("channels, values, message", [
+    (("a_n",), lambda: (1.0, 2.0), r"diagnostics\(\): returned \(1.0, 2.0\): expected 1 numbers"),
+    (("a_n",), lambda: ("x",), r"diagnostics\(\): a_n = 'x': not a number"),
+    (("A n",), lambda: (1.0,), r"diagnostic channel 'A n': a name is lower-case letters"),
+])
+def test_bad_diagnostics_are_refused_naming_the_controller(channels, values, message, short_grasp):
+    class Bad(ThresholdGrip):
+        diagnostic_channels = channels
+
+        def diagnostics(self):
+            return values()
+
+    with pytest.raises((graspbed.ControllerError, ValueError), match=message):
+        graspbed.run(short_grasp(0.3), controller=Bad())
+
+
 def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_grasp):
     seen = {}
 
