@@ -190,10 +190,12 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   loop_config.inversion = config.sensor.inversion;
   loop_config.Validate();
   std::unique_ptr<controller::GraspController> grasp;
+  std::vector<std::string> diagnostic_columns;
   try {
     grasp = options.make_controller
                 ? options.make_controller(config.controller)
                 : controller::MakeController(config.controller.name, config.controller.params);
+    diagnostic_columns = DiagnosticColumns(*grasp);
   } catch (const std::invalid_argument& error) {
     throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
@@ -256,7 +258,6 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
   const size_t recorded_first = columns.size();
   if (replay) columns.insert(columns.end(), std::begin(kRecordedNames), std::end(kRecordedNames));
   const size_t diagnostics_first = columns.size();
-  const std::vector<std::string> diagnostic_columns = DiagnosticColumns(*grasp);
   columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
   std::vector<std::string> text_columns = {"intent", "phase", "slip_cues"};
   if (replay) text_columns.push_back("recorded_phase");

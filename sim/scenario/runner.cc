@@ -276,8 +276,10 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   const sim::SimRigConfig rig_config = RigConfigFor(config);
   rig_config.Validate();
 
-  // The rig first: a scene it refuses (bodies that start inside each other) leaves no output behind.
+  // The rig first: a scene it refuses (bodies that start inside each other) or a controller whose
+  // diagnostic channels cannot be columns leaves no output behind.
   std::unique_ptr<sim::SimRig> rig;
+  std::vector<std::string> diagnostic_columns;
   try {
     // The host inverts with the sensor's nominal constants, not with anything the simulation
     // knows per unit (spread, drift): those show up as estimation error, as on hardware.
@@ -286,6 +288,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
         options.make_controller
             ? options.make_controller(config.controller)
             : controller::MakeController(config.controller.name, config.controller.params));
+    diagnostic_columns = internal::DiagnosticColumns(rig->controller());
   } catch (const std::invalid_argument& error) {
     throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
   }
@@ -305,7 +308,6 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   const size_t capacity_rows = static_cast<size_t>(std::ceil(config.duration_s * ticks_per_s)) + 16;
   std::vector<std::string> columns = NumericColumns(units);
   const size_t diagnostics_first = columns.size();
-  const std::vector<std::string> diagnostic_columns = internal::DiagnosticColumns(rig->controller());
   columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
   SignalLog log(std::move(columns), {"intent", "phase", "slip_cues"}, capacity_rows);
   const size_t ring_capacity =

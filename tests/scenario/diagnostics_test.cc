@@ -3,9 +3,12 @@
 // declares none; bad channel names refused naming the controller.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "common/config_error.h"
 #include "controller/grip_slip_controller.h"
 #include "sim/scenario/run_outputs.h"
 #include "sim/scenario/runner.h"
@@ -47,16 +50,21 @@ std::string RefusalOf(std::vector<controller::DiagnosticChannel> channels) {
   return "accepted";
 }
 
+/// Runs `config` with outputs in `dir` (no plots) and reads its signals.csv back.
+Signals RunAndRead(const ScenarioConfig& config, const TempDir& dir) {
+  RunOptions run;
+  run.out_dir = dir.Path("run");
+  run.write_plots = false;
+  EXPECT_TRUE(RunScenario(config, run).completed);
+  return Signals(run.out_dir + "/signals.csv");
+}
+
 TEST(DiagnosticsTest, TheReferenceControllersCuesAreInTheSignalsAtEveryFlag) {
   // pull_ramp: a pull the grip cannot hold at first, so the cues fire.
   const ScenarioConfig config = LoadScenario(SourcePath("scenarios/pull_ramp.yaml"));
   ASSERT_EQ(config.controller.name, "grip_slip");
   TempDir dir("diagnostics");
-  RunOptions run;
-  run.out_dir = dir.Path("run");
-  run.write_plots = false;
-  ASSERT_TRUE(RunScenario(config, run).completed);
-  const Signals signals(run.out_dir + "/signals.csv");
+  const Signals signals = RunAndRead(config, dir);
 
   const controller::GripSlipController reference{controller::GripSlipConfig{}};
   ASSERT_FALSE(reference.diagnostic_channels().empty());
@@ -97,12 +105,27 @@ TEST(DiagnosticsTest, AControllerWithoutChannelsAddsNoColumns) {
   config.controller.params.clear();
   config.duration_s = 0.3;
   TempDir dir("diagnostics_none");
+  const Signals signals = RunAndRead(config, dir);
+  for (const std::string& column : signals.header()) EXPECT_NE(column.rfind("ctl_", 0), 0u) << column;
+}
+
+TEST(DiagnosticsTest, ARunOfAControllerWithBadChannelsIsRefusedBeforeAnyOutput) {
+  ScenarioConfig config = LoadScenario(SourcePath("scenarios/default.yaml"));
+  TempDir dir("diagnostics_bad");
   RunOptions run;
   run.out_dir = dir.Path("run");
-  run.write_plots = false;
-  ASSERT_TRUE(RunScenario(config, run).completed);
-  const Signals signals(run.out_dir + "/signals.csv");
-  for (const std::string& column : signals.header()) EXPECT_NE(column.rfind("ctl_", 0), 0u) << column;
+  run.make_controller = [](const ControllerOptions&) {
+    return std::make_unique<ChannelsOnly>(std::vector<controller::DiagnosticChannel>{{"Bad Name", ""}});
+  };
+  try {
+    RunScenario(config, run);
+    ADD_FAILURE() << "the run was not refused";
+  } catch (const common::ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("controller 'channels_only': diagnostic channel 'Bad Name'"),
+              std::string::npos)
+        << error.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(run.out_dir));
 }
 
 TEST(DiagnosticsTest, BadChannelsAreRefusedNamingTheController) {
