@@ -5,6 +5,7 @@
 // enough for the object (graspbed's grip_slip controller is the one that adapts).
 #include <algorithm>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@ namespace {
 using graspbed::controller::ControllerParameter;
 using graspbed::controller::ControllerParams;
 using graspbed::controller::ControllerTelemetry;
+using graspbed::controller::DiagnosticChannel;
 using graspbed::controller::GraspController;
 using graspbed::controller::GraspIntent;
 using graspbed::controller::HandCommand;
@@ -38,6 +40,7 @@ class ThresholdGripController final : public GraspController {
     intent_ = GraspIntent::kIdle;
     effort_ = 0.0;
     last_time_s_ = -1.0;
+    grip_error_n_ = 0.0;
     telemetry_ = ControllerTelemetry{};
   }
   void SetIntent(GraspIntent intent) override { intent_ = intent; }
@@ -76,8 +79,8 @@ class ThresholdGripController final : public GraspController {
           effort_ = config_.approach_effort;
         } else {
           telemetry_.phase = "holding";
-          effort_ =
-              std::clamp(effort_ + config_.gain_per_n_s * (target_n - state.total_fn_n) * dt_s, 0.0, 1.0);
+          grip_error_n_ = target_n - state.total_fn_n;
+          effort_ = std::clamp(effort_ + config_.gain_per_n_s * grip_error_n_ * dt_s, 0.0, 1.0);
         }
         break;
     }
@@ -88,12 +91,23 @@ class ThresholdGripController final : public GraspController {
   ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return "threshold_grip"; }
 
+  // Optional: internal signals graspbed logs as signals.csv columns (here ctl_grip_error_n).
+  std::span<const DiagnosticChannel> diagnostic_channels() const override {
+    static constexpr DiagnosticChannel kChannels[] = {
+        {"grip_error_n", "grip target minus the sensed squeeze while holding [N]"}};
+    return kChannels;
+  }
+  void ReadDiagnostics(std::span<double> values) const override {
+    if (!values.empty()) values[0] = grip_error_n_;
+  }
+
  private:
   ThresholdGripConfig config_;
   GraspIntent intent_ = GraspIntent::kIdle;
   double effort_ = 0.0;        ///< current motor effort [-]
   double last_time_s_ = -1.0;  ///< time of the previous Update [s]; < 0 before the first
   double ceiling_n_ = 0.0;     ///< task grip ceiling [N]; 0 = none
+  double grip_error_n_ = 0.0;  ///< target minus sensed squeeze at the last holding update [N]
   ControllerTelemetry telemetry_;
 };
 

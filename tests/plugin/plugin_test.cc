@@ -253,6 +253,10 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   EXPECT_EQ(summary.at("controller"), "plugin:" + kThreshold);
   EXPECT_TRUE(summary.at("passed").get<bool>());
   EXPECT_FALSE(summary.at("metrics").at("dropped").get<bool>());
+  // The plugin's diagnostic channel is a column; held, the grip error is small.
+  const std::string signals = graspbed::test_support::ReadText(dir_.Path("rel/signals.csv"));
+  const std::string header = signals.substr(0, signals.find('\n'));
+  EXPECT_THAT(header, ::testing::EndsWith(",ctl_grip_error_n"));
   // By bare name on GRASPBED_PLUGIN_PATH (the child inherits it), with a parameter through --set.
   ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", kPluginDir.c_str(), 1), 0);
   const CliResult named =
