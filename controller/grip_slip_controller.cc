@@ -136,6 +136,9 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("slip_grip_rate_n_per_s", slip_grip_rate_n_per_s, 0.0, 10000.0, "N/s",
                     "while the cues keep reporting slip after a response, the slip floor keeps rising this "
                     "fast; 0 = off"),
+      GRASPBED_BIND("ratio_ceiling_count_s", ratio_ceiling_count_s, 0.0, 10.0, "s",
+                    "with the target at its ceiling, the ratio cue (and the centroid cue with it) counts as "
+                    "slip only this long after its episode rose; 0 = not at all"),
       GRASPBED_BIND("ratio_ceiling_rearm_s", ratio_ceiling_rearm_s, 0.0, 10.0, "s",
                     "with the target at its ceiling, a ratio cue rising again within this time of falling "
                     "continues its episode instead of being a new slip; 0 = every rise is new"),
@@ -605,13 +608,13 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       }
       // The ratio cue held up with the target at its ceiling says the load is beyond what the
       // ceiling allows by the friction estimate, not that the contact is sliding now (the grip can
-      // rise no further either way). Past its first slip_refractory_s it no longer counts as slip,
-      // nor does the centroid cue, whose check on a rolling pad is that same load ratio (the pad
-      // deforms under the load); the vibration cue still does. Held up, it hid every later slip
-      // (a flag already up when a slip begins detects nothing) and kept the flag up for seconds.
-      // Hysteresis does not stop a load that hovers at the threshold at the ceiling from crossing
-      // it again and again (pouring: a rise every few ms): a rise soon after the last fall continues
-      // the episode, so it is held at once.
+      // rise no further either way). Past ratio_ceiling_count_s of its episode (by default from
+      // its rise) it does not count as slip, nor does the centroid cue, whose check on a rolling
+      // pad is that same load ratio (the pad deforms under the load); the vibration cue still does.
+      // Held up, it hid every later slip (a flag already up when a slip begins detects nothing) and
+      // kept the flag up for seconds. With a count window, a load hovering at the threshold would
+      // cross it again and again (pouring: a rise every few ms): a rise soon after the last fall
+      // continues the episode.
       if (signals.ratio_slip && !ratio_was_up_) {
         const bool continues =
             target_n_ >= ceiling_n && time_s - ratio_fall_s_ <= config_.ratio_ceiling_rearm_s;
@@ -619,8 +622,8 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       }
       if (!signals.ratio_slip && ratio_was_up_) ratio_fall_s_ = time_s;
       ratio_was_up_ = signals.ratio_slip;
-      const bool ratio_held =
-          signals.ratio_slip && target_n_ >= ceiling_n && time_s - ratio_rise_s_ > config_.slip_refractory_s;
+      const bool ratio_held = signals.ratio_slip && target_n_ >= ceiling_n &&
+                              time_s - ratio_rise_s_ >= config_.ratio_ceiling_count_s;
       ratio_counts_ = signals.ratio_slip && !ratio_held;
       centroid_counts_ = signals.centroid_slip && !ratio_held;
       slip_now = ratio_counts_ || signals.vibration_slip || centroid_counts_;

@@ -76,9 +76,14 @@ struct GripSlipConfig {
   /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
   /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
   double slip_grip_rate_n_per_s = 100.0;
+  /// With the target at its ceiling, the ratio cue counts as slip only this long after its episode
+  /// rose [s]; 0 = not at all (the grip can rise no further, and the cue then says the load is
+  /// beyond what the ceiling holds at the friction estimate, not that the contact slides; the
+  /// vibration cue still flags). The centroid cue is held with it.
+  double ratio_ceiling_count_s = 0.0;
   /// With the target at its ceiling, a ratio cue that rises again within this time of falling
   /// continues the episode it rose in (a load hovering at the threshold), rather than being a new
-  /// slip [s]; 0 = every rise is new.
+  /// slip [s]; 0 = every rise is new. Matters with ratio_ceiling_count_s > 0.
   double ratio_ceiling_rearm_s = 0.25;
   /// The reported slip flag stays up this long after the last frame a cue counted as slip, so a
   /// cue flickering about its threshold within one episode is one flag, not one per crossing [s];

@@ -513,13 +513,17 @@ TEST(GripSlipControllerTest, RatioCueHeldAtTheCeilingStopsCountingAsSlip) {
 
 /// A load that hovers at the ratio cue's threshold with the target at the ceiling (pouring into a
 /// held cup): the cue falls and rises again every 80 ms, past its hysteresis, while the (grippier)
-/// object does not move. Each rise soon after a fall continues the episode: one flag, not one per
-/// crossing; with ratio_ceiling_rearm_s 0 every rise is a new flag.
+/// object does not move. Its first rise, with the target still below the ceiling, is a flag; at the
+/// ceiling the cue counts no more, so the crossings after it raise none, whatever the rearm window.
+/// With a count window at the ceiling (ratio_ceiling_count_s 40 ms), each rise soon after a fall
+/// continues the episode (still one flag); with ratio_ceiling_rearm_s 0 too, every rise is a flag.
 TEST(GripSlipControllerTest, ALoadHoveringAtTheThresholdAtTheCeilingIsOneFlag) {
-  const auto flag_rises = [](double rearm_s, int* ratio_rises) {
+  constexpr double kCountS = 0.04;
+  const auto flag_rises = [](double count_s, double rearm_s, int* ratio_rises) {
     HandPlant::Options plant;
     plant.friction = 1.2;  // the object holds: no slip whatever the estimate says
     GripSlipConfig config = DefaultConfig();
+    config.ratio_ceiling_count_s = count_s;
     config.ratio_ceiling_rearm_s = rearm_s;
     ClosedLoop loop(config, plant, {});
     loop.controller.SetGripCeiling(3.0);
@@ -547,14 +551,18 @@ TEST(GripSlipControllerTest, ALoadHoveringAtTheThresholdAtTheCeilingIsOneFlag) {
     EXPECT_LT(loop.plant.slip_distance_m(), 0.5e-3) << "the object was meant to hold";
     return rises;
   };
+  const GripSlipConfig defaults = DefaultConfig();
   int ratio_rises = 0;
-  const int flags = flag_rises(DefaultConfig().ratio_ceiling_rearm_s, &ratio_rises);
+  const int flags = flag_rises(defaults.ratio_ceiling_count_s, defaults.ratio_ceiling_rearm_s, &ratio_rises);
   std::printf("[ measure  ] ratio cue rose %d times, flag rose %d times\n", ratio_rises, flags);
-  // The cue did cross again and again, so one flag is the rearm window at work.
+  // The cue did cross again and again, so one flag is the ceiling's hold at work.
   EXPECT_GE(ratio_rises, 5);
   EXPECT_EQ(flags, 1);
-  int ratio_rises_without = 0;
-  EXPECT_EQ(flag_rises(0.0, &ratio_rises_without), ratio_rises_without);
+  int rises = 0;
+  EXPECT_EQ(flag_rises(defaults.ratio_ceiling_count_s, 0.0, &rises), 1);
+  EXPECT_EQ(flag_rises(kCountS, defaults.ratio_ceiling_rearm_s, &rises), 1);
+  EXPECT_GE(rises, 5);
+  EXPECT_EQ(flag_rises(kCountS, 0.0, &rises), rises);
 }
 
 /// slip_flag_hold_s: the reported flag stays up until the cues have counted no slip for the hold
