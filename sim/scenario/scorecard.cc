@@ -470,10 +470,15 @@ std::string ScorecardTable(const Scorecard& scorecard) {
 
 namespace {
 
-// The headline figures per group of runs (`group_of` a row's group name): one line per (group,
-// controller), groups sorted by name.
+/// The runs of each group (`group_of` a row's group name), groups sorted by name, scored per
+/// controller in the scorecard's order.
+struct GroupScore {
+  std::string group;
+  std::vector<ControllerScore> scores;
+};
+
 template <typename GroupOf>
-std::string GroupTable(const Scorecard& scorecard, const char* group_label, GroupOf group_of) {
+std::vector<GroupScore> ScoreGroups(const Scorecard& scorecard, GroupOf group_of) {
   std::vector<std::string> groups;
   for (const ScorecardRow& row : scorecard.rows) {
     if (!row.error.empty() || !row.result.completed) continue;
@@ -481,13 +486,9 @@ std::string GroupTable(const Scorecard& scorecard, const char* group_label, Grou
     if (std::find(groups.begin(), groups.end(), group) == groups.end()) groups.push_back(group);
   }
   std::sort(groups.begin(), groups.end());
-  std::ostringstream out;
-  char line[256];
-  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
-                "controller", "runs", "detected", "latency p95", "false flags/min", "flag up", "drops",
-                "grip ratio");
-  out << line;
+  std::vector<GroupScore> scored;
   for (const std::string& group : groups) {
+    GroupScore entry{group, {}};
     for (const ControllerScore& total : scorecard.scores) {
       std::vector<const RunResult*> finished;
       for (const ScorecardRow& row : scorecard.rows) {
@@ -496,11 +497,32 @@ std::string GroupTable(const Scorecard& scorecard, const char* group_label, Grou
           finished.push_back(&row.result);
         }
       }
-      const ControllerScore score = ScoreRuns(total.controller, finished, 0);
+      entry.scores.push_back(ScoreRuns(total.controller, finished, 0));
+    }
+    scored.push_back(std::move(entry));
+  }
+  return scored;
+}
+
+/// A run's sensor: the profile and sensitivity source of its resolved config.
+std::string SensorOf(const ScorecardRow& row) {
+  return row.result.config.sensor.profile + "/" + row.result.config.sensor.sensitivities;
+}
+
+// The headline figures per group of runs: one line per (group, controller).
+std::string GroupTable(const char* group_label, const std::vector<GroupScore>& groups) {
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
+                "controller", "runs", "detected", "latency p95", "false flags/min", "flag up", "drops",
+                "grip ratio");
+  out << line;
+  for (const GroupScore& group : groups) {
+    for (const ControllerScore& score : group.scores) {
       const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" +
                                    Int(score.slip_detected) + "/" + Int(score.slip_events) + ")";
-      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n", group.c_str(),
-                    score.controller.c_str(), score.runs, detected.c_str(),
+      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n",
+                    group.group.c_str(), score.controller.c_str(), score.runs, detected.c_str(),
                     OptionalText(score.latency_p95_ms, "%.1f ms").c_str(),
                     (OptionalText(score.false_per_min, "%.1f") + " (" + Int(score.false_flags) + ")").c_str(),
                     OptionalText(score.false_flag_pct, "%.1f %%").c_str(), score.drops,
@@ -514,17 +536,15 @@ std::string GroupTable(const Scorecard& scorecard, const char* group_label, Grou
 }  // namespace
 
 std::string ScorecardBySensorTable(const Scorecard& scorecard) {
-  return GroupTable(scorecard, "sensor", [](const ScorecardRow& row) {
-    return row.result.config.sensor.profile + "/" + row.result.config.sensor.sensitivities;
-  });
+  return GroupTable("sensor", ScoreGroups(scorecard, SensorOf));
 }
 
 std::string ScorecardByScenarioTable(const Scorecard& scorecard) {
   // A run is named <base>.v<k>: its base scenario is the name up to the last ".v".
-  return GroupTable(scorecard, "scenario", [](const ScorecardRow& row) {
-    const size_t dot = row.run.rfind(".v");
-    return dot == std::string::npos ? row.run : row.run.substr(0, dot);
-  });
+  return GroupTable("scenario", ScoreGroups(scorecard, [](const ScorecardRow& row) {
+                      const size_t dot = row.run.rfind(".v");
+                      return dot == std::string::npos ? row.run : row.run.substr(0, dot);
+                    }));
 }
 
 std::string ScorecardCsv(const Scorecard& scorecard) {
@@ -562,10 +582,20 @@ nlohmann::json ScorecardJson(const Scorecard& scorecard) {
   json["wall_s"] = scorecard.wall_s;
   json["jobs"] = scorecard.jobs;
   json["controllers"] = nlohmann::json::array();
-  for (const ControllerScore& score : scorecard.scores) {
+  const std::vector<GroupScore> by_sensor = ScoreGroups(scorecard, SensorOf);
+  for (size_t c = 0; c < scorecard.scores.size(); ++c) {
+    const ControllerScore& score = scorecard.scores[c];
     nlohmann::json entry = {{"controller", score.controller}};
     for (const Figure& figure : Figures()) entry[figure.column] = figure.json(score);
     entry["false_flags_by_cue"] = score.false_flags_by_cue;
+    // The same figures per sensor (profile/sensitivities): the targets hold per profile.
+    nlohmann::json sensors = nlohmann::json::object();
+    for (const GroupScore& group : by_sensor) {
+      nlohmann::json figures = nlohmann::json::object();
+      for (const Figure& figure : Figures()) figures[figure.column] = figure.json(group.scores[c]);
+      sensors[group.group] = figures;
+    }
+    entry["by_sensor"] = sensors;
     json["controllers"].push_back(entry);
   }
   json["runs"] = nlohmann::json::array();

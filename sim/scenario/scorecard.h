@@ -164,7 +164,8 @@ std::string ScorecardByScenarioTable(const Scorecard& scorecard);
 std::string ScorecardTable(const Scorecard& scorecard);
 /// CSV: a header and one row per controller ("" for a figure that does not exist).
 std::string ScorecardCsv(const Scorecard& scorecard);
-/// JSON: set, controllers (one object each) and runs.
+/// JSON: set, controllers (one object each, with the same figures per sensor under "by_sensor") and
+/// runs.
 nlohmann::json ScorecardJson(const Scorecard& scorecard);
 /// Bars of the headline figures (slip detected, latency p95, false flags per minute, grip ratio median,
 /// drops + crushes, runs passed) as one PNG, one colour per controller.

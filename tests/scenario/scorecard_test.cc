@@ -256,6 +256,21 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   EXPECT_EQ(result.out.find("false flags by cue, grip_slip:") != std::string::npos, by_cue > 0) << result.out;
   EXPECT_LE(reference.at("missed_unsensed").get<int>(),
             reference.at("slip_events").get<int>() - reference.at("slip_detected").get<int>());
+  // Per sensor (profile/sensitivities of each run): the groups partition the runs, so their counts
+  // add up to the controller's.
+  for (const nlohmann::json* controller : {&reference, &baseline}) {
+    const nlohmann::json& by_sensor = controller->at("by_sensor");
+    ASSERT_FALSE(by_sensor.empty());
+    for (const char* count : {"runs", "slip_events", "slip_detected", "false_flags", "drops", "passed"}) {
+      int sum = 0;
+      for (const auto& [sensor, figures] : by_sensor.items()) sum += figures.at(count).get<int>();
+      EXPECT_EQ(sum, controller->at(count).get<int>()) << controller->at("controller") << " " << count;
+    }
+  }
+  for (const auto& [sensor, figures] : reference.at("by_sensor").items()) {
+    EXPECT_NE(sensor.find('/'), std::string::npos) << sensor << ": profile/sensitivities";
+    EXPECT_LE(figures.at("slip_detected").get<int>(), figures.at("slip_events").get<int>()) << sensor;
+  }
 }
 
 // The reference controller over the whole shipped set (41 runs, about 6 s on 2 cores), against
