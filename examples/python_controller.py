@@ -17,6 +17,10 @@ import graspbed
 class ThresholdGrip:
     """Force-regulating grip: see the module docstring. Parameters as in the C++ plugin."""
 
+    # Optional: internal signals graspbed logs as signals.csv columns (here ctl_grip_error_n), one
+    # number per name from diagnostics() each tick.
+    diagnostic_channels = ("grip_error_n",)
+
     def __init__(self, target_grip_n=3.0, approach_effort=0.3, contact_n=0.2, gain_per_n_s=0.3,
                  open_effort=0.5, min_valid_units=4):
         self.target_grip_n = target_grip_n
@@ -32,6 +36,7 @@ class ThresholdGrip:
         self.effort = 0.0
         self.last_t = None
         self.phase = "idle"
+        self.grip_error_n = 0.0  # grip target minus the sensed squeeze while holding [N]
 
     def set_intent(self, intent):
         self.intent = intent  # "idle" | "close" | "open"
@@ -54,8 +59,12 @@ class ThresholdGrip:
             self.phase, self.effort = "closing", self.approach_effort
         else:
             self.phase = "holding"
-            self.effort = min(max(self.effort + self.gain_per_n_s * (self.target_grip_n - squeeze) * dt, 0.0), 1.0)
+            self.grip_error_n = self.target_grip_n - squeeze
+            self.effort = min(max(self.effort + self.gain_per_n_s * self.grip_error_n * dt, 0.0), 1.0)
         return self.effort
+
+    def diagnostics(self):
+        return (self.grip_error_n,)
 
     def telemetry(self):
         return {"phase": self.phase, "grip_target_n": self.target_grip_n, "safe_hold": self.phase == "safe_hold"}
@@ -70,7 +79,8 @@ def main():
     print("  dropped %s, max slip %.3f mm, peak grip %.2f N, real-time factor %.1f"
           % (metrics["dropped"], metrics["max_slip_mm"], metrics["peak_grip_n"], summary["real_time_factor"]))
     squeeze = signals["true_squeeze_n"]
-    print("  %d ticks; true squeeze at the end %.2f N" % (len(squeeze), squeeze[-1]))
+    print("  %d ticks; true squeeze at the end %.2f N, grip error at the end %.2f N"
+          % (len(squeeze), squeeze[-1], signals["ctl_grip_error_n"][-1]))
     return 0 if summary["passed"] else 1
 
 

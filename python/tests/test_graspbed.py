@@ -29,6 +29,10 @@ def test_a_python_controller_holds_the_default_object():
     phases = set(result["signals"]["phase"])
     assert {"closing", "holding"} <= phases
     np.testing.assert_array_equal(np.unique(result["signals"]["grip_target_n"][-10:]), [3.0])
+    # Its diagnostic channel too: the grip error it integrates, settled near zero by the end.
+    grip_error = result["signals"]["ctl_grip_error_n"]
+    assert np.abs(grip_error).max() > 0.5
+    assert abs(grip_error[-1]) < 0.3
 
 
 def test_signals_are_numpy_columns_of_one_length(short_grasp):
