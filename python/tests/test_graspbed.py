@@ -100,8 +100,12 @@ def test_diagnostic_channels_reach_the_signals(short_grasp):
     # What the controller saw, tick by tick, is what the loop logged from the same state.
     np.testing.assert_array_equal(signals["ctl_sensed_fn_n"], signals["est_total_fn_n"])
     assert signals["ctl_units_in_contact"].max() >= 1.0
+
+    class Undeclared(ThresholdGrip):
+        diagnostic_channels = None  # read as not declared (the example declares one)
+
     assert not any(name.startswith("ctl_") for name in graspbed.run(
-        short_grasp(0.2), controller=ThresholdGrip())["signals"])
+        short_grasp(0.2), controller=Undeclared())["signals"])
 
 
 @pytest.mark.parametrize("channels, values, message", [
