@@ -97,8 +97,11 @@ SlipOnsetCheck MeasureSlipOnset(const sensor::Layout& layout, const SceneConfig&
     const double speed = std::abs(now - window_start_position) / (simulation.time_s() - window_start_s);
     window_start_position = now;
     window_start_s = simulation.time_s();
-    if (speed > kSlipSpeedM_S)
-      return {pull / CoulombLimitN(simulation), simulation.truth().sliding_load_share};
+    if (speed > kSlipSpeedM_S) {
+      const GroundTruth& truth = simulation.truth();
+      return {pull / CoulombLimitN(simulation), truth.sliding_load_share, truth.sliding_speed_m_s,
+              truth.finger_sliding_speed_m_s, truth.thumb_sliding_speed_m_s};
+    }
   }
   return {};
 }

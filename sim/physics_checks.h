@@ -30,6 +30,10 @@ struct SlipOnsetCheck {
   double ratio = 0.0;
   /// GroundTruth::sliding_load_share then: the share of a digit's force on sliding contacts [0..1].
   double sliding_load_share = 0.0;
+  /// GroundTruth::sliding_speed_m_s and its per-digit parts then [m/s].
+  double sliding_speed_m_s = 0.0;
+  double finger_sliding_speed_m_s = 0.0;
+  double thumb_sliding_speed_m_s = 0.0;
 };
 SlipOnsetCheck MeasureSlipOnset(const sensor::Layout& layout, const SceneConfig& scene);
 

@@ -576,6 +576,8 @@ GroundTruth Simulation::truth() const {
     if (normal > 0.0 &&
         std::hypot(local[1], local[2]) >= sliding_friction_fraction_ * contact.friction[0] * normal) {
       t.sliding_speed_m_s = std::max(t.sliding_speed_m_s, slip);
+      double& digit_sliding = side == kFinger ? t.finger_sliding_speed_m_s : t.thumb_sliding_speed_m_s;
+      digit_sliding = std::max(digit_sliding, slip);
       (side == kFinger ? finger_sliding_normal : thumb_sliding_normal) += normal;
     }
     slip_weighted += slip * std::max(normal, 0.0);

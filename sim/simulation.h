@@ -62,6 +62,10 @@ struct GroundTruth {
   /// friction is a soft velocity constraint: under a shake the object rocks against the pads at a
   /// third of the friction limit); that is excluded here [m/s].
   double sliding_speed_m_s = 0.0;
+  /// The same per digit: the largest at the finger's contacts (sensed) and at the thumb's [m/s];
+  /// sliding_speed_m_s is the larger. Tells a slide under the sensor from one on the thumb alone.
+  double finger_sliding_speed_m_s = 0.0;
+  double thumb_sliding_speed_m_s = 0.0;
   /// Share of a digit's normal force on the object carried by its sliding contacts (those counted in
   /// sliding_speed_m_s), the larger of the two digits' [0, 1]: near 1 the digit slides over the
   /// object as a whole; a few percent is a lightly loaded contact at the patch's edge sliding while

@@ -62,6 +62,7 @@ void MetricsTracker::CloseEvent() {
   } else {
     ++missed_;
     if (!current_.sensed) ++missed_unsensed_;
+    if (current_.thumb_slid && !current_.finger_slid) ++missed_thumb_only_;
   }
   if (event_count_ < kMaxEvents) events_[event_count_] = current_;
   ++event_count_;
@@ -191,6 +192,10 @@ void MetricsTracker::Update(const TickSample& sample) {
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
+      const double digit_speed_m_s =
+          speed > config_.slip_speed_m_s ? config_.slip_speed_m_s : config_.creep_speed_m_s;
+      current_.finger_slid = current_.finger_slid || truth.finger_sliding_speed_m_s > digit_speed_m_s;
+      current_.thumb_slid = current_.thumb_slid || truth.thumb_sliding_speed_m_s > digit_speed_m_s;
       for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
         current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
@@ -285,6 +290,7 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   m.slip_events = copy.event_count_;
   m.missed_slip_events = copy.missed_;
   m.missed_unsensed_slip_events = copy.missed_unsensed_;
+  m.missed_thumb_only_slip_events = copy.missed_thumb_only_;
   if (copy.event_count_ > 0 && copy.worst_latency_s_ >= 0.0)
     m.slip_detect_latency_ms = copy.worst_latency_s_ * 1e3;
   m.controller_slip_flags = copy.flags_;

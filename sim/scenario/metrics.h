@@ -31,6 +31,11 @@ struct SlipEvent {
   /// without is one the tactile sensor had nothing to report on (the object sliding on an unsensed
   /// part of the finger, e.g. the fingertip cap while a grasp forms).
   bool sensed = false;
+  /// Which digits slid at the event's ticks: contacts of that digit at the friction limit faster
+  /// than slip_speed_m_s (creep_speed_m_s at a creep event's ticks). Only the thumb: the object slid
+  /// on the unsensed digit while the sensed finger's contact stuck.
+  bool finger_slid = false;
+  bool thumb_slid = false;
   double latency_s = 0.0;  ///< flag time - onset, >= 0 (0 for an early flag) [s]
 };
 
@@ -58,7 +63,9 @@ struct Metrics {
   int slip_events = 0;                  ///< ground-truth slip events while held
   int missed_slip_events = 0;           ///< of those, never flagged by the controller
   int missed_unsensed_slip_events = 0;  ///< of the missed, those with no unit loaded (SlipEvent::sensed)
-  int controller_slip_flags = 0;        ///< rising edges of the controller's slip flag while held
+  /// Of the missed, those where only the thumb slid (SlipEvent::thumb_slid, not finger_slid).
+  int missed_thumb_only_slip_events = 0;
+  int controller_slip_flags = 0;  ///< rising edges of the controller's slip flag while held
   /// Flags matching no slip event with no contact sliding at the friction limit (above creep speed)
   /// in the early_detection_window_s before them: the contact was not slipping at all.
   int false_slip_flags = 0;
@@ -194,6 +201,7 @@ class MetricsTracker {
   int pending_count_ = 0;
   int missed_ = 0;
   int missed_unsensed_ = 0;
+  int missed_thumb_only_ = 0;
   double worst_latency_s_ = -1.0;
 
   double fn_square_sum_ = 0.0;

@@ -96,6 +96,8 @@ enum Col : size_t {
   kTrueSqueeze,
   kSlipSpeed,
   kSlidingSpeed,
+  kFingerSlidingSpeed,
+  kThumbSlidingSpeed,
   kSlidingShare,
   kNeededGrip,
   kObjectX,
@@ -118,17 +120,12 @@ enum Col : size_t {
 };
 
 constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
-    {"true_sensed_fn_n",   "true_finger_fn_n",
-     "true_thumb_fn_n",    "true_squeeze_n",
-     "slip_speed_mm_s",    "sliding_speed_mm_s",
-     "sliding_load_share", "needed_grip_n",
-     "object_x_m",         "object_y_m",
-     "object_z_m",         "object_height_m",
-     "wrist_x_m",          "wrist_y_m",
-     "wrist_z_m",          "wrist_target_z_m",
-     "grip_closure_m",     "object_mass_kg",
-     "external_force_x_n", "external_force_y_n",
-     "external_force_z_n", "holding",
+    {"true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",     "true_squeeze_n",
+     "slip_speed_mm_s",    "sliding_speed_mm_s", "finger_sliding_mm_s", "thumb_sliding_mm_s",
+     "sliding_load_share", "needed_grip_n",      "object_x_m",          "object_y_m",
+     "object_z_m",         "object_height_m",    "wrist_x_m",           "wrist_y_m",
+     "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",      "object_mass_kg",
+     "external_force_x_n", "external_force_y_n", "external_force_z_n",  "holding",
      "slip_event",         "slip_distance_mm"};
 
 // Per-unit columns, in this order per unit.
@@ -376,6 +373,8 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       row[kTrueSqueeze] = truth.object_squeeze_n;
       row[kSlipSpeed] = truth.slip_speed_m_s * 1e3;
       row[kSlidingSpeed] = truth.sliding_speed_m_s * 1e3;
+      row[kFingerSlidingSpeed] = truth.finger_sliding_speed_m_s * 1e3;
+      row[kThumbSlidingSpeed] = truth.thumb_sliding_speed_m_s * 1e3;
       row[kSlidingShare] = truth.sliding_load_share;
       row[kNeededGrip] = truth.required_grip_n;
       row[kObjectX] = truth.object_position_m[0];
@@ -521,6 +520,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"slip_events", m.slip_events},
       {"missed_slip_events", m.missed_slip_events},
       {"missed_unsensed_slip_events", m.missed_unsensed_slip_events},
+      {"missed_thumb_only_slip_events", m.missed_thumb_only_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
       {"false_slip_flags", m.false_slip_flags},
       {"false_slip_flags_by_cue", m.false_slip_flags_by_cue},
@@ -546,6 +546,8 @@ nlohmann::json SummaryJson(const RunResult& result) {
          {"distance_mm", e.distance_m * 1e3},
          {"detected", e.detected},
          {"sensed", e.sensed},
+         {"finger_slid", e.finger_slid},
+         {"thumb_slid", e.thumb_slid},
          {"latency_ms", e.detected ? nlohmann::json(e.latency_s * 1e3) : nlohmann::json(nullptr)}});
   }
   // When each script action fired; for event actions also when it was armed and saw its event.

@@ -226,6 +226,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     score.slip_events += metrics.slip_events;
     score.slip_detected += metrics.slip_events - metrics.missed_slip_events;
     score.missed_unsensed += metrics.missed_unsensed_slip_events;
+    score.missed_thumb_only += metrics.missed_thumb_only_slip_events;
     for (const SlipEvent& event : metrics.events) {
       if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
     }
@@ -373,6 +374,11 @@ const std::vector<Figure>& Figures() {
          return Int(s.missed_unsensed) + " of " + Int(s.slip_events - s.slip_detected);
        },
        [](const ControllerScore& s) { return nlohmann::json(s.missed_unsensed); }},
+      {"missed, only thumb slid", "missed_thumb_only",
+       [](const ControllerScore& s) {
+         return Int(s.missed_thumb_only) + " of " + Int(s.slip_events - s.slip_detected);
+       },
+       [](const ControllerScore& s) { return nlohmann::json(s.missed_thumb_only); }},
       {"detection latency p50", "latency_p50_ms",
        [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p50_ms); }},

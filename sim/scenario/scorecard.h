@@ -75,6 +75,8 @@ struct ControllerScore {
   int slip_detected = 0;  ///< of those, flagged by the controller
   /// Of the events not flagged, those during which no unit was loaded (SlipEvent::sensed false).
   int missed_unsensed = 0;
+  /// Of the events not flagged, those where only the thumb slid (Metrics::missed_thumb_only_slip_events).
+  int missed_thumb_only = 0;
   std::optional<double> detected_pct;    ///< 100 * detected / events; nullopt with no event [%]
   std::optional<double> latency_p50_ms;  ///< over detected events [ms]
   std::optional<double> latency_p95_ms;

@@ -306,6 +306,34 @@ TEST_F(TrackerTest, AMissedSlipWithNoUnitLoadedIsCountedApart) {
   EXPECT_EQ(f.missed_unsensed_slip_events, 0);
 }
 
+// A missed slip where only the thumb slid (the sensed finger's contact stuck) is counted apart; one
+// where the finger slid, alone or with the thumb, is not. A digit counts when it slid faster than the
+// event's speed at one of its ticks.
+TEST_F(TrackerTest, AMissedSlipOfTheThumbAloneIsCountedApart) {
+  Run(0.3, 0.0);
+  truth_.thumb_sliding_speed_m_s = 0.01;
+  Run(0.35, 0.01);  // the thumb alone
+  truth_.thumb_sliding_speed_m_s = 0.0;
+  Run(0.5, 0.0);
+  truth_.finger_sliding_speed_m_s = 0.01;
+  Run(0.55, 0.01);  // the finger alone
+  truth_.finger_sliding_speed_m_s = 0.0;
+  Run(0.7, 0.0);
+  truth_.thumb_sliding_speed_m_s = 0.01;
+  Run(0.74, 0.01);
+  truth_.finger_sliding_speed_m_s = 0.0021;  // both, the finger just over the 2 mm/s event speed
+  Run(0.75, 0.01);
+  truth_.finger_sliding_speed_m_s = truth_.thumb_sliding_speed_m_s = 0.0;
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  ASSERT_EQ(m.events.size(), 3u);
+  EXPECT_EQ(m.missed_slip_events, 3);
+  EXPECT_EQ(m.missed_thumb_only_slip_events, 1);
+  EXPECT_TRUE(m.events[0].thumb_slid && !m.events[0].finger_slid);
+  EXPECT_TRUE(m.events[1].finger_slid && !m.events[1].thumb_slid);
+  EXPECT_TRUE(m.events[2].finger_slid && m.events[2].thumb_slid);
+}
+
 // False flags are counted by the controller's cue label at their rise; a flag after sliding
 // (incipient) and a flag that detects an event are not false and not counted.
 TEST_F(TrackerTest, FalseFlagsAreCountedByTheControllersCueLabel) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -156,6 +157,10 @@ TEST_F(FrictionTest, TheObjectSlipsWithinFivePercentOfCoulombsLimit) {
   ASSERT_GT(ratio_at_onset, 0.0) << "never slipped up to twice the initial limit (or faulted)";
   // The digits slide over the object as a whole: the sliding contacts carry its force.
   EXPECT_GT(onset.sliding_load_share, 1.0 - kCoulombBand);
+  // Both digits, then, and the sliding speed is the faster digit's.
+  EXPECT_GT(onset.finger_sliding_speed_m_s, 0.0);
+  EXPECT_GT(onset.thumb_sliding_speed_m_s, 0.0);
+  EXPECT_EQ(onset.sliding_speed_m_s, std::max(onset.finger_sliding_speed_m_s, onset.thumb_sliding_speed_m_s));
   RecordProperty("ratio_at_onset", std::to_string(ratio_at_onset));
   EXPECT_NEAR(ratio_at_onset, 1.0, kCoulombBand) << "pull / (mu x normal force) at the onset of slip";
 }
