@@ -40,6 +40,9 @@ constexpr size_t kBenchPerUnit = std::size(kBenchUnitNames);
 // Replay: the recorded command beside the new one, after the per-unit columns.
 constexpr const char* kRecordedNames[] = {"recorded_grip_effort", "recorded_motor_enable", "recorded_brake",
                                           "command_differs"};
+static_assert(kLoopColumnCount + std::size(kRecordedNames) <= kSignalBoundFixedColumns &&
+                  kBenchPerUnit <= kSignalBoundColumnsPerUnit,
+              "the loader's bound on signal memory must count every column");
 // Storage reserved for a serial session's rows beyond duration x rate (ticks also follow frames).
 constexpr double kSerialRowMargin = 1.5;
 

@@ -132,6 +132,8 @@ constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast
 constexpr const char* kUnitNames[] = {"r1_ohm",    "r2_ohm",    "fn_est_n", "ft_est_n",
                                       "fn_true_n", "ft_true_n", "validity"};
 constexpr size_t kPerUnit = std::size(kUnitNames);
+static_assert(kFixedCount <= kSignalBoundFixedColumns && kPerUnit <= kSignalBoundColumnsPerUnit,
+              "the loader's bound on signal memory must count every column");
 
 std::vector<std::string> NumericColumns(int units) {
   std::vector<std::string> names(internal::kLoopColumnNames, internal::kLoopColumnNames + kLoopColumnCount);

@@ -609,7 +609,8 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
   // The signals are reserved before the run (one row per control tick, at most one per step).
   const double ticks_per_s = std::min(config.controller.rate_hz, 1.0 / config.scene.physics.timestep_s);
   const double row_bytes =
-      8.0 * (40.0 + static_cast<double>(controller::kMaxDiagnosticChannels) + 7.0 * unit_count);
+      8.0 * (static_cast<double>(kSignalBoundFixedColumns + controller::kMaxDiagnosticChannels) +
+             static_cast<double>(kSignalBoundColumnsPerUnit) * unit_count);
   const double signal_bytes = std::ceil(config.duration_s * ticks_per_s) * row_bytes;
   if (signal_bytes > kMaxSignalBytes) {
     map.Fail("duration_s", "with controller.rate_hz = " + FormatNumber(config.controller.rate_hz) +

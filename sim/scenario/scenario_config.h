@@ -71,6 +71,13 @@ enum class ScriptEvent {
 /// How long the grasped/released condition must hold without a break before the event counts [s].
 inline constexpr double kEventConfirmS = 0.02;
 
+/// The loader bounds the signals a run keeps in memory by these numeric columns per row: at most
+/// kSignalBoundFixedColumns before and after the per-unit ones (the loop's, the truth and scoring,
+/// a replay's recorded command), kSignalBoundColumnsPerUnit per unit, and
+/// controller::kMaxDiagnosticChannels. Each backend asserts at compile time that its columns fit.
+inline constexpr size_t kSignalBoundFixedColumns = 48;
+inline constexpr size_t kSignalBoundColumnsPerUnit = 7;
+
 /// Name of an event in scenario files ("grasped", "stable", "slip_flagged", "released"; "" for kNone).
 const char* EventName(ScriptEvent event);
 /// Every event name (kNone excluded), in declaration order.

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -89,6 +90,20 @@ TEST(ScenarioConfigTest, UnknownTopLevelKeyNamesLineAndValidKeys) {
   EXPECT_NE(error.find("test.yaml:2: objekt: unknown key; valid keys: "), std::string::npos) << error;
   EXPECT_NE(error.find("object"), std::string::npos) << error;
   EXPECT_NE(error.find("expectations"), std::string::npos) << error;
+}
+
+// The signals a run keeps are reserved before it starts; a run whose rows could not fit in the
+// bound (2 GB) is refused at load time, naming duration_s. The bound counts every column a row can
+// have (kSignalBoundFixedColumns + the diagnostic channels + kSignalBoundColumnsPerUnit per unit).
+TEST(ScenarioConfigTest, ARunTooLongForItsSignalsIsRefusedNamingDuration) {
+  const double row_bytes =
+      8.0 * static_cast<double>(kSignalBoundFixedColumns + controller::kMaxDiagnosticChannels +
+                                20 * kSignalBoundColumnsPerUnit);  // default_20
+  const double longest_s = 2e9 / (row_bytes * 1000.0);             // 1 kHz ticks, one per 1 ms step
+  EXPECT_EQ(ErrorOf("duration_s: " + std::to_string(std::floor(longest_s)) + "\n"), "");
+  const std::string error = ErrorOf("duration_s: " + std::to_string(std::ceil(longest_s)) + "\n");
+  EXPECT_NE(error.find("duration_s"), std::string::npos) << error;
+  EXPECT_NE(error.find("MB of signals (at most 2000 MB)"), std::string::npos) << error;
 }
 
 TEST(ScenarioConfigTest, WrongTypeAndOutOfRangeNameKeyAndValue) {
