@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "common/config_error.h"
+#include "controller/constant_grip_controller.h"
 #include "controller/grasp_controller.h"
 #include "controller/grip_slip_controller.h"
 #include "controller/open_loop_controller.h"
@@ -26,6 +27,10 @@ const std::vector<ControllerEntry>& Entries() {
        [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
          return std::make_unique<OpenLoopController>(
              OpenLoopConfig{.close_effort = p.at("close_effort"), .open_effort = p.at("open_effort")});
+       }},
+      {"constant_grip", &ConstantGripController::Parameters,
+       [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
+         return std::make_unique<ConstantGripController>(ConstantGripController::ConfigFromParams(p));
        }},
       {"grip_slip", &GripSlipController::Parameters,
        [](const ControllerParams& p) -> std::unique_ptr<GraspController> {

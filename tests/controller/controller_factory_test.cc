@@ -24,12 +24,18 @@ std::string ErrorOf(const std::function<void()>& action) {
   return graspbed::test_support::ErrorOf<std::invalid_argument>(action);
 }
 
-TEST(ControllerFactoryTest, KnowsGripSlipAndOpenLoop) {
+TEST(ControllerFactoryTest, KnowsGripSlipOpenLoopAndConstantGrip) {
   EXPECT_THAT(ControllerNames(), Contains("grip_slip"));
   EXPECT_THAT(ControllerNames(), Contains("open_loop"));
+  EXPECT_THAT(ControllerNames(), Contains("constant_grip"));
   EXPECT_EQ(MakeController("grip_slip", {})->name(), "grip_slip");
+  EXPECT_EQ(MakeController("constant_grip", {{"grip_n", 3.0}})->name(), "constant_grip");
   EXPECT_THAT(ErrorOf([] { MakeController("grip_slap", {}); }),
-              HasSubstr("unknown controller 'grip_slap'; valid controllers: grip_slip, open_loop"));
+              HasSubstr("unknown controller 'grip_slap'; valid controllers: constant_grip, grip_slip, open_loop"));
+  EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"grip_n", -1.0}}); }),
+              HasSubstr("grip_n = -1: must be in [0.01, 200] N"));
+  EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"contact_confirm_frames", 2.5}}); }),
+              HasSubstr("contact_confirm_frames = 2.5: must be a whole number"));
 }
 
 TEST(ControllerFactoryTest, GripSlipParametersAreDeclaredWithDefaultsFromTheConfig) {
