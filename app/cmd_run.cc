@@ -87,6 +87,7 @@ struct RunCommandOptions {
   std::vector<std::string> sets;
   bool json = false;
   bool no_plots = false;
+  bool oracle = false;
   VideoCommandOptions video;
   // Backend (docs/hardware.md, "One runner, three backends").
   std::string backend;
@@ -114,6 +115,7 @@ void RunCommand(const RunCommandOptions& options) {
   run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
   run.write_plots = !options.no_plots;
   run.stop = &StopRequested();
+  if (options.oracle) run.oracle = scenario::OracleMode::kAlways;
   run.prompt_actions = options.prompt_actions;
   run.intent_stdin = config.backend == scenario::Backend::kSerial && !options.no_stdin_intent;
   run.intent_fifo = options.intent_fifo;
@@ -192,6 +194,10 @@ void AddRunCommand(CLI::App& root) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->add_flag("--json", options->json, "print the summary JSON on stdout instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  command->add_flag("--oracle", options->oracle,
+                    "also find the scenario's oracle grip (the lightest constant grip that holds it, "
+                    "`graspbed oracle`) and score the grip against it: grip_efficiency, peak_grip_ratio "
+                    "(done anyway when the scenario states max_grip_efficiency)");
   options->video.Add(command, "OUT/video.mp4");
   command
       ->add_option(

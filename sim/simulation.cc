@@ -561,7 +561,9 @@ GroundTruth Simulation::truth() const {
     const double on_object = contact.geom2 == object_geom_ ? 1.0 : -1.0;
     mjtNum* tangential = side == kFinger ? finger_tangential : thumb_tangential;
     for (int k = 0; k < 3; ++k) {
-      tangential[k] += on_object * (local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k]);
+      const double along_tangents = local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k];
+      tangential[k] += on_object * along_tangents;
+      t.hand_load_n[k] += on_object * (local[0] * contact.frame[k] + along_tangents);
     }
     mjtNum v_object[3];
     mjtNum v_digit[3];
@@ -591,12 +593,10 @@ GroundTruth Simulation::truth() const {
     t.sliding_load_share = std::max(t.sliding_load_share, thumb_sliding_normal / thumb_on_object);
   for (int k = 0; k < 3; ++k) t.object_tangential_force_n[k] = finger_tangential[k] + thumb_tangential[k];
   t.object_tangential_load_n = mju_norm3(t.object_tangential_force_n.data());
-  // Both digits press with the same squeeze, and each must hold its own tangential force inside
-  // its friction cone: the digit carrying more sets the grip (half the total when they share evenly).
+  // The full contact forces summed: the squeeze of one digit cancels the other's, what remains is
+  // the load (weight, inertia, pulls) the hand carries.
   const double friction = m->geom_friction[3 * object_geom_];
-  if (friction > 0.0) {
-    t.required_grip_n = std::max(mju_norm3(finger_tangential), mju_norm3(thumb_tangential)) / friction;
-  }
+  if (friction > 0.0) t.load_bound_grip_n = mju_norm3(t.hand_load_n.data()) / (2.0 * friction);
   return t;
 }
 

@@ -92,12 +92,14 @@ struct GroundTruth {
   std::array<double, 3> object_tangential_force_n{};
   /// Its magnitude [N]: the load the pinch carries by friction (weight, pulls, inertia).
   double object_tangential_load_n = 0.0;
-  /// Least squeeze per digit that holds the object at its current friction coefficient mu:
-  /// max(|Ft finger|, |Ft thumb|) / mu [N], with Ft a digit's tangential force on the object (world
-  /// frame). Both digits press with the same squeeze and each must keep its own share inside its
-  /// friction cone; an even share gives tangential load / (2 mu). Peak grip over this is the
-  /// grasp's efficiency.
-  double required_grip_n = 0.0;
+  /// Net force of the hand (both digits, normal and tangential) on the object, world frame [N]. The
+  /// squeeze cancels in this sum, on a non-antipodal pinch too: by Newton it is the load the hand
+  /// carries, m a - m g - external pulls - the table's support (weight and inertia once lifted).
+  std::array<double, 3> hand_load_n{};
+  /// A squeeze-independent lower bound of the grip that holds the object now: |hand_load_n| / (2 mu),
+  /// two digits each carrying at most mu times its normal force, mu the object's current friction
+  /// coefficient [N]. 0 while the table carries the object.
+  double load_bound_grip_n = 0.0;
   int finger_contacts = 0;  ///< contacts between the object and the finger
   int thumb_contacts = 0;   ///< contacts between the object and the thumb
 };

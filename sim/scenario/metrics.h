@@ -36,7 +36,29 @@ struct SlipEvent {
   /// on the unsensed digit while the sensed finger's contact stuck.
   bool finger_slid = false;
   bool thumb_slid = false;
+  /// The object was dropped while this event was open (an event opened at the drop if none was).
+  bool ends_in_drop = false;
+  /// Gross slip: slid at least MetricsConfig::gross_slip_m or ended in a drop; what a hand must
+  /// catch. Smaller events are micro-slips (the soft contact's slides), reported, not targeted.
+  bool gross = false;
   double latency_s = 0.0;  ///< flag time - onset, >= 0 (0 for an early flag) [s]
+};
+
+/// Counts of one class of slip events (gross or micro).
+struct SlipClassCounts {
+  int events = 0;    ///< events of the class while held
+  int detected = 0;  ///< of those, flagged by the controller
+  /// Largest detection latency over the detected events of the class [ms]; nullopt with none.
+  std::optional<double> worst_latency_ms;
+};
+
+/// The oracle's figures for a run (graspbed oracle; docs/scenarios.md, "The oracle grip").
+struct OracleGrip {
+  /// The lightest constant grip that holds the scenario (no drop, no gross slip) on the ideal
+  /// sensor: the mean true squeeze over the held time of that constant_grip run [N]; nullopt when
+  /// the motor's stall force does not hold it (reason says so).
+  std::optional<double> grip_n;
+  std::string reason;  ///< why grip_n is absent ("" when present)
 };
 
 /// The metrics of one run.
@@ -44,6 +66,10 @@ struct Metrics {
   bool grasped = false;        ///< the object was grasped at some point after a close
   double grasp_time_s = -1.0;  ///< when it first was [s]; < 0 never
   bool dropped = false;        ///< left the hand while held (or was never grasped)
+  /// Close commands (intent close, until it changes or the run ends) during which the object was
+  /// never grasped: a regrasp that missed, a grip too light to count (the first close's miss is
+  /// also `dropped`).
+  int ungrasped_closes = 0;
   double drop_time_s = -1.0;   ///< [s]; < 0 not dropped
   double max_slip_mm = 0.0;    ///< slip distance accumulated above the creep speed while held [mm]
   /// Distance slid while held by contacts carrying less than MetricsConfig::slip_min_load_share of
@@ -51,15 +77,22 @@ struct Metrics {
   double partial_slip_mm = 0.0;
   double peak_grip_n = 0.0;  ///< largest squeeze on the object over the run [N]
   bool crushed = false;      ///< peak_grip_n above object.crush_limit_n (fragile objects only)
-  /// Largest grip the held object needed: max over holding ticks of the ground truth's
-  /// required_grip_n, max(|Ft finger|, |Ft thumb|) / mu [N].
-  double needed_grip_n = 0.0;
-  /// peak_grip_n / needed_grip_n: how many times harder than necessary the hand squeezed at its
-  /// worst [-]; empty when the object was never held with load (needed_grip_n below
-  /// MetricsTracker::kMinNeededGripN, e.g. grasped but never lifted).
-  std::optional<double> grip_efficiency_ratio;
+  /// Mean squeeze on the object over the time held [N] (0 when never held).
+  double mean_held_grip_n = 0.0;
+  /// Largest squeeze-independent lower bound of the grip while held (GroundTruth::load_bound_grip_n:
+  /// the hand's load over 2 mu) [N].
+  double peak_load_bound_grip_n = 0.0;
+  /// The oracle grip of the scenario, when the run asked for it (RunOptions::oracle).
+  std::optional<OracleGrip> oracle;
+  /// mean_held_grip_n / the oracle grip: how many times the lightest grip that holds the hand held
+  /// on average [-]; nullopt without an oracle grip or a held time.
+  std::optional<double> grip_efficiency;
+  /// peak_grip_n / the oracle grip [-]; nullopt without an oracle grip.
+  std::optional<double> peak_grip_ratio;
   /// Largest detection latency over the slip events [ms]; nullopt when no slip event happened.
   std::optional<double> slip_detect_latency_ms;
+  SlipClassCounts gross;                ///< gross slip events (SlipEvent::gross)
+  SlipClassCounts micro;                ///< micro-slip events (the rest)
   int slip_events = 0;                  ///< ground-truth slip events while held
   int missed_slip_events = 0;           ///< of those, never flagged by the controller
   int missed_unsensed_slip_events = 0;  ///< of the missed, those with no unit loaded (SlipEvent::sensed)
@@ -114,10 +147,6 @@ class MetricsTracker {
  public:
   /// Most slip events kept with their details (more are counted, not stored).
   static constexpr int kMaxEvents = 256;
-  /// Least needed grip that counts as a real load for grip_efficiency_ratio [N]: the default
-  /// contact threshold. Below it (an object grasped but never lifted needs ~1e-6 N) the ratio
-  /// would only measure MuJoCo's residual contact forces.
-  static constexpr double kMinNeededGripN = 0.05;
   /// Distinct slip_cues labels whose false flags are counted apart.
   static constexpr int kMaxCueLabels = 8;
 
@@ -166,6 +195,8 @@ class MetricsTracker {
   double grasp_time_s_ = -1.0;
   double grasp_start_s_ = -1.0;  ///< when the current grasp was established [s]
   bool grasped_ = false;         ///< grasped since the latest close
+  bool closing_ = false;         ///< the intent is close (a close episode is open)
+  int ungrasped_closes_ = 0;
   bool holding_ = false;
   std::array<double, 3> reference_offset_m_{};  ///< object - wrist when grasped [m]
   bool dropped_ = false;
@@ -175,7 +206,8 @@ class MetricsTracker {
   double slip_distance_m_ = 0.0;
   double partial_slip_distance_m_ = 0.0;
   double peak_grip_n_ = 0.0;
-  double needed_grip_n_ = 0.0;
+  double held_grip_integral_n_s_ = 0.0;  ///< squeeze integrated over the held time [N s]
+  double peak_load_bound_grip_n_ = 0.0;
 
   std::array<SlipEvent, kMaxEvents> events_{};
   int event_count_ = 0;  ///< events started (may exceed kMaxEvents)
@@ -203,6 +235,9 @@ class MetricsTracker {
   int missed_unsensed_ = 0;
   int missed_thumb_only_ = 0;
   double worst_latency_s_ = -1.0;
+  std::array<int, 2> class_events_{};  ///< [micro, gross]
+  std::array<int, 2> class_detected_{};
+  std::array<double, 2> class_worst_latency_s_{-1.0, -1.0};
 
   double fn_square_sum_ = 0.0;
   double ft_square_sum_ = 0.0;
@@ -229,5 +264,8 @@ struct ExpectationOutcome {
 /// "no_physics_fault" that every run must meet.
 std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations,
                                                      const Metrics& metrics);
+
+/// Fills metrics.oracle, grip_efficiency and peak_grip_ratio from the scenario's oracle grip.
+void ApplyOracle(const OracleGrip& oracle, Metrics& metrics);
 
 }  // namespace graspbed::scenario

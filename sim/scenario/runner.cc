@@ -19,6 +19,7 @@
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
+#include "sim/scenario/oracle.h"
 #include "sim/scenario/script_player.h"
 #include "sim/scenario/run_outputs.h"
 #include "sim/scenario/signal_log.h"
@@ -99,7 +100,7 @@ enum Col : size_t {
   kFingerSlidingSpeed,
   kThumbSlidingSpeed,
   kSlidingShare,
-  kNeededGrip,
+  kLoadBoundGrip,
   kObjectX,
   kObjectY,
   kObjectZ,
@@ -122,7 +123,7 @@ enum Col : size_t {
 constexpr const char* kTruthNames[static_cast<size_t>(kFixedCount) - static_cast<size_t>(kLoopColumnCount)] =
     {"true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",     "true_squeeze_n",
      "slip_speed_mm_s",    "sliding_speed_mm_s", "finger_sliding_mm_s", "thumb_sliding_mm_s",
-     "sliding_load_share", "needed_grip_n",      "object_x_m",          "object_y_m",
+     "sliding_load_share", "load_bound_grip_n",  "object_x_m",          "object_y_m",
      "object_z_m",         "object_height_m",    "wrist_x_m",           "wrist_y_m",
      "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",      "object_mass_kg",
      "external_force_x_n", "external_force_y_n", "external_force_z_n",  "holding",
@@ -202,7 +203,12 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   plot::Chart force = MakeChart("Grip force", "time [s]", "force [N]");
   force.series = {Line(log, time, "grip_target_n", "controller target"),
                   Line(log, time, "est_total_fn_n", "estimated"),
-                  Line(log, time, "true_squeeze_n", "true squeeze", 1.0, true)};
+                  Line(log, time, "true_squeeze_n", "true squeeze", 1.0, true),
+                  Line(log, time, "load_bound_grip_n", "load / 2 mu (truth)", 1.0, true)};
+  if (result.metrics.oracle && result.metrics.oracle->grip_n) {
+    force.series.push_back(
+        HorizontalLine("oracle grip (lightest that holds)", time.front(), time.back(), *result.metrics.oracle->grip_n));
+  }
   if (result.config.scene.object.crush_limit_n > 0.0) {
     force.series.push_back(
         HorizontalLine("crush limit", time.front(), time.back(), result.config.scene.object.crush_limit_n));
@@ -274,6 +280,14 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   const int units = layout.unit_count();
   const sim::SimRigConfig rig_config = RigConfigFor(config);
   rig_config.Validate();
+  // The oracle first: its runs are scenarios of their own, and the run below is scored against it.
+  std::optional<OracleGrip> oracle;
+  if (options.oracle == OracleMode::kAlways ||
+      (options.oracle == OracleMode::kIfExpected && config.expectations.max_grip_efficiency)) {
+    OracleOptions oracle_options;
+    oracle_options.stop = options.stop;
+    oracle = FindOracleGrip(config, oracle_options).grip;
+  }
 
   // The rig first: a scene it refuses (bodies that start inside each other) or a controller whose
   // diagnostic channels cannot be columns leaves no output behind.
@@ -378,7 +392,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       row[kFingerSlidingSpeed] = truth.finger_sliding_speed_m_s * 1e3;
       row[kThumbSlidingSpeed] = truth.thumb_sliding_speed_m_s * 1e3;
       row[kSlidingShare] = truth.sliding_load_share;
-      row[kNeededGrip] = truth.required_grip_n;
+      row[kLoadBoundGrip] = truth.load_bound_grip_n;
       row[kObjectX] = truth.object_position_m[0];
       row[kObjectY] = truth.object_position_m[1];
       row[kObjectZ] = truth.object_position_m[2];
@@ -433,6 +447,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
   result.completed = !stopped;
   result.metrics = tracker.Finish(sim_s, wall_s, player.first_close_time_s());
+  if (oracle) ApplyOracle(*oracle, result.metrics);
   const sim::PhysicsFault& fault = rig->simulation().fault();
   result.metrics.physics_fault = fault.occurred;
   result.metrics.physics_fault_cause = fault.occurred ? fault.cause_text() : "";
@@ -500,11 +515,18 @@ nlohmann::json SummaryJson(const RunResult& result) {
   }
   nlohmann::json metrics = {
       {"dropped", m.dropped},
+      {"ungrasped_closes", m.ungrasped_closes},
       {"max_slip_mm", m.max_slip_mm},
       {"partial_slip_mm", m.partial_slip_mm},
       {"peak_grip_n", m.peak_grip_n},
-      {"needed_grip_n", m.needed_grip_n},
-      {"grip_efficiency_ratio", Optional(m.grip_efficiency_ratio)},
+      {"mean_held_grip_n", m.mean_held_grip_n},
+      {"peak_load_bound_grip_n", m.peak_load_bound_grip_n},
+      {"oracle_grip_n", m.oracle ? Optional(m.oracle->grip_n) : nlohmann::json(nullptr)},
+      {"oracle_note", !m.oracle                 ? nlohmann::json("not computed (run --oracle)")
+                      : m.oracle->grip_n        ? nlohmann::json(nullptr)
+                                                : nlohmann::json(m.oracle->reason)},
+      {"grip_efficiency", Optional(m.grip_efficiency)},
+      {"peak_grip_ratio", Optional(m.peak_grip_ratio)},
       {"crushed", m.crushed},
       {"slip_detect_latency_ms", Optional(m.slip_detect_latency_ms)},
       {"false_slip_per_min", m.false_slip_per_min},
@@ -521,6 +543,12 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"held_s", m.held_s},
       {"slip_events", m.slip_events},
       {"missed_slip_events", m.missed_slip_events},
+      {"gross_slip_events", m.gross.events},
+      {"gross_slip_detected", m.gross.detected},
+      {"gross_detect_latency_ms", Optional(m.gross.worst_latency_ms)},
+      {"micro_slip_events", m.micro.events},
+      {"micro_slip_detected", m.micro.detected},
+      {"micro_detect_latency_ms", Optional(m.micro.worst_latency_ms)},
       {"missed_unsensed_slip_events", m.missed_unsensed_slip_events},
       {"missed_thumb_only_slip_events", m.missed_thumb_only_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
@@ -546,6 +574,8 @@ nlohmann::json SummaryJson(const RunResult& result) {
          {"end_s", e.end_s},
          {"peak_speed_mm_s", e.peak_speed_m_s * 1e3},
          {"distance_mm", e.distance_m * 1e3},
+         {"gross", e.gross},
+         {"ends_in_drop", e.ends_in_drop},
          {"detected", e.detected},
          {"sensed", e.sensed},
          {"finger_slid", e.finger_slid},
@@ -618,10 +648,18 @@ std::string SummaryTable(const RunResult& result) {
                 m.grasped ? "yes" : "no", m.dropped ? "yes" : "no", m.max_slip_mm, m.peak_grip_n,
                 m.crushed ? "yes" : "no");
   out << line;
+  out << "  grip: mean held " << optional_text(m.mean_held_grip_n, "%.2f N") << ", oracle "
+      << (!m.oracle          ? std::string("not computed (run --oracle)")
+          : m.oracle->grip_n ? optional_text(m.oracle->grip_n, "%.2f N")
+                             : "none: " + m.oracle->reason)
+      << ", efficiency " << optional_text(m.grip_efficiency, "%.2f") << ", peak/oracle "
+      << optional_text(m.peak_grip_ratio, "%.2f") << "\n";
   std::snprintf(line, sizeof(line),
-                "  slip events %d (missed %d), detect latency %s, false slip %.2f/min, stable after %s\n",
-                m.slip_events, m.missed_slip_events,
-                optional_text(m.slip_detect_latency_ms, "%.1f ms").c_str(), m.false_slip_per_min,
+                "  gross slips %d (missed %d, latency %s), micro-slips %d (missed %d), false slip %.2f/min, "
+                "stable after %s\n",
+                m.gross.events, m.gross.events - m.gross.detected,
+                optional_text(m.gross.worst_latency_ms, "%.1f ms").c_str(), m.micro.events,
+                m.micro.events - m.micro.detected, m.false_slip_per_min,
                 optional_text(m.time_to_stable_s, "%.3f s").c_str());
   out << line;
   // %g, not %f: an ideal sensor inverts exactly (RMSE ~1e-15 N), and 0.000 would hide whether the

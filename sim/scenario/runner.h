@@ -33,6 +33,13 @@ struct SimRigConfig;
 
 namespace graspbed::scenario {
 
+/// When a run computes its scenario's oracle grip (sim/scenario/oracle.h) to score its grip against.
+enum class OracleMode {
+  kIfExpected,  ///< only when the scenario states max_grip_efficiency (`graspbed run` by default)
+  kAlways,      ///< every simulated run (`run --oracle`, suites, the scorecard; cached per scenario)
+  kNever,       ///< never (the oracle's own runs)
+};
+
 /// Builds a run's controller from its resolved controller section (RunOptions::make_controller).
 using ControllerFactory =
     std::function<std::unique_ptr<controller::GraspController>(const ControllerOptions&)>;
@@ -84,6 +91,8 @@ struct RunOptions {
   /// Called once after the loop with the result, before summary.json is written and the INCOMPLETE
   /// marker removed (a video is finished there). An exception from it propagates.
   std::function<void(const RunResult&)> on_finished;
+  /// Whether the run computes the oracle grip (simulation only; more simulated runs, cached).
+  OracleMode oracle = OracleMode::kIfExpected;
   /// backend serial: script actions that need the simulator (lift, pull, add_mass, ...) are printed
   /// on stderr at their times as prompts for a person at the bench, instead of refusing the scenario.
   bool prompt_actions = false;

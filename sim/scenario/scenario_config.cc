@@ -360,8 +360,15 @@ const common::FieldTable<Expectations>& ExpectationsFields() {
               .Note("true needs `object.crush_limit_n` > 0"),
           Table::OptionalNumber(
               "slip_detected_within_ms", &C::slip_detected_within_ms, NumberRule::NonNegative(), "ms",
-              "passes when every slip event was flagged by the controller, the latest within the limit; no "
-              "slip event at all passes (note \"no slip event occurred\")"),
+              "passes when every gross slip event (>= `metrics.gross_slip_m` or a drop) was flagged by the "
+              "controller, the latest within the limit; no gross slip passes (note \"no gross slip event "
+              "occurred\")"),
+          Table::OptionalNumber("micro_slip_detected_within_ms", &C::micro_slip_detected_within_ms,
+                                NumberRule::NonNegative(), "ms",
+                                "the same for the micro-slip events (below `metrics.gross_slip_m`)"),
+          Table::OptionalNumber("max_grip_efficiency", &C::max_grip_efficiency, NumberRule::Positive(), "-",
+                                "passes when `grip_efficiency` (mean grip held / the oracle grip) <= limit; the "
+                                "run computes the oracle grip; fails without one"),
           Table::OptionalNumber(
               "max_estimation_error_n", &C::max_estimation_error_n, NumberRule::NonNegative(), "N",
               "passes when max(`fn_rmse_n`, `ft_rmse_n`) <= limit; fails when no unit was ever in contact"),
@@ -398,6 +405,9 @@ const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
                         "a slip event ends after the speed stays below slip_speed_m_s this long"),
           Table::Number("early_detection_window_s", &C::early_detection_window_s, kDuration, "s",
                         "a controller slip flag up to this long before a ground-truth onset detects it"),
+          Table::Number("gross_slip_m", &C::gross_slip_m, NumberRule::Between(0.0, 0.1), "m",
+                        "a slip event that slides at least this far (or ends in a drop) is gross; smaller "
+                        "ones are micro-slips"),
           Table::Number("grasp_force_n", &C::grasp_force_n, {0.0, sim::kMaxForceN, true}, "N",
                         "finger normal force above which the object counts as grasped"),
           Table::Number("seating_s", &C::seating_s, kDuration, "s",
@@ -836,7 +846,8 @@ const char* ToString(Profile profile) { return profile == Profile::kLinear ? "li
 
 bool Expectations::empty() const {
   return !not_dropped && !max_slip_mm && !max_peak_grip_n && !not_crushed && !slip_detected_within_ms &&
-         !max_estimation_error_n && !stable_within_s && !max_false_slip_per_min;
+         !micro_slip_detected_within_ms && !max_grip_efficiency && !max_estimation_error_n && !stable_within_s &&
+         !max_false_slip_per_min;
 }
 
 void ScenarioConfig::Validate() const {

@@ -135,7 +135,10 @@ struct Expectations {
   std::optional<double> max_slip_mm;              ///< accumulated slip distance <= [mm]
   std::optional<double> max_peak_grip_n;          ///< peak squeeze on the object <= [N]
   std::optional<bool> not_crushed;                ///< squeeze never above object.crush_limit_n
-  std::optional<double> slip_detected_within_ms;  ///< every slip event flagged within [ms]
+  std::optional<double> slip_detected_within_ms;  ///< every gross slip event flagged within [ms]
+  std::optional<double> micro_slip_detected_within_ms;  ///< every micro-slip event flagged within [ms]
+  /// Mean grip over the held time / the oracle grip <= this [-] (the run computes the oracle).
+  std::optional<double> max_grip_efficiency;
   std::optional<double> max_estimation_error_n;   ///< fn_rmse_n and ft_rmse_n <= [N]
   std::optional<double> stable_within_s;          ///< time_to_stable_s <= [s] after the first close
   std::optional<double> max_false_slip_per_min;   ///< false slip alarms per minute held <= [1/min]
@@ -175,6 +178,9 @@ struct MetricsConfig {
   /// A controller slip flag up to this long before a ground-truth onset counts as detecting it
   /// (incipient slip); later flags count from the onset [s].
   double early_detection_window_s = 0.05;
+  /// A slip event that slides at least this far (or ends in a drop) is gross; smaller ones are
+  /// micro-slips [m].
+  double gross_slip_m = 0.5e-3;
   /// Finger normal force above which the object counts as grasped [N].
   double grasp_force_n = 0.3;
   /// Seating: for this long after a grasp is established the pads settle on the object (the

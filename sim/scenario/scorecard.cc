@@ -216,7 +216,9 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
   score.controller = controller;
   score.errors = errors;
   std::vector<double> latencies_ms;
-  std::vector<double> grip_ratios;
+  std::vector<double> gross_latencies_ms;
+  std::vector<double> efficiencies;
+  std::vector<double> peak_ratios;
   double fn_square_sum = 0.0;
   int64_t fn_samples = 0;
   for (const RunResult* result : finished) {
@@ -227,8 +229,14 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     score.slip_detected += metrics.slip_events - metrics.missed_slip_events;
     score.missed_unsensed += metrics.missed_unsensed_slip_events;
     score.missed_thumb_only += metrics.missed_thumb_only_slip_events;
+    score.gross_slip_events += metrics.gross.events;
+    score.gross_slip_detected += metrics.gross.detected;
+    score.micro_slip_events += metrics.micro.events;
+    score.micro_slip_detected += metrics.micro.detected;
     for (const SlipEvent& event : metrics.events) {
-      if (event.detected) latencies_ms.push_back(event.latency_s * 1000.0);
+      if (!event.detected) continue;
+      latencies_ms.push_back(event.latency_s * 1000.0);
+      if (event.gross) gross_latencies_ms.push_back(event.latency_s * 1000.0);
     }
     score.false_flags += metrics.false_slip_flags;
     for (const auto& [cues, count] : metrics.false_slip_flags_by_cue) score.false_flags_by_cue[cues] += count;
@@ -237,7 +245,9 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     score.false_flag_min += metrics.false_slip_flag_s / 60.0;
     if (metrics.dropped) ++score.drops;
     if (metrics.crushed) ++score.crushes;
-    if (metrics.grip_efficiency_ratio) grip_ratios.push_back(*metrics.grip_efficiency_ratio);
+    if (metrics.grip_efficiency) efficiencies.push_back(*metrics.grip_efficiency);
+    if (metrics.peak_grip_ratio) peak_ratios.push_back(*metrics.peak_grip_ratio);
+    if (metrics.oracle && !metrics.oracle->grip_n) ++score.no_oracle;
     if (metrics.fn_rmse_n && metrics.estimation_samples > 0) {
       fn_square_sum +=
           *metrics.fn_rmse_n * *metrics.fn_rmse_n * static_cast<double>(metrics.estimation_samples);
@@ -246,6 +256,12 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     if (metrics.physics_fault) ++score.physics_faults;
   }
   if (score.slip_events > 0) score.detected_pct = 100.0 * score.slip_detected / score.slip_events;
+  if (score.gross_slip_events > 0)
+    score.gross_detected_pct = 100.0 * score.gross_slip_detected / score.gross_slip_events;
+  if (score.micro_slip_events > 0)
+    score.micro_detected_pct = 100.0 * score.micro_slip_detected / score.micro_slip_events;
+  score.gross_latency_p50_ms = Percentile(gross_latencies_ms, 50.0);
+  score.gross_latency_p95_ms = Percentile(gross_latencies_ms, 95.0);
   score.latency_p50_ms = Percentile(latencies_ms, 50.0);
   score.latency_p95_ms = Percentile(latencies_ms, 95.0);
   if (score.held_min > 0.0) {
@@ -253,8 +269,10 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     score.incipient_per_min = score.incipient_flags / score.held_min;
     score.false_flag_pct = 100.0 * score.false_flag_min / score.held_min;
   }
-  score.grip_ratio_median = Percentile(grip_ratios, 50.0);
-  score.grip_ratio_p95 = Percentile(grip_ratios, 95.0);
+  score.grip_efficiency_median = Percentile(efficiencies, 50.0);
+  score.grip_efficiency_p95 = Percentile(efficiencies, 95.0);
+  score.peak_grip_ratio_median = Percentile(peak_ratios, 50.0);
+  score.peak_grip_ratio_p95 = Percentile(peak_ratios, 95.0);
   if (fn_samples > 0) score.fn_rmse_n = std::sqrt(fn_square_sum / static_cast<double>(fn_samples));
   return score;
 }
@@ -359,7 +377,35 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return nlohmann::json(s.errors); }},
       {"passed", "passed", [](const ControllerScore& s) { return Int(s.passed) + "/" + Int(s.runs); },
        [](const ControllerScore& s) { return nlohmann::json(s.passed); }},
-      {"slip events detected", "slip_detected_pct",
+      {"gross slips flagged", "gross_slip_detected_pct",
+       [](const ControllerScore& s) {
+         return OptionalText(s.gross_detected_pct, "%.1f %%") + " (" + Int(s.gross_slip_detected) + "/" +
+                Int(s.gross_slip_events) + ")";
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.gross_detected_pct); }},
+      {"gross slip events", "gross_slip_events", [](const ControllerScore& s) { return Int(s.gross_slip_events); },
+       [](const ControllerScore& s) { return nlohmann::json(s.gross_slip_events); }},
+      {"gross slips flagged (count)", "gross_slip_detected",
+       [](const ControllerScore& s) { return Int(s.gross_slip_detected); },
+       [](const ControllerScore& s) { return nlohmann::json(s.gross_slip_detected); }},
+      {"gross latency p50", "gross_latency_p50_ms",
+       [](const ControllerScore& s) { return OptionalText(s.gross_latency_p50_ms, "%.1f ms"); },
+       [](const ControllerScore& s) { return OptionalJson(s.gross_latency_p50_ms); }},
+      {"gross latency p95", "gross_latency_p95_ms",
+       [](const ControllerScore& s) { return OptionalText(s.gross_latency_p95_ms, "%.1f ms"); },
+       [](const ControllerScore& s) { return OptionalJson(s.gross_latency_p95_ms); }},
+      {"micro-slips flagged", "micro_slip_detected_pct",
+       [](const ControllerScore& s) {
+         return OptionalText(s.micro_detected_pct, "%.1f %%") + " (" + Int(s.micro_slip_detected) + "/" +
+                Int(s.micro_slip_events) + ")";
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.micro_detected_pct); }},
+      {"micro-slip events", "micro_slip_events", [](const ControllerScore& s) { return Int(s.micro_slip_events); },
+       [](const ControllerScore& s) { return nlohmann::json(s.micro_slip_events); }},
+      {"micro-slips flagged (count)", "micro_slip_detected",
+       [](const ControllerScore& s) { return Int(s.micro_slip_detected); },
+       [](const ControllerScore& s) { return nlohmann::json(s.micro_slip_detected); }},
+      {"all slip events flagged", "slip_detected_pct",
        [](const ControllerScore& s) {
          return OptionalText(s.detected_pct, "%.1f %%") + " (" + Int(s.slip_detected) + "/" +
                 Int(s.slip_events) + ")";
@@ -379,10 +425,10 @@ const std::vector<Figure>& Figures() {
          return Int(s.missed_thumb_only) + " of " + Int(s.slip_events - s.slip_detected);
        },
        [](const ControllerScore& s) { return nlohmann::json(s.missed_thumb_only); }},
-      {"detection latency p50", "latency_p50_ms",
+      {"all latency p50", "latency_p50_ms",
        [](const ControllerScore& s) { return OptionalText(s.latency_p50_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p50_ms); }},
-      {"detection latency p95", "latency_p95_ms",
+      {"all latency p95", "latency_p95_ms",
        [](const ControllerScore& s) { return OptionalText(s.latency_p95_ms, "%.1f ms"); },
        [](const ControllerScore& s) { return OptionalJson(s.latency_p95_ms); }},
       {"false flags / min held", "false_flags_per_min",
@@ -409,12 +455,20 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return nlohmann::json(s.drops); }},
       {"crushes", "crushes", [](const ControllerScore& s) { return Int(s.crushes); },
        [](const ControllerScore& s) { return nlohmann::json(s.crushes); }},
-      {"peak/needed grip median", "grip_ratio_median",
-       [](const ControllerScore& s) { return OptionalText(s.grip_ratio_median, "%.2f"); },
-       [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_median); }},
-      {"peak/needed grip p95", "grip_ratio_p95",
-       [](const ControllerScore& s) { return OptionalText(s.grip_ratio_p95, "%.2f"); },
-       [](const ControllerScore& s) { return OptionalJson(s.grip_ratio_p95); }},
+      {"grip efficiency median", "grip_efficiency_median",
+       [](const ControllerScore& s) { return OptionalText(s.grip_efficiency_median, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.grip_efficiency_median); }},
+      {"grip efficiency p95", "grip_efficiency_p95",
+       [](const ControllerScore& s) { return OptionalText(s.grip_efficiency_p95, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.grip_efficiency_p95); }},
+      {"peak grip / oracle median", "peak_grip_ratio_median",
+       [](const ControllerScore& s) { return OptionalText(s.peak_grip_ratio_median, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.peak_grip_ratio_median); }},
+      {"peak grip / oracle p95", "peak_grip_ratio_p95",
+       [](const ControllerScore& s) { return OptionalText(s.peak_grip_ratio_p95, "%.2f"); },
+       [](const ControllerScore& s) { return OptionalJson(s.peak_grip_ratio_p95); }},
+      {"runs without oracle grip", "no_oracle", [](const ControllerScore& s) { return Int(s.no_oracle); },
+       [](const ControllerScore& s) { return nlohmann::json(s.no_oracle); }},
       {"Fn estimation RMSE", "fn_rmse_n",
        [](const ControllerScore& s) { return OptionalText(s.fn_rmse_n, "%.3f N"); },
        [](const ControllerScore& s) { return OptionalJson(s.fn_rmse_n); }},
@@ -428,7 +482,8 @@ const std::vector<Figure>& Figures() {
 bool InTable(const Figure& figure) {
   const std::string column = figure.column;
   return column != "errors" && column != "slip_events" && column != "slip_detected" &&
-         column != "false_flags" && column != "incipient_flags";
+         column != "false_flags" && column != "incipient_flags" && column != "gross_slip_events" &&
+         column != "gross_slip_detected" && column != "micro_slip_events" && column != "micro_slip_detected";
 }
 
 }  // namespace
@@ -519,20 +574,20 @@ std::string SensorOf(const ScorecardRow& row) {
 std::string GroupTable(const char* group_label, const std::vector<GroupScore>& groups) {
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "  %-22s %-12s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
-                "controller", "runs", "detected", "latency p95", "false flags/min", "flag up", "drops",
-                "grip ratio");
+  std::snprintf(line, sizeof(line), "  %-22s %-13s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
+                "controller", "runs", "gross flagged", "latency p95", "false flags/min", "flag up", "drops",
+                "efficiency");
   out << line;
   for (const GroupScore& group : groups) {
     for (const ControllerScore& score : group.scores) {
-      const std::string detected = OptionalText(score.detected_pct, "%.0f %%") + " (" +
-                                   Int(score.slip_detected) + "/" + Int(score.slip_events) + ")";
-      std::snprintf(line, sizeof(line), "  %-22s %-12s %4d %14s %11s %16s %8s %5d %10s\n",
+      const std::string detected = OptionalText(score.gross_detected_pct, "%.0f %%") + " (" +
+                                   Int(score.gross_slip_detected) + "/" + Int(score.gross_slip_events) + ")";
+      std::snprintf(line, sizeof(line), "  %-22s %-13s %4d %14s %11s %16s %8s %5d %10s\n",
                     group.group.c_str(), score.controller.c_str(), score.runs, detected.c_str(),
-                    OptionalText(score.latency_p95_ms, "%.1f ms").c_str(),
+                    OptionalText(score.gross_latency_p95_ms, "%.1f ms").c_str(),
                     (OptionalText(score.false_per_min, "%.1f") + " (" + Int(score.false_flags) + ")").c_str(),
                     OptionalText(score.false_flag_pct, "%.1f %%").c_str(), score.drops,
-                    OptionalText(score.grip_ratio_median, "%.2f").c_str());
+                    OptionalText(score.grip_efficiency_median, "%.2f").c_str());
       out << line;
     }
   }
@@ -627,12 +682,12 @@ void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
     std::function<std::optional<double>(const ControllerScore&)> value;
   };
   const std::vector<Panel> panels = {
-      {"slip events detected", "detected [%]", [](const ControllerScore& s) { return s.detected_pct; }},
-      {"detection latency p95", "latency [ms]", [](const ControllerScore& s) { return s.latency_p95_ms; }},
+      {"gross slips flagged", "flagged [%]", [](const ControllerScore& s) { return s.gross_detected_pct; }},
+      {"gross slip latency p95", "latency [ms]", [](const ControllerScore& s) { return s.gross_latency_p95_ms; }},
       {"false flags per minute held", "false flags [1/min]",
        [](const ControllerScore& s) { return s.false_per_min; }},
-      {"peak / needed grip, median", "ratio [-]",
-       [](const ControllerScore& s) { return s.grip_ratio_median; }},
+      {"grip efficiency (mean / oracle), median", "ratio [-]",
+       [](const ControllerScore& s) { return s.grip_efficiency_median; }},
       {"drops + crushes", "runs [-]",
        [](const ControllerScore& s) { return std::optional<double>(s.drops + s.crushes); }},
       {"runs passed", "passed [%]",

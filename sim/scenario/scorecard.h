@@ -71,7 +71,17 @@ struct ControllerScore {
   int runs = 0;           ///< runs that ran to their end (errors and interrupted runs excluded)
   int errors = 0;         ///< runs that threw or were interrupted
   int passed = 0;         ///< runs that met every expectation of their scenario
-  int slip_events = 0;    ///< ground-truth slip events while held, all runs
+  /// Gross slip events (SlipEvent::gross: >= metrics.gross_slip_m or a drop), all runs: what a hand
+  /// must catch, the headline.
+  int gross_slip_events = 0;
+  int gross_slip_detected = 0;                 ///< of those, flagged by the controller
+  std::optional<double> gross_detected_pct;    ///< 100 * detected / events; nullopt with none [%]
+  std::optional<double> gross_latency_p50_ms;  ///< over the detected gross events [ms]
+  std::optional<double> gross_latency_p95_ms;
+  int micro_slip_events = 0;  ///< micro-slip events (the rest), reported, not targeted
+  int micro_slip_detected = 0;
+  std::optional<double> micro_detected_pct;  ///< [%]
+  int slip_events = 0;    ///< ground-truth slip events while held, all runs (gross and micro)
   int slip_detected = 0;  ///< of those, flagged by the controller
   /// Of the events not flagged, those during which no unit was loaded (SlipEvent::sensed false).
   int missed_unsensed = 0;
@@ -91,8 +101,13 @@ struct ControllerScore {
   std::optional<double> false_flag_pct;     ///< false_flag_min / held_min [%]
   int drops = 0;
   int crushes = 0;
-  std::optional<double> grip_ratio_median;  ///< peak grip / needed grip over runs with a load [-]
-  std::optional<double> grip_ratio_p95;
+  /// Mean grip held / oracle grip (Metrics::grip_efficiency) over the runs with both [-].
+  std::optional<double> grip_efficiency_median;
+  std::optional<double> grip_efficiency_p95;
+  /// Peak grip / oracle grip (Metrics::peak_grip_ratio) over the runs with an oracle grip [-].
+  std::optional<double> peak_grip_ratio_median;
+  std::optional<double> peak_grip_ratio_p95;
+  int no_oracle = 0;  ///< runs whose oracle grip was not found (not holdable at the stall pinch)
   std::optional<double> fn_rmse_n;  ///< sample-weighted RMS of the runs' Fn RMSEs [N]
   int physics_faults = 0;
 };
@@ -155,7 +170,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
 
 /// The same figures per sensor (profile and sensitivity source of each run's resolved config): one
 /// line per (sensor, controller) with runs, slip events detected, latency p95, false flags per
-/// minute held, flag-up share, drops and median grip ratio: the reference's targets hold per profile.
+/// minute held, flag-up share, drops and median grip efficiency: the reference's targets hold per profile.
 std::string ScorecardBySensorTable(const Scorecard& scorecard);
 
 /// The same figures per base scenario of the set (a run `pull_ramp.v3` counts for `pull_ramp`), to
@@ -169,7 +184,7 @@ std::string ScorecardCsv(const Scorecard& scorecard);
 /// JSON: set, controllers (one object each, with the same figures per sensor under "by_sensor") and
 /// runs.
 nlohmann::json ScorecardJson(const Scorecard& scorecard);
-/// Bars of the headline figures (slip detected, latency p95, false flags per minute, grip ratio median,
+/// Bars of the headline figures (gross slips detected, latency p95, false flags per minute, grip efficiency median,
 /// drops + crushes, runs passed) as one PNG, one colour per controller.
 void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path);
 /// Writes scorecard.csv, scorecard.json and scorecard.png into `out_dir` (created; atomic writes).

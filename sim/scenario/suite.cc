@@ -68,6 +68,7 @@ SuiteResult RunSuite(const std::vector<ScenarioConfig>& configs, const SuiteOpti
         run_options.write_plots = options.write_plots;
         run_options.stop = options.stop;
         run_options.make_controller = options.make_controller;
+        run_options.oracle = options.oracle;
         if (options.prepare_run) options.prepare_run(configs[index], configs[index].name, run_options);
         run.result = RunScenario(configs[index], run_options);
       } catch (const std::exception& error) {
@@ -134,8 +135,9 @@ nlohmann::json SuiteJson(const SuiteResult& result) {
 std::string SuiteTable(const SuiteResult& result) {
   std::ostringstream out;
   char line[512];
-  std::snprintf(line, sizeof(line), "%-28s %-12s %-6s %8s %9s %9s  %s\n", "scenario", "controller", "result",
-                "slip_mm", "grip_N", "wall_s", "failed expectations");
+  std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7s %7s %7s %8s %8s %6s %7s  %s\n", "scenario", "controller",
+                "result", "slip_mm", "gross", "micro", "peak_N", "oracle_N", "effic", "wall_s",
+                "failed expectations");
   out << line;
   for (const SuiteRun& run : result.runs) {
     const RunResult& r = run.result;
@@ -149,11 +151,24 @@ std::string SuiteTable(const SuiteResult& result) {
     for (const ExpectationOutcome& o : r.outcomes) {
       if (!o.passed) failures += (failures.empty() ? "" : ", ") + o.name + " (" + o.value_text + ")";
     }
-    std::snprintf(line, sizeof(line), "%-28s %-12s %-6s %8.2f %9.2f %9.2f  %s\n", r.config.name.c_str(),
-                  r.config.controller.name.c_str(), verdict.c_str(), r.metrics.max_slip_mm,
-                  r.metrics.peak_grip_n, r.metrics.wall_s, failures.c_str());
+    const Metrics& m = r.metrics;
+    const auto counts = [](const SlipClassCounts& c) {
+      return std::to_string(c.detected) + "/" + std::to_string(c.events);
+    };
+    const auto number = [](const std::optional<double>& value) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof(buffer), "%.2f", value.value_or(0.0));
+      return value ? std::string(buffer) : std::string("-");
+    };
+    const std::optional<double> oracle_n = m.oracle ? m.oracle->grip_n : std::nullopt;
+    std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7.2f %7s %7s %8.2f %8s %6s %7.2f  %s\n",
+                  r.config.name.c_str(), r.config.controller.name.c_str(), verdict.c_str(), m.max_slip_mm,
+                  counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n, number(oracle_n).c_str(),
+                  number(m.grip_efficiency).c_str(), m.wall_s, failures.c_str());
     out << line;
   }
+  out << "  (gross, micro: slip events flagged / all; oracle_N: the lightest constant grip that holds; effic: mean "
+         "grip held / oracle)\n";
   std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenarios in %.2f s with %d jobs%s\n",
                 result.passed, result.failed, result.runs.size(), result.wall_s, result.jobs,
                 result.completed ? "" : " (INTERRUPTED)");

@@ -42,6 +42,8 @@ struct SuiteOptions {
   ControllerFactory make_controller;  ///< RunOptions::make_controller for every run; may be empty
   /// Adds observers to each run's options (e.g. `--video`); empty: none.
   PrepareRun prepare_run;
+  /// Every simulated run is scored against its scenario's oracle grip (cached per scenario).
+  OracleMode oracle = OracleMode::kAlways;
 };
 
 /// Results in the order of `configs`.

@@ -113,24 +113,56 @@ TEST(ExpectationsTest, NotCrushedFollowsTheCrushFlag) {
   EXPECT_FALSE(Passes(e, m, "not_crushed"));
 }
 
-TEST(ExpectationsTest, SlipDetectionPassesInTimeAndFailsLateOrMissed) {
+TEST(ExpectationsTest, SlipDetectionJudgesGrossSlipsAndTheMicroExpectationTheRest) {
   Expectations e;
   e.slip_detected_within_ms = 30.0;
   Metrics m = HeldMetrics();
   // No slip at all: nothing to detect, passes with a note.
   const ExpectationOutcome none = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
   EXPECT_TRUE(none.passed);
-  EXPECT_EQ(none.value_text, "no slip");
-  m.slip_events = 2;
-  m.slip_detect_latency_ms = 30.0;
+  EXPECT_EQ(none.value_text, "no gross slip");
+  // Micro-slips missed do not fail it; only micro_slip_detected_within_ms asks for them.
+  m.slip_events = 3;
+  m.missed_slip_events = 3;
+  m.micro = {3, 0, std::nullopt};
   EXPECT_TRUE(Passes(e, m, "slip_detected_within_ms"));
-  m.slip_detect_latency_ms = 31.0;
+  e.micro_slip_detected_within_ms = 30.0;
+  const ExpectationOutcome micro = Find(EvaluateExpectations(e, m), "micro_slip_detected_within_ms");
+  EXPECT_FALSE(micro.passed);
+  EXPECT_EQ(micro.value_text, "3 of 3 missed");
+  e.micro_slip_detected_within_ms.reset();
+  m.gross = {2, 2, 30.0};
+  EXPECT_TRUE(Passes(e, m, "slip_detected_within_ms"));
+  m.gross.worst_latency_ms = 31.0;
   EXPECT_FALSE(Passes(e, m, "slip_detected_within_ms"));
-  m.slip_detect_latency_ms = 5.0;
-  m.missed_slip_events = 1;
+  m.gross = {2, 1, 5.0};
   const ExpectationOutcome missed = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
   EXPECT_FALSE(missed.passed);
   EXPECT_EQ(missed.value_text, "1 of 2 missed");
+}
+
+TEST(ExpectationsTest, GripEfficiencyIsJudgedAgainstTheOracleAndFailsWithoutOne) {
+  Expectations e;
+  e.max_grip_efficiency = 2.0;
+  Metrics m = HeldMetrics();
+  m.mean_held_grip_n = 3.0;
+  const ExpectationOutcome unasked = Find(EvaluateExpectations(e, m), "max_grip_efficiency");
+  EXPECT_FALSE(unasked.passed);
+  EXPECT_EQ(unasked.note, "the run computed no oracle grip");
+  ApplyOracle(OracleGrip{1.5, ""}, m);
+  ASSERT_TRUE(m.grip_efficiency.has_value());
+  EXPECT_DOUBLE_EQ(*m.grip_efficiency, 2.0);          // 3 N held on average over the 1.5 N oracle
+  EXPECT_DOUBLE_EQ(*m.peak_grip_ratio, 6.0 / 1.5);  // the 6 N peak
+  EXPECT_TRUE(Passes(e, m, "max_grip_efficiency"));
+  m.mean_held_grip_n = 3.1;
+  ApplyOracle(OracleGrip{1.5, ""}, m);
+  EXPECT_FALSE(Passes(e, m, "max_grip_efficiency"));
+  ApplyOracle(OracleGrip{std::nullopt, "not held at the motor's stall pinch of 20 N: dropped at 1.7 s"}, m);
+  EXPECT_FALSE(m.grip_efficiency.has_value());
+  EXPECT_FALSE(m.peak_grip_ratio.has_value());
+  const ExpectationOutcome unholdable = Find(EvaluateExpectations(e, m), "max_grip_efficiency");
+  EXPECT_FALSE(unholdable.passed);
+  EXPECT_NE(unholdable.note.find("stall pinch"), std::string::npos) << unholdable.note;
 }
 
 TEST(ExpectationsTest, EstimationErrorTakesTheWorseOfFnAndFtAndFailsWithoutContact) {
@@ -528,23 +560,73 @@ TEST_F(TrackerTest, ObjectLeavingTheHandIsADropAndOpeningIsNot) {
   EXPECT_FALSE(released.Finish(0.3, 0.1, 0.0).dropped);
 }
 
-TEST_F(TrackerTest, GripEfficiencyOnlyForARealLoad) {
-  // Grasped but never lifted: the needed grip is MuJoCo's residual contact force, no load.
-  truth_.required_grip_n = 1e-6;
-  Run(0.5, 0.0);
-  const Metrics unloaded = tracker_.Finish(0.5, 0.1, 0.0);
-  EXPECT_DOUBLE_EQ(unloaded.needed_grip_n, 1e-6);
-  EXPECT_FALSE(unloaded.grip_efficiency_ratio.has_value()) << *unloaded.grip_efficiency_ratio;
-  // Just below the minimum load still gives none; a lifted object's load gives peak / needed.
-  truth_.required_grip_n = 0.5 * MetricsTracker::kMinNeededGripN;
+TEST_F(TrackerTest, MeanGripIsOverTheHeldTimeAndTheLoadBoundItsPeak) {
+  // Not held yet (intent idle): a 9 N squeeze then counts in the peak, not in the mean held.
+  truth_.object_squeeze_n = 9.0;
+  Run(0.1, 0.0, false, controller::GraspIntent::kIdle);
+  truth_.object_squeeze_n = 2.0;
+  truth_.load_bound_grip_n = 0.3;
   Run(0.6, 0.0);
-  EXPECT_FALSE(tracker_.Finish(0.6, 0.1, 0.0).grip_efficiency_ratio.has_value());
-  truth_.required_grip_n = 0.6;
+  truth_.object_squeeze_n = 4.0;
+  truth_.load_bound_grip_n = 0.9;
+  Run(1.1, 0.0);
+  const Metrics m = tracker_.Finish(1.1, 0.1, 0.1);
+  EXPECT_DOUBLE_EQ(m.peak_grip_n, 9.0);
+  EXPECT_NEAR(m.held_s, 1.0, 2 * kTickS);
+  EXPECT_NEAR(m.mean_held_grip_n, 3.0, 0.01);  // half the held time at 2 N, half at 4 N
+  EXPECT_DOUBLE_EQ(m.peak_load_bound_grip_n, 0.9);
+}
+
+TEST_F(TrackerTest, SlipsAreGrossFromTheirSizeOrADropAndCountedByClass) {
+  Run(0.3, 0.0);
+  Run(0.33, 0.01, true);  // 0.3 mm, flagged: a micro-slip
+  Run(0.5, 0.0);
+  Run(0.56, 0.01);  // 0.6 mm, missed: a gross slip
+  Run(0.8, 0.0);
+  Run(0.82, 0.01);  // 0.2 mm, missed: micro
   Run(1.0, 0.0);
-  const Metrics loaded = tracker_.Finish(1.0, 0.1, 0.0);
-  EXPECT_DOUBLE_EQ(loaded.needed_grip_n, 0.6);
-  ASSERT_TRUE(loaded.grip_efficiency_ratio.has_value());
-  EXPECT_DOUBLE_EQ(*loaded.grip_efficiency_ratio, 2.0 / 0.6);  // the 2 N squeeze over the 0.6 N needed
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  ASSERT_EQ(m.events.size(), 3u);
+  EXPECT_FALSE(m.events[0].gross);
+  EXPECT_TRUE(m.events[1].gross);
+  EXPECT_FALSE(m.events[2].gross);
+  EXPECT_EQ(m.micro.events, 2);
+  EXPECT_EQ(m.micro.detected, 1);
+  EXPECT_EQ(m.gross.events, 1);
+  EXPECT_EQ(m.gross.detected, 0);
+  EXPECT_FALSE(m.gross.worst_latency_ms.has_value());
+  // A drop makes the slip it ends in gross, however short; a drop without an open slip is an event.
+  MetricsTracker dropping(MetricsConfig{}, 8.0, 0.05);
+  TickSample sample;
+  sample.truth = &truth_;
+  sample.state = &state_;
+  sample.true_loads = loads_;
+  sample.intent = controller::GraspIntent::kClose;
+  truth_.slip_speed_m_s = truth_.sliding_speed_m_s = 0.0;
+  for (int tick = 0; tick < 400; ++tick) {
+    sample.time_s = tick * kTickS;
+    if (tick == 300) truth_.object_position_m = {0.0, 0.0, -0.03};  // gone at once
+    dropping.Update(sample);
+  }
+  const Metrics d = dropping.Finish(0.4, 0.1, 0.0);
+  EXPECT_TRUE(d.dropped);
+  ASSERT_EQ(d.events.size(), 1u);
+  EXPECT_TRUE(d.events[0].ends_in_drop);
+  EXPECT_TRUE(d.events[0].gross);
+  EXPECT_EQ(d.gross.events, 1);
+}
+
+TEST_F(TrackerTest, ACloseThatNeverGraspsIsCounted) {
+  Run(0.3, 0.0);  // grasped at once (both digits touch)
+  Run(0.4, 0.0, false, controller::GraspIntent::kOpen);
+  truth_.finger_contacts = 0;  // the second close misses the object
+  Run(0.8, 0.0);
+  Run(0.9, 0.0, false, controller::GraspIntent::kOpen);
+  Run(1.0, 0.0);  // and so does the third, until the run ends
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_TRUE(m.grasped);
+  EXPECT_FALSE(m.dropped);
+  EXPECT_EQ(m.ungrasped_closes, 2);
 }
 
 TEST_F(TrackerTest, StableWindowAndCrushAndEstimationError) {

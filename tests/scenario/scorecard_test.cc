@@ -67,7 +67,12 @@ TEST(ScorecardTest, PercentileInterpolatesBetweenOrderStatistics) {
 
 TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   RunResult a = FinishedRun(2, 0, {10.0, 20.0}, 1, 30.0);
-  a.metrics.grip_efficiency_ratio = 1.5;
+  a.metrics.grip_efficiency = 1.5;
+  a.metrics.peak_grip_ratio = 2.0;
+  a.metrics.gross = {1, 1, 10.0};
+  a.metrics.micro = {1, 1, 20.0};
+  a.metrics.events = {SlipEvent{.detected = true, .gross = true, .latency_s = 0.010},
+                      SlipEvent{.detected = true, .gross = false, .latency_s = 0.020}};
   a.metrics.fn_rmse_n = 0.1;
   a.metrics.estimation_samples = 300;
   RunResult b = FinishedRun(2, 1, {30.0}, 2, 30.0);
@@ -76,7 +81,11 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   b.metrics.missed_thumb_only_slip_events = 1;
   a.metrics.false_slip_flags_by_cue = {{"vibration", 1}};
   b.metrics.false_slip_flags_by_cue = {{"vibration", 1}, {"ratio", 1}};
-  b.metrics.grip_efficiency_ratio = 3.0;
+  b.metrics.grip_efficiency = 3.0;
+  b.metrics.peak_grip_ratio = 5.0;
+  b.metrics.gross = {2, 1, 30.0};
+  b.metrics.events = {SlipEvent{.detected = true, .gross = true, .latency_s = 0.030},
+                      SlipEvent{.detected = false, .gross = true}};
   b.metrics.fn_rmse_n = 0.2;
   b.metrics.estimation_samples = 100;
   RunResult c = FinishedRun(0, 0, {}, 0, 60.0);
@@ -99,7 +108,15 @@ TEST(ScorecardTest, ScoreRunsPoolsEventsFlagsGripAndEstimationOverRuns) {
   EXPECT_NEAR(*score.false_per_min, 1.5, kTol);
   EXPECT_EQ(score.drops, 1);
   EXPECT_EQ(score.crushes, 1);
-  EXPECT_NEAR(*score.grip_ratio_median, 2.25, kTol);
+  EXPECT_NEAR(*score.grip_efficiency_median, 2.25, kTol);
+  EXPECT_NEAR(*score.grip_efficiency_p95, 1.5 + 0.95 * 1.5, kTol);
+  EXPECT_NEAR(*score.peak_grip_ratio_median, 3.5, kTol);
+  EXPECT_EQ(score.gross_slip_events, 3);
+  EXPECT_EQ(score.gross_slip_detected, 2);
+  EXPECT_NEAR(*score.gross_detected_pct, 200.0 / 3.0, kTol);
+  EXPECT_NEAR(*score.gross_latency_p50_ms, 20.0, kTol);  // the gross events' 10 and 30 ms
+  EXPECT_EQ(score.micro_slip_events, 1);
+  EXPECT_EQ(score.micro_slip_detected, 1);
   // RMS weighted by samples: sqrt((0.01 * 300 + 0.04 * 100) / 400).
   EXPECT_NEAR(*score.fn_rmse_n, std::sqrt(7.0 / 400.0), kTol);
 }
@@ -110,7 +127,8 @@ TEST(ScorecardTest, ScoreOfNoRunHasNoRatesRatherThanZeros) {
   EXPECT_FALSE(score.detected_pct.has_value());
   EXPECT_FALSE(score.latency_p95_ms.has_value());
   EXPECT_FALSE(score.false_per_min.has_value());
-  EXPECT_FALSE(score.grip_ratio_median.has_value());
+  EXPECT_FALSE(score.grip_efficiency_median.has_value());
+  EXPECT_FALSE(score.gross_detected_pct.has_value());
   EXPECT_FALSE(score.fn_rmse_n.has_value());
 }
 
@@ -179,7 +197,8 @@ TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
 
 // A small set through the real CLI: two bases (a pull ramp and an added mass step), one seeded
 // variation of each that slips under a 10 N grip (friction 0.28-0.31 against the 4 N pull; 0.85-0.95 kg
-// added), both controllers.
+// added) on another sensor than the bases' (so the per-sensor figures have two groups), both
+// controllers.
 TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMoreSlip) {
   TempDir dir;
   dir.Write("set/set.yaml",
@@ -187,11 +206,13 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
             "  - {scenario: " +
                 kScenarios +
                 "/pull_ramp.yaml, variations: 1,\n"
-                "     vary: [{key: object.friction, min: 0.28, max: 0.31}]}\n"
+                "     vary: [{key: object.friction, min: 0.28, max: 0.31},\n"
+                "            {choose: [{sensor.profile: ideal}, {sensor.profile: divider_12bit}]}]}\n"
                 "  - {scenario: " +
                 kScenarios +
                 "/added_mass_step.yaml, variations: 1,\n"
-                "     vary: [{key: \"script[2].mass_kg\", min: 0.85, max: 0.95}]}\n");
+                "     vary: [{key: \"script[2].mass_kg\", min: 0.85, max: 0.95},\n"
+                "            {choose: [{sensor.profile: ideal}, {sensor.profile: divider_12bit}]}]}\n");
   const std::string out = dir.Path("out");
   const CliResult result = RunCli("score --set-dir " + dir.Path("set") + " -j 2 --out " + out);
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
@@ -209,13 +230,14 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   // Per base scenario: each base's two runs (v0 and one variation) under each controller.
   const std::string by_scenario = result.out.substr(result.out.find("by scenario"));
   for (const char* line :
-       {"pull_ramp              grip_slip       2", "pull_ramp              open_loop       2",
-        "added_mass_step        grip_slip       2"}) {
+       {"pull_ramp              grip_slip        2", "pull_ramp              open_loop        2",
+        "added_mass_step        grip_slip        2"}) {
     EXPECT_NE(by_scenario.find(line), std::string::npos) << line << "\n" << result.out;
   }
-  for (const char* label : {"slip events detected", "detection latency p50", "detection latency p95",
-                            "false flags / min held", "drops", "crushes", "peak/needed grip median",
-                            "peak/needed grip p95", "Fn estimation RMSE", "passed"}) {
+  for (const char* label : {"gross slips flagged", "gross latency p50", "gross latency p95", "micro-slips flagged",
+                            "all slip events flagged", "false flags / min held", "drops", "crushes",
+                            "grip efficiency median", "grip efficiency p95", "peak grip / oracle median",
+                            "Fn estimation RMSE", "passed"}) {
     EXPECT_NE(result.out.find(label), std::string::npos) << label;
   }
 
@@ -224,7 +246,9 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   const std::string csv_header = csv.substr(0, csv.find('\n'));
   for (const char* column :
        {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms", "false_flags_per_min", "drops",
-        "crushes", "grip_ratio_median", "grip_ratio_p95", "fn_rmse_n", "passed", "runs"}) {
+        "crushes", "grip_efficiency_median", "grip_efficiency_p95", "peak_grip_ratio_median",
+        "gross_slip_events", "gross_slip_detected", "gross_slip_detected_pct", "gross_latency_p50_ms",
+        "gross_latency_p95_ms", "micro_slip_events", "micro_slip_detected", "fn_rmse_n", "passed", "runs"}) {
     EXPECT_NE(csv_header.find(column), std::string::npos) << column;
   }
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
@@ -259,8 +283,21 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   const int missed = reference.at("slip_events").get<int>() - reference.at("slip_detected").get<int>();
   EXPECT_LE(reference.at("missed_unsensed").get<int>(), missed);
   EXPECT_LE(reference.at("missed_thumb_only").get<int>(), missed);
-  // Per sensor (profile/sensitivities of each run): the groups partition the runs, so their counts
-  // add up to the controller's.
+  // Per sensor (profile/sensitivities of each run): one group per sensor the runs used (the bases'
+  // inamp_16bit, their variations' draw), each counting exactly the runs on that sensor, so the
+  // groups partition the runs and their counts add up to the controller's.
+  std::map<std::string, int> runs_by_sensor;
+  for (const nlohmann::json& run : json.at("runs")) {
+    if (run.at("controller") != "grip_slip") continue;
+    const nlohmann::json& overrides = run.at("overrides");
+    const std::string profile =
+        overrides.contains("sensor.profile") ? overrides.at("sensor.profile").get<std::string>() : "inamp_16bit";
+    ++runs_by_sensor[profile + "/paper"];
+  }
+  ASSERT_GE(runs_by_sensor.size(), 2u) << "the premise: the variations use another sensor than the bases";
+  std::map<std::string, int> grouped;
+  for (const auto& [sensor, figures] : reference.at("by_sensor").items()) grouped[sensor] = figures.at("runs");
+  EXPECT_EQ(grouped, runs_by_sensor);
   for (const nlohmann::json* controller : {&reference, &baseline}) {
     const nlohmann::json& by_sensor = controller->at("by_sensor");
     ASSERT_FALSE(by_sensor.empty());
@@ -277,12 +314,11 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   }
 }
 
-// The reference controller over the whole shipped set (41 runs, about 6 s on 2 cores), against
-// the reference's targets (docs/controller.md, "Scorecard") that it meets: nothing dropped or
-// crushed, every run finished without a physics fault, the median peak / needed grip at most 2.
-// The other targets (>= 95 % of slip events flagged, p95 latency <= 50 ms, <= 1 false flag per
-// minute held) are not met; the figures are printed and docs/controller.md records them.
-TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndGripsAtMostTwiceTheNeed) {
+// The reference controller over the whole shipped set, against what it meets today: nothing
+// dropped or crushed, every run finished without a physics fault, every run scored against an
+// oracle grip. Its grip efficiency and gross-slip figures are printed; their targets are the
+// reference controller's next issue (docs/controller.md, "Scorecard").
+TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndEveryRunHasAnOracle) {
   ScorecardOptions options;
   options.controllers = {"grip_slip"};
   options.jobs = 2;
@@ -292,16 +328,26 @@ TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndGripsAtMost
   const ControllerScore& score = scorecard.scores[0];
   std::printf(
       "[ measure ] shipped set, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
-      "%.2f false flags/min held, grip ratio median %.2f\n",
+      "%.2f false flags/min held, gross %d/%d flagged, grip efficiency median %.2f p95 %.2f\n",
       score.runs, score.passed, score.slip_detected, score.slip_events, score.latency_p95_ms.value_or(-1.0),
-      score.false_per_min.value_or(-1.0), score.grip_ratio_median.value_or(-1.0));
+      score.false_per_min.value_or(-1.0), score.gross_slip_detected, score.gross_slip_events,
+      score.grip_efficiency_median.value_or(-1.0), score.grip_efficiency_p95.value_or(-1.0));
   EXPECT_EQ(score.errors, 0);
   EXPECT_EQ(score.runs, scorecard.runs_per_controller);
   EXPECT_EQ(score.physics_faults, 0);
   EXPECT_EQ(score.drops, 0);
   EXPECT_EQ(score.crushes, 0);
-  ASSERT_TRUE(score.grip_ratio_median.has_value());
-  EXPECT_LE(*score.grip_ratio_median, 2.0);
+  // Every run was scored against an oracle grip, or says why it has none (a variation no constant
+  // grip holds within the stall pinch: the narrow box of default.v2 slides 0.55 mm at the lift
+  // whatever the grip, its finger pressed on the table).
+  for (const ScorecardRow& row : scorecard.rows) {
+    ASSERT_TRUE(row.result.metrics.oracle.has_value()) << row.run;
+    if (!row.result.metrics.oracle->grip_n) {
+      std::printf("[ measure ] %s: no oracle grip: %s\n", row.run.c_str(), row.result.metrics.oracle->reason.c_str());
+      EXPECT_FALSE(row.result.metrics.oracle->reason.empty()) << row.run;
+    }
+  }
+  ASSERT_TRUE(score.grip_efficiency_median.has_value());
   // The set does exercise slip: the figures above are over real events.
   EXPECT_GT(score.slip_events, 10);
 }

@@ -1,0 +1,62 @@
+// `graspbed oracle`: the lightest constant grip that holds a scenario (sim/scenario/oracle.h).
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/command_registry.h"
+#include "app/stop_signal.h"
+#include "sim/scenario/oracle.h"
+#include "sim/scenario/scenario_config.h"
+
+namespace graspbed::app {
+namespace {
+
+struct OracleCommandOptions {
+  std::string scenario;
+  std::vector<std::string> sets;
+  bool json = false;
+};
+
+void OracleCommand(const OracleCommandOptions& options) {
+  std::vector<scenario::Override> overrides;
+  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
+  const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
+  if (config.backend != scenario::Backend::kSim) {
+    throw std::invalid_argument(std::string("the oracle runs the simulation; backend ") +
+                                scenario::BackendName(config.backend) + " has none");
+  }
+  scenario::OracleOptions oracle;
+  oracle.stop = &StopRequested();
+  StopSignalGuard guard;
+  const scenario::OracleReport report = scenario::RunOracleReport(config, oracle);
+  if (options.json) {
+    std::cout << scenario::OracleReportJson(config, report).dump(2) << '\n';
+  } else {
+    std::cout << scenario::OracleReportTable(config, report);
+  }
+  const bool completed =
+      report.full.completed && (!report.until_disturbance || report.until_disturbance->completed);
+  if (!completed) throw CLI::RuntimeError(130);
+}
+
+void AddOracleCommand(CLI::App& root) {
+  auto options = std::make_shared<OracleCommandOptions>();
+  CLI::App* command = root.add_subcommand(
+      "oracle",
+      "The scenario's oracle grip: the lightest constant grip (controller constant_grip on the ideal "
+      "sensor) with which it is not dropped and has no gross slip, by bisection to 2 % or 0.02 N; also "
+      "the lightest that holds it until its first disturbance action; exit 0, 2 on bad input");
+  command->add_option("scenario", options->scenario, "scenario YAML file")->required();
+  command->add_option("--set", options->sets, "override a key, e.g. --set object.mass_kg=0.3 (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  command->add_flag("--json", options->json,
+                    "print JSON (oracle_grip_n, oracle_grip_until_disturbance_n, each search's steps)");
+  command->callback([options] { OracleCommand(*options); });
+}
+
+const bool kRegisteredOracle = RegisterCommands(&AddOracleCommand);
+
+}  // namespace
+}  // namespace graspbed::app
