@@ -4,6 +4,7 @@
 // recordings are refused by name; a run compared with itself has zero residuals.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -235,6 +236,64 @@ TEST_F(ReplayCompareTest, ARunComparedWithItselfHasZeroResidualsAndTheSameTimes)
   const CliResult bad = RunCli("compare " + Path("sim") + " " + Path("."));
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("signals.csv: cannot read"), std::string::npos) << bad.err;
+}
+
+// Two runs that differ (the same scenario on two seeds of a noisy readout: other noise, so other
+// estimates, commands and physics) on the same tick grid: compare's residuals are the ones computed
+// here from the two signals.csv, row against row (an invalid unit's estimate counts as 0 N).
+TEST_F(ReplayCompareTest, TheResidualsOfTwoDifferentRunsAreTheirSignalsDifferences) {
+  for (const char* seed : {"1", "2"}) {
+    const CliResult run = RunCli(std::string("run ") + kScenario + " --seed " + seed +
+                                 " --set sensor.profile=divider_12bit --no-plots --out " + Path(std::string("seed") + seed));
+    ASSERT_NE(run.exit_code, 2) << run.err;
+  }
+  const CliResult compare = RunCli("compare " + Path("seed1") + " " + Path("seed2") + " --json");
+  ASSERT_EQ(compare.exit_code, 0) << compare.out << compare.err;
+  const nlohmann::json c = nlohmann::json::parse(compare.out);
+  ASSERT_EQ(c.at("shift_s").get<double>(), 0.0) << "the premise: both close at the same tick";
+
+  const Signals a(Path("seed1") + "/signals.csv");
+  const Signals b(Path("seed2") + "/signals.csv");
+  ASSERT_EQ(a.rows(), b.rows());
+  double grip_sq = 0.0, effort_sq = 0.0, fn_sq = 0.0, grip_max = 0.0;
+  std::vector<double> unit_fn_sq(kUnits, 0.0), unit_ft_sq(kUnits, 0.0);
+  for (size_t i = 0; i < a.rows(); ++i) {
+    ASSERT_EQ(a.At("time_s", i), b.At("time_s", i));
+    const double grip = b.At("est_total_fn_n", i) - a.At("est_total_fn_n", i);
+    grip_sq += grip * grip;
+    grip_max = std::max(grip_max, std::abs(grip));
+    const double effort = b.At("grip_effort", i) - a.At("grip_effort", i);
+    effort_sq += effort * effort;
+    for (int u = 0; u < kUnits; ++u) {
+      const std::string k = std::to_string(u);
+      const auto reading = [&](const Signals& run, const std::string& column) {
+        return run.At("validity_" + k, i) == 0.0 ? run.At(column + k, i) : 0.0;
+      };
+      const double fn = reading(b, "fn_est_n_") - reading(a, "fn_est_n_");
+      const double ft = reading(b, "ft_est_n_") - reading(a, "ft_est_n_");
+      unit_fn_sq[u] += fn * fn;
+      unit_ft_sq[u] += ft * ft;
+      fn_sq += fn * fn;
+    }
+  }
+  const double n = static_cast<double>(a.rows());
+  // Both sides read the same text of the two files: the sums differ only in their rounding.
+  constexpr double kRelTol = 1e-9;
+  const auto near = [&](double expected, const nlohmann::json& got, const char* what) {
+    EXPECT_NEAR(got.get<double>(), expected, kRelTol * std::max(1.0, std::abs(expected))) << what;
+  };
+  EXPECT_EQ(c.at("samples").get<size_t>(), a.rows());
+  near(std::sqrt(grip_sq / n), c.at("grip_rms_n"), "grip_rms_n");
+  near(grip_max, c.at("grip_max_abs_n"), "grip_max_abs_n");
+  near(std::sqrt(effort_sq / n), c.at("effort_rms"), "effort_rms");
+  near(std::sqrt(fn_sq / (n * kUnits)), c.at("fn_rms_n"), "fn_rms_n");
+  for (int u = 0; u < kUnits; ++u) {
+    near(std::sqrt(unit_fn_sq[u] / n), c.at("units")[u].at("fn_rms_n"), "unit fn_rms_n");
+    near(std::sqrt(unit_ft_sq[u] / n), c.at("units")[u].at("ft_rms_n"), "unit ft_rms_n");
+  }
+  // They do differ: the noise alone moves the sensed grip by more than an ADC step.
+  EXPECT_GT(c.at("grip_rms_n").get<double>(), 0.01);
+  EXPECT_GT(c.at("fn_rms_n").get<double>(), 0.0);
 }
 
 // A session where the person closes 0.2 s and opens 0.5 s later than the script did: aligned
