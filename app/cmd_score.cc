@@ -74,9 +74,10 @@ void AddScoreCommand(CLI::App& root) {
   CLI::App* command = root.add_subcommand(
       "score",
       "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
-      "base scenarios plus seeded variations): slip detection (and the misses with no unit loaded or "
-      "where only the thumb slid), latency, false flags (also by the controller's own cue label), drops, "
-      "crushes, grip efficiency, Fn RMSE, passes, overall and per sensor profile; writes "
+      "base scenarios plus seeded variations): gross slips flagged and their latency (micro-slips and all "
+      "events beside them; the misses with no unit loaded or where only the thumb slid), false flags (also "
+      "by the controller's own cue label), drops, crushes, grip efficiency and peak grip against each "
+      "run's oracle grip (`graspbed oracle`), Fn RMSE, passes, overall and per sensor profile; writes "
       "DIR/scorecard.csv, scorecard.json and scorecard.png");
   command
       ->add_option("--controller", options->controllers,

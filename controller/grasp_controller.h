@@ -109,7 +109,7 @@ class GraspController {
 };
 
 /// Names of the built-in controllers, sorted. Any "plugin:LIBRARY" name is valid besides them
-/// (controller/plugin_loader.h). These three are graspbed's side, not part of the plugin API.
+/// (controller/plugin_loader.h). These three functions are graspbed's side, not part of the plugin API.
 std::vector<std::string> ControllerNames();
 /// The parameters (with defaults) of controller `name` (built-in or "plugin:..."); throws
 /// std::invalid_argument on an unknown name, listing the valid ones, or a plugin that does not load.

@@ -110,7 +110,8 @@ nlohmann::json EmulatedHand::Summary() const {
        {"slip_detect_latency_ms", "false_slip_per_min", "fn_rmse_n", "ft_rmse_n", "missed_slip_events",
         "missed_unsensed_slip_events", "missed_thumb_only_slip_events", "controller_slip_flags",
         "false_slip_flags", "false_slip_flags_by_cue", "incipient_slip_flags", "false_slip_flag_s",
-        "false_slip_flag_pct", "estimation_samples"}) {
+        "false_slip_flag_pct", "estimation_samples", "gross_slip_detected", "gross_detect_latency_ms",
+        "micro_slip_detected", "micro_detect_latency_ms"}) {
     metrics.erase(key);
   }
   return {

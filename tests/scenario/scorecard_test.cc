@@ -379,10 +379,10 @@ TEST(ScorecardCliTest, SeedAndVariationsScaleDrawAHeldOutSetFromTheSameRanges) {
                              "/scenarios/scorecard --limit 5 --controller open_loop ";
   CliResult result = RunCli(common + "--out " + dir.Path("shipped"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v2 seed 2026 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(" v3 seed 2026 ("), std::string::npos) << result.out;
   result = RunCli(common + "--seed 11 --variations-scale 2 --out " + dir.Path("held_out"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v2 seed 11 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(" v3 seed 11 ("), std::string::npos) << result.out;
   const nlohmann::json shipped = nlohmann::json::parse(ReadText(dir.Path("shipped") + "/scorecard.json"));
   const nlohmann::json held_out = nlohmann::json::parse(ReadText(dir.Path("held_out") + "/scorecard.json"));
   EXPECT_EQ(held_out.at("set").at("seed"), 11);
