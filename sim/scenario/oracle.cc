@@ -1,13 +1,19 @@
 #include "sim/scenario/oracle.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <future>
 #include <map>
 #include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "sim/scenario/runner.h"
 
@@ -108,6 +114,46 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
   return search;
 }
 
+/// The directory of the opt-in disk cache ($GRASPBED_ORACLE_CACHE_DIR), "" when unset.
+std::string DiskCacheDir() {
+  const char* dir = std::getenv("GRASPBED_ORACLE_CACHE_DIR");
+  return dir != nullptr ? dir : "";
+}
+
+nlohmann::json SearchJson(const OracleSearch& search);
+OracleSearch SearchFromJson(const nlohmann::json& json);
+
+/// A search stored under `hash` in the disk cache; nullopt when absent or unreadable (then it is
+/// searched again and rewritten).
+std::optional<OracleSearch> ReadDiskCache(const std::string& dir, const std::string& hash) {
+  std::ifstream file(dir + "/" + hash + ".json");
+  if (!file) return std::nullopt;
+  const nlohmann::json json = nlohmann::json::parse(file, nullptr, /*allow_exceptions=*/false);
+  if (json.is_discarded()) return std::nullopt;
+  try {
+    return SearchFromJson(json);
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;
+  }
+}
+
+/// Stores `search` (written to a temporary name and renamed: a reader never sees half a file). A
+/// cache that cannot be written is no error: the search stands.
+void WriteDiskCache(const std::string& dir, const OracleSearch& search) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  const std::string path = dir + "/" + search.config_hash + ".json";
+  // Unique per process and thread: two processes of a sweep may store the same search at once.
+  const std::string temporary = path + ".tmp." + std::to_string(::getpid()) + "." +
+                                std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()));
+  {
+    std::ofstream file(temporary);
+    file << SearchJson(search).dump() << '\n';
+    if (!file) return;
+  }
+  std::filesystem::rename(temporary, path, error);
+}
+
 struct Cache {
   std::mutex mutex;
   std::map<uint64_t, std::shared_future<OracleSearch>> searches;
@@ -178,7 +224,8 @@ std::optional<ScenarioConfig> UntilFirstDisturbance(const ScenarioConfig& config
 
 OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& options) {
   // The hash covers everything the search runs (the step config at a placeholder setpoint) and how.
-  const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle " +
+  const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle graspbed " +
+                               GRASPBED_VERSION + " " +
                                Number(options.relative_resolution, "%.17g") + " " +
                                Number(options.absolute_resolution_n, "%.17g") + " " +
                                Number(options.first_guess_n, "%.17g");
@@ -202,8 +249,17 @@ OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& o
   }
   if (!compute) return future.get();  // computed, or being computed by another thread
   try {
+    const std::string disk = DiskCacheDir();
+    if (!disk.empty()) {
+      if (std::optional<OracleSearch> stored = ReadDiskCache(disk, Hex(key))) {
+        stored->config_hash = Hex(key);
+        promise.set_value(*stored);
+        return future.get();
+      }
+    }
     OracleSearch search = Search(config, options);
     search.config_hash = Hex(key);
+    if (!disk.empty() && search.completed) WriteDiskCache(disk, search);
     if (!search.completed) {  // an interrupted search is not kept
       const std::lock_guard<std::mutex> lock(cache.mutex);
       cache.searches.erase(key);
@@ -238,6 +294,26 @@ namespace {
 
 nlohmann::json OptionalJson(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+OracleSearch SearchFromJson(const nlohmann::json& json) {
+  OracleSearch search;
+  if (!json.at("grip_n").is_null()) search.grip.grip_n = json.at("grip_n").get<double>();
+  if (!json.at("setpoint_n").is_null()) search.setpoint_n = json.at("setpoint_n").get<double>();
+  if (!json.at("reason").is_null()) search.grip.reason = json.at("reason").get<std::string>();
+  search.stall_pinch_n = json.at("stall_pinch_n").get<double>();
+  search.completed = json.at("completed").get<bool>();
+  for (const nlohmann::json& entry : json.at("steps")) {
+    OracleStep step;
+    step.setpoint_n = entry.at("setpoint_n").get<double>();
+    step.held = entry.at("held").get<bool>();
+    step.mean_grip_n = entry.at("mean_grip_n").get<double>();
+    step.peak_grip_n = entry.at("peak_grip_n").get<double>();
+    step.max_slip_mm = entry.at("max_slip_mm").get<double>();
+    step.outcome = entry.at("outcome").get<std::string>();
+    search.steps.push_back(step);
+  }
+  return search;
 }
 
 nlohmann::json SearchJson(const OracleSearch& search) {

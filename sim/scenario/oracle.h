@@ -11,9 +11,11 @@
 /// holding run, so a controller's mean grip compares with it in the same units whatever its sensor
 /// reports; the constant_grip setpoint that gave it is kept beside it.
 ///
-/// Results are cached per resolved oracle configuration (a hash of its config.yaml text) for the
-/// life of the process, so a suite or a scorecard pays once per distinct scenario, whatever the
-/// number of controllers or threads asking.
+/// Results are cached per resolved oracle configuration (a hash of its config.yaml text and the
+/// graspbed version) for the life of the process, so a suite or a scorecard pays once per distinct
+/// scenario, whatever the number of controllers or threads asking. With $GRASPBED_ORACLE_CACHE_DIR
+/// set they are also kept there as <hash>.json across processes (a tuning aid: a search depends on
+/// the simulation, the sensor model and constant_grip, so clear the directory after changing them).
 
 #include <atomic>
 #include <cstdint>

@@ -156,14 +156,15 @@ std::string SuiteTable(const SuiteResult& result) {
       return std::to_string(c.detected) + "/" + std::to_string(c.events);
     };
     const auto number = [](const std::optional<double>& value) {
+      if (!value) return std::string("-");
       char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "%.2f", value.value_or(0.0));
-      return value ? std::string(buffer) : std::string("-");
+      std::snprintf(buffer, sizeof(buffer), "%.2f", *value);
+      return std::string(buffer);
     };
-    const std::optional<double> oracle_n = m.oracle ? m.oracle->grip_n : std::nullopt;
+    const std::string oracle_text = m.oracle ? number(m.oracle->grip_n) : std::string("-");
     std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7.2f %7s %7s %8.2f %8s %6s %7.2f  %s\n",
                   r.config.name.c_str(), r.config.controller.name.c_str(), verdict.c_str(), m.max_slip_mm,
-                  counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n, number(oracle_n).c_str(),
+                  counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n, oracle_text.c_str(),
                   number(m.grip_efficiency).c_str(), m.wall_s, failures.c_str());
     out << line;
   }

@@ -7,18 +7,24 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "sim/scenario/runner.h"
 #include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 namespace graspbed::scenario {
 namespace {
 
 using graspbed::test_support::CliResult;
 using graspbed::test_support::RunCli;
+using graspbed::test_support::RunCliUnder;
+using graspbed::test_support::TempDir;
 
 const std::string kDefault = std::string(GRASPBED_SOURCE_DIR) + "/scenarios/default.yaml";
 
@@ -156,6 +162,30 @@ TEST(OracleCliTest, PrintsBothOraclesAsJsonWithTheStepsAndRefusesBadInput) {
   const CliResult bad = RunCli("oracle " + kDefault + " --set object.mass_kg=-1");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("object.mass_kg = -1"), std::string::npos) << bad.err;
+}
+
+TEST(OracleCliTest, TheOptInDiskCacheAnswersAnotherProcessAndAnUnreadableEntryIsSearchedAgain) {
+  TempDir dir;
+  const std::string env = "env GRASPBED_ORACLE_CACHE_DIR=" + dir.Path("cache") + " ";
+  const std::string arguments = "oracle " + kDefault + " --set object.mass_kg=0.12 --json";
+  const CliResult first = RunCliUnder(env, arguments);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const nlohmann::json searched = nlohmann::json::parse(first.out);
+  const std::string entry = dir.Path("cache") + "/" + searched.at("full").at("config_hash").get<std::string>() + ".json";
+  ASSERT_TRUE(std::filesystem::exists(entry));
+  // Another process reads it back: the same figures and steps. A stored search with a doctored
+  // figure proves the answer came from the file, not from a new search.
+  nlohmann::json stored = nlohmann::json::parse(graspbed::test_support::ReadText(entry));
+  stored["grip_n"] = 0.123;
+  std::ofstream(entry) << stored.dump();
+  const nlohmann::json cached = nlohmann::json::parse(RunCliUnder(env, arguments).out);
+  EXPECT_EQ(cached.at("oracle_grip_n").get<double>(), 0.123);
+  EXPECT_EQ(cached.at("full").at("steps"), searched.at("full").at("steps"));
+  // A file that does not parse is searched again and rewritten.
+  std::ofstream(entry) << "{ not json";
+  const nlohmann::json again = nlohmann::json::parse(RunCliUnder(env, arguments).out);
+  EXPECT_EQ(again.at("oracle_grip_n"), searched.at("oracle_grip_n"));
+  EXPECT_EQ(nlohmann::json::parse(graspbed::test_support::ReadText(entry)).at("grip_n"), searched.at("oracle_grip_n"));
 }
 
 }  // namespace
