@@ -139,7 +139,13 @@ def isolated(source_dir, build_dir, stage_dir):
     with open(out + ".score.txt") as f:
         if "open_loop" not in f.read():
             fail("score printed no open_loop column")
-    # The data directory can be moved away from the binary with GRASPBED_DATA_DIR.
+
+
+def data_dir(stage_dir):
+    """The data directory can be moved away from the binary with GRASPBED_DATA_DIR. Needs no mount
+    namespace, so it runs wherever the tests run (a bare root included)."""
+    prefix = os.path.join(stage_dir, "prefix")
+    binary = os.path.join(prefix, "bin", "graspbed")
     moved = os.path.join(stage_dir, "data-elsewhere")
     shutil.rmtree(moved, ignore_errors=True)
     shutil.copytree(os.path.join(prefix, "share", "graspbed"), moved, symlinks=True)
@@ -253,6 +259,8 @@ def main():
         stage(build_dir, stage_dir)
     elif step == "isolated":
         isolated(source_dir, build_dir, stage_dir)
+    elif step == "data-dir":
+        data_dir(stage_dir)
     elif step == "example":
         example(source_dir, stage_dir)
     elif step == "example-run":
