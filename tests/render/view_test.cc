@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "tests/support/cli_runner.h"
@@ -48,16 +50,36 @@ TEST(ViewCliTest, LiveScenarioShowsFramesAndAdvancesTime) {
   EXPECT_GT(ShownTime(result.out), 0.01) << result.out;
 }
 
-TEST(ViewCliTest, ReplaysAFinishedRunWithoutSimulatingIt) {
+// The replay shows what states.csv holds: cut after 0.3 s, it stops at the file's last state, where
+// the whole file (and a viewer that simulated config.yaml again) runs on past it.
+TEST(ViewCliTest, ReplaysAFinishedRunFromItsStateLogWithoutSimulatingIt) {
   TempDir dir("view_replay");
   const std::string out = dir.Path("run");
   const CliResult run = RunCli("run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + out);
   ASSERT_EQ(run.exit_code, kExitOk) << run.err;
-  const CliResult result = RunCliUnder(
-      kVirtualDisplay, "view " + out + " --frames " + std::to_string(kFrames) + " --size 320x240 --speed 8");
-  ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_EQ(ShownFrames(result.out), kFrames) << result.out;
-  EXPECT_GT(ShownTime(result.out), 0.01) << result.out;
+  const std::string replay = "view " + out + " --frames " + std::to_string(kFrames) + " --size 320x240 --speed 8";
+  const CliResult whole = RunCliUnder(kVirtualDisplay, replay);
+  ASSERT_EQ(whole.exit_code, kExitOk) << whole.out << whole.err;
+  EXPECT_EQ(ShownFrames(whole.out), kFrames) << whole.out;
+  constexpr double kCutS = 0.3;
+  ASSERT_GT(ShownTime(whole.out), kCutS) << "the premise: 12 frames at 8x replay past the cut";
+
+  const std::string states = out + "/states.csv";
+  std::istringstream lines(test_support::ReadText(states));
+  std::string line;
+  std::getline(lines, line);
+  std::string cut = line + "\n";
+  double last_s = -1.0;
+  while (std::getline(lines, line)) {
+    const double time_s = std::stod(line.substr(0, line.find(',')));
+    if (time_s > kCutS) break;
+    cut += line + "\n";
+    last_s = time_s;
+  }
+  std::ofstream(states) << cut;
+  const CliResult shortened = RunCliUnder(kVirtualDisplay, replay);
+  ASSERT_EQ(shortened.exit_code, kExitOk) << shortened.out << shortened.err;
+  EXPECT_NEAR(ShownTime(shortened.out), last_s, 1e-3) << shortened.out;
 }
 
 TEST(ViewCliTest, RefusesADirectoryThatIsNotARunAndSaysWhenThereIsNoDisplay) {
