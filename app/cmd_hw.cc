@@ -85,7 +85,11 @@ struct HwOptions {
   int tare_frames = -1;
   std::string log;
   bool json = false;
+  bool latency_report = false;
 };
+
+/// Frames whose loop latency `hw --latency-report` keeps (17 min at 1 kHz, 8 MB).
+constexpr size_t kLatencyReportFrames = size_t{1} << 20;
 
 controller::GraspIntent ParseIntent(const std::string& text) {
   const std::optional<controller::GraspIntent> intent = controller::IntentFromName(text);
@@ -154,6 +158,7 @@ void RunHw(const HwOptions& options) {
   scenario::RunOptions run;
   run.stop = &StopRequested();
   run.calibration = calibration;
+  if (options.latency_report) run.latency_frames = kLatencyReportFrames;
   // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
   StopSignalGuard signals;
   const scenario::RunResult result = scenario::RunScenario(scenario, run);
@@ -177,6 +182,7 @@ void RunHw(const HwOptions& options) {
   for (const char* key : {"log", "log_rows", "log_rows_lost", "log_error", "last_error"}) {
     if (bench.contains(key)) summary[key] = bench.at(key);
   }
+  if (bench.contains("latency")) summary["latency"] = bench.at("latency");
   const bool connected_at_end = bench.at("connected_at_end").get<bool>();
   summary["connected_at_end"] = connected_at_end;
   const std::string log_error = bench.value("log_error", std::string());
@@ -190,6 +196,15 @@ void RunHw(const HwOptions& options) {
               << " sessions; peak grip " << bench.at("peak_est_total_fn_n") << " N (sensed)"
               << (connected_at_end ? "" : "; device DISCONNECTED at the end")
               << (log_error.empty() ? "" : "; log: " + log_error) << '\n';
+    if (bench.contains("latency")) {
+      const nlohmann::json& latency = bench.at("latency");
+      std::printf("loop latency (frame decoded -> its command written), %llu frames: p50 %.0f us, p99 %.0f us, "
+                  "p99.9 %.0f us, max %.0f us; %llu over 1 ms, %llu over 5 ms\n",
+                  latency.at("frames_answered").get<unsigned long long>(), latency.at("p50_us").get<double>(),
+                  latency.at("p99_us").get<double>(), latency.at("p999_us").get<double>(),
+                  latency.at("max_us").get<double>(), latency.at("over_1ms").get<unsigned long long>(),
+                  latency.at("over_5ms").get<unsigned long long>());
+    }
   }
   // The run failed (exit 1) when the device was gone at the end or the log could not be completed.
   if (!connected_at_end || !log_error.empty())
@@ -304,6 +319,9 @@ void AddHwCommands(CLI::App& root) {
       ->check(CLI::PositiveNumber);
   hw->add_option("--log", hw_options->log, "CSV with one row per decoded frame");
   hw->add_flag("--json", hw_options->json, "Print a JSON summary at the end");
+  hw->add_flag("--latency-report", hw_options->latency_report,
+               "Measure the loop latency, from each frame's decode to the write of the command that answers "
+               "it, and print its p50, p99, p99.9 and max (JSON: \"latency\")");
   hw->callback([hw_options] { RunHw(*hw_options); });
 
   auto emulate_options = std::make_shared<EmulateOptions>();

@@ -29,7 +29,7 @@ double HardwareBackend::nominal_r0_ohm() const {
 }
 
 HardwareActuator::HardwareActuator(HardwareBackend& backend, const HardwareConfig& config)
-    : owns_link_(!config.motor_port.empty()) {
+    : sensor_link_(backend.link()), owns_link_(!config.motor_port.empty()) {
   link_ = owns_link_ ? std::make_shared<SerialLink>(config.motor_port, config, LinkRole::kMotor, 0, "")
                      : backend.link();
 }
@@ -41,7 +41,7 @@ void HardwareActuator::Start() {
 }
 
 hand::WriteStatus HardwareActuator::Write(const hand::HandCommand& command) {
-  return link_->SendMotor(command);
+  return link_->SendMotor(command, sensor_link_->taken_frame_arrival_ns());
 }
 
 void HardwareActuator::Stop() {

@@ -67,6 +67,7 @@ class HardwareActuator : public hand::HandActuator {
 
  private:
   std::shared_ptr<SerialLink> link_;
+  std::shared_ptr<SerialLink> sensor_link_;  // the backend's: when the frame a command answers arrived
   bool owns_link_;
 };
 

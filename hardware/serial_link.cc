@@ -132,6 +132,7 @@ bool SerialLink::TryTakeFrame(sensor::RawFrame* frame, uint64_t* last_id, uint64
   *frame = slot_;
   *last_id = slot_id_;
   if (session != nullptr) *session = slot_session_;
+  taken_arrival_ns_.store(slot_arrival_ns_, std::memory_order_release);
   return true;
 }
 
@@ -156,8 +157,9 @@ bool SerialLink::PopTap(TappedFrame* out) {
   return true;
 }
 
-hand::WriteStatus SerialLink::SendMotor(const hand::HandCommand& command) {
+hand::WriteStatus SerialLink::SendMotor(const hand::HandCommand& command, int64_t frame_arrival_ns) {
   if (!connected_.load(std::memory_order_acquire)) return hand::WriteStatus::kDisconnected;
+  pending_arrival_ns_.store(frame_arrival_ns, std::memory_order_release);
   pending_motor_.store(PackMotor(command), std::memory_order_release);
   Wake();
   return hand::WriteStatus::kOk;
@@ -199,7 +201,15 @@ void SerialLink::SendPendingMotor() {
   packet.flags = static_cast<uint8_t>(pending & 0xFFu);
   std::array<uint8_t, kMaxWirePacketSize> out;
   const size_t size = EncodePacket(packet, out);
-  if (WritePacket(std::span<const uint8_t>(out.data(), size))) motor_sent_.fetch_add(1);
+  if (!WritePacket(std::span<const uint8_t>(out.data(), size))) return;
+  motor_sent_.fetch_add(1);
+  // The first command written after a frame was taken answers it; later ones (the loop ticking again
+  // on the same frame) do not count again.
+  const int64_t arrival_ns = pending_arrival_ns_.load(std::memory_order_acquire);
+  if (latency_.enabled() && arrival_ns != 0 && arrival_ns != last_answered_arrival_ns_) {
+    latency_.Record(NowNs() - arrival_ns);
+    last_answered_arrival_ns_ = arrival_ns;
+  }
 }
 
 void SerialLink::NewSession() {
@@ -258,6 +268,7 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
 
 void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   if (!has_sensor() || !handshake_) return;  // frames before the HELLO belong to nobody's session
+  const int64_t arrival_ns = NowNs();  // the frame's last byte was just read
   if (frame.unit_count != expected_units_) {
     ++extra_corrupt_;
     // The message once per episode of refused frames (or change of count within one), not per
@@ -292,6 +303,7 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
     std::lock_guard lock(frame_mutex_);
     slot_ = scratch_;
     slot_session_ = session;
+    slot_arrival_ns_ = arrival_ns;
     slot_id_ = published_.load() + 1;
     published_.store(slot_id_, std::memory_order_release);
   }

@@ -18,6 +18,7 @@
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_backend.h"
 #include "hardware/hardware_config.h"
+#include "hardware/loop_latency.h"
 #include "hardware/protocol.h"
 #include "hardware/serial_port.h"
 #include "hardware/stream_decoder.h"
@@ -84,12 +85,22 @@ class SerialLink {
   uint64_t tap_overflows() const { return tap_overflows_.load(); }
 
   /// Queues `command` as the next MOTOR_COMMAND (the newest wins). kDisconnected, and nothing is
-  /// queued, while no HELLO has been seen on the current connection. Never blocks.
-  hand::WriteStatus SendMotor(const hand::HandCommand& command);
+  /// queued, while no HELLO has been seen on the current connection. Never blocks. `frame_arrival_ns`:
+  /// when the frame the command answers was decoded (taken_frame_arrival_ns() of the sensor's link;
+  /// 0: none), for the loop latency.
+  hand::WriteStatus SendMotor(const hand::HandCommand& command, int64_t frame_arrival_ns = 0);
   /// Queues motor off and waits up to `timeout_s` until it has been written.
   void MotorOff(double timeout_s);
   /// MOTOR_COMMAND packets written since Start().
   uint64_t motor_commands_sent() const { return motor_sent_.load(); }
+
+  /// Records the loop latency of up to `frames` frames (allocated now, before Start()): for each frame
+  /// a command answers, the time from the frame's decode to that command's write() returning.
+  void EnableLatencyRecording(size_t frames) { latency_.Reserve(frames); }
+  /// The recorded figures (after Stop()).
+  LatencySummary latency() const { return latency_.Summary(); }
+  /// When the newest frame TryTakeFrame() returned was decoded (steady clock [ns]; 0 before any).
+  int64_t taken_frame_arrival_ns() const { return taken_arrival_ns_.load(std::memory_order_acquire); }
 
  private:
   void Run();
@@ -153,6 +164,11 @@ class SerialLink {
   sensor::RawFrame slot_;
   uint64_t slot_id_ = 0;
   uint64_t slot_session_ = 0;
+  int64_t slot_arrival_ns_ = 0;                  // when the slot's frame was decoded
+  std::atomic<int64_t> taken_arrival_ns_{0};     // the same for the frame the loop took last
+  std::atomic<int64_t> pending_arrival_ns_{0};   // the same for the pending motor command's frame
+  int64_t last_answered_arrival_ns_ = 0;         // I/O thread: the frame whose latency was recorded last
+  LatencyRecorder latency_;
   std::atomic<uint64_t> published_{0};
   std::mutex wait_mutex_;
   std::condition_variable frame_cv_;

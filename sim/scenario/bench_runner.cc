@@ -226,6 +226,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     serial_backend = std::make_unique<hardware::HardwareBackend>(config.serial, units, layout.name);
     serial_actuator = std::make_unique<hardware::HardwareActuator>(*serial_backend, config.serial);
     if (!config.log.empty()) serial_backend->link()->EnableTap(16384);
+    if (options.latency_frames > 0) serial_actuator->link()->EnableLatencyRecording(options.latency_frames);
   }
   if (serial) {
     try {
@@ -472,6 +473,13 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     bench["stale_periods"] = counters.stale_periods;
     bench["sessions"] = counters.sessions;
     bench["motor_commands"] = link.motor_commands_sent();
+    if (options.latency_frames > 0) {
+      const hardware::LatencySummary latency = serial_actuator->link()->latency();
+      bench["latency"] = {{"frames_answered", latency.frames}, {"not_kept", latency.not_kept},
+                          {"p50_us", latency.p50_us},          {"p99_us", latency.p99_us},
+                          {"p999_us", latency.p999_us},        {"max_us", latency.max_us},
+                          {"over_1ms", latency.over_1ms},      {"over_5ms", latency.over_5ms}};
+    }
     bench["connected_at_end"] = connected_at_end;
     if (!link.last_error().empty()) bench["last_error"] = link.last_error();
     if (frame_logger) {

@@ -91,6 +91,10 @@ struct RunOptions {
   /// Called once after the loop with the result, before summary.json is written and the INCOMPLETE
   /// marker removed (a video is finished there). An exception from it propagates.
   std::function<void(const RunResult&)> on_finished;
+  /// backend serial: record the loop latency (a frame's decode to its command's write) of up to this
+  /// many frames, reported in summary.json's "bench" as "latency" (docs/hardware.md, "Loop latency");
+  /// 0: off. Allocated before the session (8 bytes a frame).
+  size_t latency_frames = 0;
   /// Whether the run computes the oracle grip (simulation only; more simulated runs, cached).
   OracleMode oracle = OracleMode::kIfExpected;
   /// backend serial: script actions that need the simulator (lift, pull, add_mass, ...) are printed

@@ -167,7 +167,7 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // 3. The host: `graspbed hw` with the reference controller, logging every frame.
   const std::string log = Path("frames.csv");
   const nlohmann::json hw = RunJson({"hw", "--port", link, "--controller", "grip_slip", "--duration",
-                                     std::to_string(kHostDurationS), "--json", "--log", log},
+                                     std::to_string(kHostDurationS), "--json", "--log", log, "--latency-report"},
                                     "hw");
   // The host's stream stop ends the emulator's trial; it then prints its outcome.
   const std::optional<int> emulator_code = emulator.Wait(kRunDeadlineS);
@@ -180,6 +180,20 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
     ASSERT_TRUE(hw.contains(key)) << key << " missing from " << hw.dump();
   }
   const auto frames = hw.at("frames").get<uint64_t>();
+  // The loop latency (docs/hardware.md, "Loop latency"): recorded per frame a command answered; its
+  // figures are the bench's to judge (bench/loop_latency_bench), here only that they are consistent.
+  ASSERT_TRUE(hw.contains("latency")) << hw.dump(2);
+  const nlohmann::json& latency = hw.at("latency");
+  const auto answered = latency.at("frames_answered").get<uint64_t>();
+  EXPECT_GT(answered, 0u);
+  EXPECT_LE(answered, frames);
+  EXPECT_EQ(latency.at("not_kept").get<uint64_t>(), 0u);
+  EXPECT_GT(latency.at("p50_us").get<double>(), 0.0);
+  EXPECT_LE(latency.at("p50_us").get<double>(), latency.at("p99_us").get<double>());
+  EXPECT_LE(latency.at("p99_us").get<double>(), latency.at("p999_us").get<double>());
+  EXPECT_LE(latency.at("p999_us").get<double>(), latency.at("max_us").get<double>());
+  EXPECT_LE(latency.at("over_5ms").get<uint64_t>(), latency.at("over_1ms").get<uint64_t>());
+  EXPECT_LE(latency.at("over_1ms").get<uint64_t>(), answered);
   EXPECT_EQ(hw.at("corrupt").get<uint64_t>(), 0u);
   EXPECT_EQ(hw.at("reconnects").get<uint64_t>(), 0u);
   EXPECT_EQ(hw.at("unknown_packets").get<uint64_t>(), 0u);
