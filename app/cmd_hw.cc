@@ -3,11 +3,15 @@
 // simulated hand behind a pseudo-terminal, speaking the same protocol as the device, so `hw` runs end to end
 // without hardware. docs/hardware.md.
 
+#include <sched.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -86,7 +90,24 @@ struct HwOptions {
   std::string log;
   bool json = false;
   bool latency_report = false;
+  int realtime_priority = 0;
 };
+
+/// Runs this thread, and the link threads it starts from now on (they inherit it), under SCHED_FIFO
+/// at `priority` (1-99), so other processes on the cores cannot delay a frame's answer.
+/// @throws std::runtime_error naming what the machine must allow when it is refused (exit 1).
+void UseRealTimePriority(int priority) {
+  sched_param parameters{};
+  parameters.sched_priority = priority;
+  if (::sched_setscheduler(0, SCHED_FIFO, &parameters) != 0) {
+    const int error = errno;
+    throw std::runtime_error(
+        "--realtime-priority " + std::to_string(priority) + ": SCHED_FIFO refused (" + std::strerror(error) +
+        "): needs the CAP_SYS_NICE capability (root has it unless a container drops it; for a user, setcap "
+        "cap_sys_nice+ep on the binary) or an rtprio limit of at least " + std::to_string(priority) +
+        " for your user (/etc/security/limits.conf)");
+  }
+}
 
 /// Frames whose loop latency `hw --latency-report` keeps (17 min at 1 kHz, 8 MB).
 constexpr size_t kLatencyReportFrames = size_t{1} << 20;
@@ -159,6 +180,7 @@ void RunHw(const HwOptions& options) {
   run.stop = &StopRequested();
   run.calibration = calibration;
   if (options.latency_report) run.latency_frames = kLatencyReportFrames;
+  if (options.realtime_priority > 0) UseRealTimePriority(options.realtime_priority);
   // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
   StopSignalGuard signals;
   const scenario::RunResult result = scenario::RunScenario(scenario, run);
@@ -319,6 +341,10 @@ void AddHwCommands(CLI::App& root) {
       ->check(CLI::PositiveNumber);
   hw->add_option("--log", hw_options->log, "CSV with one row per decoded frame");
   hw->add_flag("--json", hw_options->json, "Print a JSON summary at the end");
+  hw->add_option("--realtime-priority", hw_options->realtime_priority,
+                 "Run the loop and the serial threads under SCHED_FIFO at this priority (1-99), so a busy "
+                 "machine cannot delay the answer to a frame; needs root, CAP_SYS_NICE or an rtprio limit")
+      ->check(CLI::Range(1, 99));
   hw->add_flag("--latency-report", hw_options->latency_report,
                "Measure the loop latency, from each frame's decode to the write of the command that answers "
                "it, and print its p50, p99, p99.9 and max (JSON: \"latency\")");

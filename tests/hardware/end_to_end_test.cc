@@ -313,6 +313,24 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
               sim_metrics.at("grasp_time_s").get<double>() - kScriptCloseS, kExtraReactionS + kFramePeriodS);
 }
 
+// --realtime-priority where SCHED_FIFO is not allowed (the CAP_SYS_NICE capability dropped with
+// util-linux's setpriv): refused before the port is opened, naming what the machine must allow.
+TEST_F(EndToEndTest, HwRefusesARealTimePriorityTheMachineDoesNotAllowNamingWhatItNeeds) {
+  Child probe({"/usr/bin/setpriv", "--bounding-set", "-sys_nice", "--", "true"}, Path("probe.out"), Path("probe.err"));
+  if (!probe.started() || probe.Wait(kRunDeadlineS) != std::optional<int>(0)) {
+    GTEST_SKIP() << "setpriv cannot drop CAP_SYS_NICE here: " << probe.err();
+  }
+  Child hw({"/usr/bin/setpriv", "--bounding-set", "-sys_nice", "--", binary_, "hw", "--port", Path("no-device"),
+            "--realtime-priority", "10"},
+           Path("rt.out"), Path("rt.err"));
+  ASSERT_TRUE(hw.started());
+  EXPECT_EQ(hw.Wait(kRunDeadlineS), std::optional<int>(1));
+  const std::string err = hw.err();
+  EXPECT_NE(err.find("--realtime-priority 10: SCHED_FIFO refused"), std::string::npos) << err;
+  EXPECT_NE(err.find("CAP_SYS_NICE"), std::string::npos) << err;
+  EXPECT_EQ(err.find("does not exist"), std::string::npos) << "refused before the port was opened: " << err;
+}
+
 TEST_F(EndToEndTest, HwRefusesAMissingPortWithAClearMessage) {
   Child hw({binary_, "hw", "--port", Path("no-device"), "--duration", "1"}, Path("hw.out"), Path("hw.err"));
   ASSERT_TRUE(hw.started());
