@@ -6,11 +6,15 @@
 // 100 s of real time. Counters: p50_us, p99_us, p999_us, max_us, frames answered, over 1 ms and 5 ms,
 // frames the host dropped. For the loaded figure, run it beside two busy loops:
 //   for i in 1 2; do (timeout 120 sh -c 'while :; do :; done' &); done; build/bench/loop_latency_bench
+// With GRASPBED_BENCH_RT_PRIORITY=N the host runs under SCHED_FIFO at N, as `hw --realtime-priority`.
 #include <benchmark/benchmark.h>
 
+#include <sched.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
 #include <filesystem>
 #include <string>
 
@@ -31,6 +35,15 @@ constexpr double kPressAtS = 0.3;
 
 void BM_LoopLatency(benchmark::State& state) {
   const int64_t frames = state.range(0);
+  if (const char* priority = std::getenv("GRASPBED_BENCH_RT_PRIORITY")) {
+    // The host's threads (started below) inherit it; the emulator's thread too.
+    sched_param parameters{};
+    parameters.sched_priority = std::atoi(priority);
+    if (::sched_setscheduler(0, SCHED_FIFO, &parameters) != 0) {
+      state.SkipWithError("GRASPBED_BENCH_RT_PRIORITY: SCHED_FIFO refused");
+      return;
+    }
+  }
   const std::string link = "/tmp/graspbed-latency-bench-" + std::to_string(::getpid());
   for (auto _ : state) {
     EmulatorConfig device;
