@@ -83,7 +83,9 @@ class FieldTable {
     std::function<void(const YamlMap&, Struct*)> load_section;
     std::function<void(const Struct&)> validate_section;  ///< throws ConfigError, keys relative
     std::function<void(const Struct&, YAML::Emitter&)> emit_section;
-    std::function<std::vector<FieldReference>()> reference_section;
+    /// The section's rows with its defaults taken from the parent's default-constructed member (a
+    /// parent may default its sections apart from their own defaults: gauge.r1 is -0.75 .. 0.75 mm).
+    std::function<std::vector<FieldReference>(const Struct&)> reference_section;
 
     /// NaN (in any entry) stands for "derived at run time": not checked, not written out, and
     /// documented as "auto" (the field's doc says from what).
@@ -184,7 +186,7 @@ class FieldTable {
     field.load_section = [member, sub](const YamlMap& map, Struct* s) { sub->Load(map, &(s->*member)); };
     field.validate_section = [member, sub](const Struct& s) { sub->ValidateRelative(s.*member); };
     field.emit_section = [member, sub](const Struct& s, YAML::Emitter& out) { sub->Emit(s.*member, out); };
-    field.reference_section = [sub] { return sub->Reference(); };
+    field.reference_section = [member, sub](const Struct& parent) { return sub->Reference(parent.*member); };
     return field;
   }
   /// A key the struct's own loader reads (a list whose bounds depend on the layout, a path):
@@ -344,8 +346,10 @@ class FieldTable {
 
   /// The reference rows of every field (defaults from a default-constructed Struct), sections'
   /// rows under "section.key".
-  std::vector<FieldReference> Reference() const {
-    Struct defaults{};
+  /// The reference rows with the defaults of `defaults_of` (a default-constructed Struct unless a parent
+  /// section gives its own).
+  std::vector<FieldReference> Reference(const Struct& defaults_of = Struct{}) const {
+    Struct defaults = defaults_of;
     std::vector<FieldReference> rows;
     for (const Field& field : fields_) {
       FieldReference row{field.key, field.unit, "", "", field.doc};
@@ -382,7 +386,7 @@ class FieldTable {
           break;
         }
         case Type::kSection:
-          for (FieldReference sub : field.reference_section()) {
+          for (FieldReference sub : field.reference_section(defaults)) {
             sub.key = field.key + "." + sub.key;
             rows.push_back(std::move(sub));
           }

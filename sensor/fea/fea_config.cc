@@ -112,8 +112,10 @@ const Table<ResistorExtent>& ResistorFields() {
   using C = ResistorExtent;
   static const Table<C> table(
       "resistor", {
-                      Table<C>::Number("start_mm", &C::start_mm, {}, "mm", "x from the beam centre"),
-                      Table<C>::Number("end_mm", &C::end_mm, {}, "mm", "x from the beam centre"),
+                      Table<C>::Number("start_mm", &C::start_mm, {}, "mm", "x from the beam centre")
+                          .Note("within the free span under the beam (-1 .. 1 mm at the default geometry)"),
+                      Table<C>::Number("end_mm", &C::end_mm, {}, "mm", "x from the beam centre")
+                          .Note("> `start_mm`, within the free span under the beam"),
                   });
   return table;
 }

@@ -55,6 +55,15 @@ TEST(ConfigReferenceTest, DocsCarryEveryFieldTableAsItIs) {
   }
 }
 
+// A section's defaults are its parent's (the gauge's resistors span 0 .. 0.75 mm and -0.75 .. 0 mm),
+// not those of a default-constructed section (0 .. 0), and the span rule the loader applies is named.
+TEST(ConfigReferenceTest, ASectionsDefaultsAreItsParentsAndItsRulesAreNamed) {
+  const std::string fea = ConfigReferenceMarkdown("fea");
+  EXPECT_THAT(fea, HasSubstr("| `gauge.r1.end_mm` | mm | 0.75 |"));
+  EXPECT_THAT(fea, HasSubstr("| `gauge.r2.start_mm` | mm | -0.75 |"));
+  EXPECT_THAT(fea, HasSubstr("within the free span under the beam"));
+}
+
 TEST(ConfigReferenceTest, EveryRowHasADefaultAndARule) {
   for (const ConfigSection& section : ConfigReference()) {
     std::set<std::string> keys;
