@@ -10,9 +10,11 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace graspbed::scenario {
 namespace {
@@ -527,9 +529,8 @@ void InsertDefaultedKeys(const ScenarioConfig& config, std::set<std::string>& ke
     if (SameValue(x, y)) keys.insert(key);
   });
   std::set<std::string> action_keys;
-  ForEachActionField(Action{}, Action{}, [&](const std::string& key, const auto&, const auto&) {
-    action_keys.insert(key);
-  });
+  ForEachActionField(Action{}, Action{},
+                     [&](const std::string& key, const auto&, const auto&) { action_keys.insert(key); });
   for (const Action& action : config.script) {
     ForEachActionField(action, Action{}, [&](const std::string& key, const auto& x, const auto& y) {
       if (!SameValue(x, y)) action_keys.erase(key);
@@ -639,23 +640,18 @@ TEST(ScenarioConfigTest, ResolvedYamlLoadsBackToTheSameConfigurationFieldByField
   std::string serial_text = kEveryFieldSerial;
   const std::string fea_config = std::string(GRASPBED_SOURCE_DIR) + "/sensor/fea/unit_fea.yaml";
   serial_text.replace(serial_text.find("FEA_CONFIG"), std::string("FEA_CONFIG").size(), fea_config);
-  std::set<std::string> defaulted_in_both;
-  bool first = true;
+  std::vector<std::set<std::string>> defaulted;
   for (const std::string& text : {std::string(kEveryFieldSim), serial_text}) {
     const ScenarioConfig config = LoadScenarioFromString(text, "rt.yaml");
     SCOPED_TRACE(config.name);
     const ScenarioConfig again = LoadScenarioFromString(EmitScenarioYaml(config), "config.yaml");
     ExpectSameConfig(config, again);
     // The files set what they say, so the round trip has something to lose.
-    std::set<std::string> defaulted;
-    InsertDefaultedKeys(config, defaulted);
-    if (first) {
-      defaulted_in_both = defaulted;
-    } else {
-      std::erase_if(defaulted_in_both, [&](const std::string& key) { return !defaulted.count(key); });
-    }
-    first = false;
+    InsertDefaultedKeys(config, defaulted.emplace_back());
   }
+  std::vector<std::string> defaulted_in_both;
+  std::set_intersection(defaulted[0].begin(), defaulted[0].end(), defaulted[1].begin(), defaulted[1].end(),
+                        std::back_inserter(defaulted_in_both));
   // Every member is set by one of the two files, but a noise burst's own noise, which no file sets
   // (a burst needs sensor.strain_model.noise_ohm > 0 and scales it).
   EXPECT_THAT(defaulted_in_both, ::testing::ElementsAre("script[].noise_ohm"));
