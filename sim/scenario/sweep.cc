@@ -157,7 +157,10 @@ SweepSpec LoadSweepSpec(const std::string& path) {
     map.Fail("scenario", "no such scenario file (paths are relative to the spec)");
   spec.scenario_path = scenario_path.lexically_normal().string();
   spec.random = map.GetString("mode", "grid", {"grid", "random"}) == "random";
-  spec.samples = spec.random ? map.RequireInt("samples", 1, kMaxRuns) : map.GetInt("samples", 0, 0, 0);
+  if (!spec.random && map.Has("samples")) {
+    map.Fail("samples", "draws runs in random mode only: set `mode: random` to sample, or remove it for a grid");
+  }
+  spec.samples = spec.random ? map.RequireInt("samples", 1, kMaxRuns) : 0;
   const double seed = map.GetNumber("seed", 1.0, NumberRule::Between(0.0, 9007199254740992.0));
   if (seed != std::floor(seed)) map.Fail("seed", "expected a whole number");
   spec.seed = static_cast<uint64_t>(seed);

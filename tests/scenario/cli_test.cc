@@ -417,6 +417,37 @@ parameters:
   EXPECT_NE(rows[0].at("object.friction"), rows[1].at("object.friction"));
 }
 
+// The shipped sweep specs run as the README gives them (the grid of the default lift over friction,
+// mass and controller; a random draw of noise and seed), and the spec printed in docs/scenarios.md
+// loads.
+TEST_F(CliTest, TheShippedSweepSpecsAndTheDocumentedOneRun) {
+  for (const char* spec : {"friction_mass", "noise_random"}) {
+    SCOPED_TRACE(spec);
+    const std::string out = dir_.Path(spec);
+    const CliResult result = RunCli("sweep " + std::string(GRASPBED_SOURCE_DIR) + "/scenarios/sweeps/" + spec +
+                                    ".yaml -j 2 --out " + out);
+    ASSERT_EQ(result.exit_code, kExitOk) << result.err;
+    EXPECT_NE(result.out.find(std::string(spec) == "friction_mass" ? "12 of 12 runs finished" : "40 of 40 runs"),
+              std::string::npos)
+        << result.out;
+  }
+  // The first ```yaml block after "## Sweeps" in docs/scenarios.md, its scenario path made absolute.
+  const std::string doc = ReadText(std::string(GRASPBED_SOURCE_DIR) + "/docs/scenarios.md");
+  const size_t section = doc.find("## Sweeps");
+  ASSERT_NE(section, std::string::npos);
+  const size_t start = doc.find("```yaml\n", section);
+  const size_t end = doc.find("```\n", start + 8);
+  ASSERT_NE(start, std::string::npos);
+  std::string documented = doc.substr(start + 8, end - start - 8);
+  const std::string relative = "../scenarios/default.yaml";
+  ASSERT_NE(documented.find(relative), std::string::npos) << documented;
+  documented.replace(documented.find(relative), relative.size(),
+                     std::string(GRASPBED_SOURCE_DIR) + "/scenarios/default.yaml");
+  const std::string spec = dir_.Write("documented.yaml", documented);
+  const CliResult result = RunCli("sweep " + spec + " --shard 1/50 -j 2 --out " + dir_.Path("documented"));
+  EXPECT_EQ(result.exit_code, kExitOk) << documented << result.err;
+}
+
 TEST_F(CliTest, SweepRefusesBadSpecsAndShardsWithFileAndLine) {
   dir_.Write("base.yaml", HeldBoxScenario(0.2));
   const std::string spec =
@@ -439,6 +470,8 @@ TEST_F(CliTest, SweepRefusesBadSpecsAndShardsWithFileAndLine) {
        "bad.yaml:3: parameters.seed = {...}: a range {min, max} needs mode: random"},
       {"scenario: base.yaml\nmode: random\nparameters:\n  seed: [1]\n",
        "bad.yaml:1: samples = null: missing required key"},
+      {"scenario: base.yaml\nsamples: 200\nparameters:\n  seed: [1]\n",
+       "bad.yaml:2: samples = 200: draws runs in random mode only: set `mode: random` to sample, or remove it"},
       {"scenario: base.yaml\nparameters: {}\n", "bad.yaml:2: parameters"},
       {"scenario: base.yaml\nparameter:\n  seed: [1]\n", "bad.yaml"},
   };
