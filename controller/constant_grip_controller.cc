@@ -24,7 +24,7 @@ struct Binding {
 };
 
 constexpr Binding kBindings[] = {
-    {"grip_n", 0.01, 200.0, "N", "total normal force held after contact (sum over the valid units)",
+    {"grip_n", 0.01, 500.0, "N", "total normal force held after contact (sum over the valid units)",
      &ConstantGripConfig::grip_n},
     {"close_effort", 0.01, 1.0, "", "motor effort while closing towards the object",
      &ConstantGripConfig::close_effort},

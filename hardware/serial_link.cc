@@ -14,6 +14,15 @@ namespace graspbed::hardware {
 namespace {
 
 constexpr uint32_t kPendingBit = 1u << 31;
+/// In the pending word's low half: the high half carries the answered frame's decode time.
+constexpr uint32_t kHasArrivalBit = 1u << 30;
+
+/// A pending command and, when it answers a frame, when that frame was decoded, in one word so the
+/// I/O thread takes both together [microseconds, modulo 2^32: differences stay right for 71 min].
+uint64_t WithArrival(uint32_t command, int64_t arrival_ns) {
+  if (arrival_ns == 0) return command;
+  return (static_cast<uint64_t>(static_cast<uint32_t>(arrival_ns / 1000)) << 32) | command | kHasArrivalBit;
+}
 
 int Milliseconds(double seconds) { return std::max(1, static_cast<int>(std::lround(seconds * 1e3))); }
 
@@ -159,8 +168,7 @@ bool SerialLink::PopTap(TappedFrame* out) {
 
 hand::WriteStatus SerialLink::SendMotor(const hand::HandCommand& command, int64_t frame_arrival_ns) {
   if (!connected_.load(std::memory_order_acquire)) return hand::WriteStatus::kDisconnected;
-  pending_arrival_ns_.store(frame_arrival_ns, std::memory_order_release);
-  pending_motor_.store(PackMotor(command), std::memory_order_release);
+  pending_motor_.store(WithArrival(PackMotor(command), frame_arrival_ns), std::memory_order_release);
   Wake();
   return hand::WriteStatus::kOk;
 }
@@ -193,7 +201,8 @@ void SerialLink::SendStream(bool start) {
 }
 
 void SerialLink::SendPendingMotor() {
-  const uint32_t pending = pending_motor_.exchange(0, std::memory_order_acq_rel);
+  const uint64_t word = pending_motor_.exchange(0, std::memory_order_acq_rel);
+  const uint32_t pending = static_cast<uint32_t>(word);
   if (!(pending & kPendingBit) || !handshake_ || !port_.is_open()) return;  // never before HELLO
   MotorCommandPacket packet;
   packet.sequence = motor_seq_++;
@@ -205,10 +214,13 @@ void SerialLink::SendPendingMotor() {
   motor_sent_.fetch_add(1);
   // The first command written after a frame was taken answers it; later ones (the loop ticking again
   // on the same frame) do not count again.
-  const int64_t arrival_ns = pending_arrival_ns_.load(std::memory_order_acquire);
-  if (latency_.enabled() && arrival_ns != 0 && arrival_ns != last_answered_arrival_ns_) {
-    latency_.Record(NowNs() - arrival_ns);
-    last_answered_arrival_ns_ = arrival_ns;
+  const uint32_t arrival_us = static_cast<uint32_t>(word >> 32);
+  if (latency_.enabled() && (pending & kHasArrivalBit) &&
+      (!answered_any_ || arrival_us != last_answered_arrival_us_)) {
+    const uint32_t now_us = static_cast<uint32_t>(NowNs() / 1000);
+    latency_.Record(static_cast<int64_t>(static_cast<uint32_t>(now_us - arrival_us)) * 1000);
+    last_answered_arrival_us_ = arrival_us;
+    answered_any_ = true;
   }
 }
 

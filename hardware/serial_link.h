@@ -155,7 +155,9 @@ class SerialLink {
   std::atomic<bool> connected_{false};
   std::atomic<bool> refused_{false};
   std::atomic<int64_t> last_frame_ns_{0};
-  std::atomic<uint32_t> pending_motor_{0};  // bit 31: pending; bits 8..23 effort; bits 0..7 flags
+  // Low half: bit 31 pending, bit 30 the high half is set; bits 8..23 effort; bits 0..7 flags. High half:
+  // when the frame the command answers was decoded [us, modulo 2^32].
+  std::atomic<uint64_t> pending_motor_{0};
   std::atomic<uint64_t> motor_sent_{0};
   std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0}, counter_unknown_{0},
       counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
@@ -166,8 +168,8 @@ class SerialLink {
   uint64_t slot_session_ = 0;
   int64_t slot_arrival_ns_ = 0;                  // when the slot's frame was decoded
   std::atomic<int64_t> taken_arrival_ns_{0};     // the same for the frame the loop took last
-  std::atomic<int64_t> pending_arrival_ns_{0};   // the same for the pending motor command's frame
-  int64_t last_answered_arrival_ns_ = 0;         // I/O thread: the frame whose latency was recorded last
+  uint32_t last_answered_arrival_us_ = 0;        // I/O thread: the frame whose latency was recorded last
+  bool answered_any_ = false;
   LatencyRecorder latency_;
   std::atomic<uint64_t> published_{0};
   std::mutex wait_mutex_;

@@ -92,13 +92,16 @@ struct GroundTruth {
   std::array<double, 3> object_tangential_force_n{};
   /// Its magnitude [N]: the load the pinch carries by friction (weight, pulls, inertia).
   double object_tangential_load_n = 0.0;
-  /// Net force of the hand (both digits, normal and tangential) on the object, world frame [N]. The
-  /// squeeze cancels in this sum, on a non-antipodal pinch too: by Newton it is the load the hand
-  /// carries, m a - m g - external pulls - the table's support (weight and inertia once lifted).
+  /// Net force of the hand (both digits, normal and tangential) on the object, world frame [N]. Two
+  /// digits pressing equally cancel in this sum, on a non-antipodal pinch too: by Newton it is the load
+  /// the hand carries, m a - m g - external pulls - the table's support (weight and inertia once
+  /// lifted).
   std::array<double, 3> hand_load_n{};
-  /// A squeeze-independent lower bound of the grip that holds the object now: |hand_load_n| / (2 mu),
-  /// two digits each carrying at most mu times its normal force, mu the object's current friction
-  /// coefficient [N]. 0 while the table carries the object.
+  /// |hand_load_n| / (2 mu), mu the object's current friction coefficient [N]: the grip two digits
+  /// need to carry that load by friction alone, each at most mu times its normal force; a lower bound
+  /// of the grip that holds the object when the load lies along the pads (weight, inertia, pulls down
+  /// or sideways), not when it pushes along the pinch axis, which normal forces carry. It does not
+  /// grow with the squeeze. 0 while the table carries the object.
   double load_bound_grip_n = 0.0;
   int finger_contacts = 0;  ///< contacts between the object and the finger
   int thumb_contacts = 0;   ///< contacts between the object and the thumb

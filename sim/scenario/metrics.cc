@@ -153,9 +153,16 @@ void MetricsTracker::Update(const TickSample& sample) {
     if (std::sqrt(squared) > config_.drop_distance_m) {
       dropped_ = true;
       drop_time_s_ = t;
-      // A drop is the grossest slip: the open event ends in it, or it is an event of its own.
-      if (!event_open_) OpenEvent(t, t);
+      // A drop is the grossest slip: the open event ends in it, or it is an event of its own, which
+      // closes at once (the object is no longer held, so nothing else would close it).
+      const bool own_event = !event_open_;
+      if (own_event) OpenEvent(t, t);
       current_.ends_in_drop = true;
+      for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
+        current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
+      current_.finger_slid = current_.finger_slid || truth.finger_sliding_speed_m_s > config_.creep_speed_m_s;
+      current_.thumb_slid = current_.thumb_slid || truth.thumb_sliding_speed_m_s > config_.creep_speed_m_s;
+      if (own_event) CloseEvent();
     }
   }
 
@@ -238,6 +245,8 @@ void MetricsTracker::Update(const TickSample& sample) {
     pending_count_ = kept;
   } else {
     creep_start_s_ = -1.0;  // a creep belongs to the grasp it happened in
+    // A slip that ended in a drop closes with it: the object is no longer held.
+    if (event_open_ && dropped_) CloseEvent();
   }
 
   // Estimation error over (tick, unit) pairs in contact, valid and fresh.

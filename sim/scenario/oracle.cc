@@ -93,8 +93,9 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
   }
   if (!best) {
     search.completed = !stopped();
-    search.grip.reason = "not held at the motor's stall pinch of " + Number(search.stall_pinch_n) +
-                         " N: " + search.steps.back().outcome;
+    search.grip.reason = !search.completed ? "interrupted"
+                                           : "not held at the motor's stall pinch of " +
+                                                 Number(search.stall_pinch_n) + " N: " + search.steps.back().outcome;
     return search;
   }
   while (!stopped() &&
@@ -146,12 +147,15 @@ void WriteDiskCache(const std::string& dir, const OracleSearch& search) {
   // Unique per process and thread: two processes of a sweep may store the same search at once.
   const std::string temporary = path + ".tmp." + std::to_string(::getpid()) + "." +
                                 std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()));
-  {
-    std::ofstream file(temporary);
-    file << SearchJson(search).dump() << '\n';
-    if (!file) return;
+  std::ofstream file(temporary);
+  file << SearchJson(search).dump() << '\n';
+  file.close();
+  if (!file) {
+    std::filesystem::remove(temporary, error);
+    return;
   }
   std::filesystem::rename(temporary, path, error);
+  if (error) std::filesystem::remove(temporary, error);
 }
 
 struct Cache {
@@ -196,9 +200,11 @@ ScenarioConfig OracleStepConfig(const ScenarioConfig& config, double setpoint_n)
   ScenarioConfig oracle = config;
   oracle.backend = Backend::kSim;
   oracle.log.clear();
+  // The instrument's own controller section: the oracle must not depend on the controller under test
+  // (its rate, its stale timeout, its ceiling).
+  oracle.controller = ControllerOptions{};
   oracle.controller.name = "constant_grip";
   oracle.controller.params = {{"grip_n", setpoint_n}};
-  oracle.controller.grip_ceiling_n = 0.0;
   SensorOptions sensor;  // the ideal readout, the paper's sensitivities
   sensor.layout = config.sensor.layout;
   sensor.sample_rate_hz = config.sensor.sample_rate_hz;
@@ -223,6 +229,9 @@ std::optional<ScenarioConfig> UntilFirstDisturbance(const ScenarioConfig& config
 }
 
 OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& options) {
+  if (!(options.first_guess_n > 0.0) || !(options.relative_resolution > 0.0 || options.absolute_resolution_n > 0.0)) {
+    throw std::invalid_argument("oracle: first_guess_n must be > 0 and one resolution > 0");
+  }
   // The hash covers everything the search runs (the step config at a placeholder setpoint) and how.
   const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle graspbed " +
                                GRASPBED_VERSION + " " +

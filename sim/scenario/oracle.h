@@ -76,7 +76,8 @@ bool IsDisturbance(ActionKind kind);
 bool IsSensorAction(ActionKind kind);
 
 /// The configuration one search step runs: `config`'s scene, seed, duration and physical script
-/// (sensor actions removed), constant_grip at `setpoint_n` with no task ceiling, the ideal sensor
+/// (sensor actions removed), constant_grip at `setpoint_n` at the default control rate with no task
+/// ceiling (nothing of the controller under test), the ideal sensor
 /// with the paper's sensitivities (same layout and rate), no latency or dropped frames, no
 /// expectations, the simulation backend.
 ScenarioConfig OracleStepConfig(const ScenarioConfig& config, double setpoint_n);

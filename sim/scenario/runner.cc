@@ -271,7 +271,7 @@ sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
 
 RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   if (config.backend != Backend::kSim) return internal::RunOnBench(config, options);
-  const auto wall_start = std::chrono::steady_clock::now();
+  auto wall_start = std::chrono::steady_clock::now();
   RunResult result;
   result.config = config;
   result.out_dir = options.out_dir;
@@ -286,7 +286,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
       (options.oracle == OracleMode::kIfExpected && config.expectations.max_grip_efficiency)) {
     OracleOptions oracle_options;
     oracle_options.stop = options.stop;
-    oracle = FindOracleGrip(config, oracle_options).grip;
+    const OracleSearch search = FindOracleGrip(config, oracle_options);
+    oracle = search.completed ? search.grip : OracleGrip{std::nullopt, "the oracle search was interrupted"};
+    wall_start = std::chrono::steady_clock::now();  // the run's own time, not its oracle's
   }
 
   // The rig first: a scene it refuses (bodies that start inside each other) or a controller whose

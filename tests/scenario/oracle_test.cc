@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -135,13 +136,31 @@ TEST(OracleTest, UntilTheFirstDisturbanceCutsTheScriptAndTheDuration) {
   EXPECT_EQ(until->script.back().kind, ActionKind::kLift);
   EXPECT_DOUBLE_EQ(until->duration_s, config.script[2].at_s);
   EXPECT_FALSE(UntilFirstDisturbance(LoadScenario(kDefault)).has_value());
-  // The oracle's runs: constant_grip on the ideal sensor, sensor faults left out.
+  // The oracle's runs: constant_grip on the ideal sensor at the default control rate (nothing of the
+  // controller under test), sensor faults left out.
   const ScenarioConfig step =
-      OracleStepConfig(LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/sensor_dropout.yaml"), 1.5);
+      OracleStepConfig(LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/sensor_dropout.yaml",
+                                    {{"controller.rate_hz", "500"}, {"controller.grip_ceiling_n", "3"}}),
+                       1.5);
   EXPECT_EQ(step.controller.name, "constant_grip");
+  EXPECT_EQ(step.controller.rate_hz, ControllerOptions{}.rate_hz);
+  EXPECT_EQ(step.controller.grip_ceiling_n, 0.0);
   EXPECT_DOUBLE_EQ(step.controller.params.at("grip_n"), 1.5);
   EXPECT_EQ(step.sensor.profile, "ideal");
   for (const Action& action : step.script) EXPECT_FALSE(IsSensorAction(action.kind)) << ActionName(action.kind);
+}
+
+TEST(OracleTest, AnInterruptedSearchSaysSoAndIsNotAppliedToTheRun) {
+  const ScenarioConfig config = LoadScenario(kDefault, {{"object.mass_kg", "0.11"}});
+  std::atomic<bool> stop{true};
+  OracleOptions options;
+  options.stop = &stop;
+  const OracleSearch search = FindOracleGrip(config, options);
+  EXPECT_FALSE(search.completed);
+  EXPECT_FALSE(search.grip.grip_n.has_value());
+  EXPECT_EQ(search.grip.reason, "interrupted");
+  // Not cached: asked again without the stop, it searches and finds the grip.
+  EXPECT_TRUE(FindOracleGrip(config).grip.grip_n.has_value());
 }
 
 TEST(OracleCliTest, PrintsBothOraclesAsJsonWithTheStepsAndRefusesBadInput) {
