@@ -33,7 +33,7 @@ TEST(ControllerFactoryTest, KnowsGripSlipOpenLoopAndConstantGrip) {
   EXPECT_THAT(ErrorOf([] { MakeController("grip_slap", {}); }),
               HasSubstr("unknown controller 'grip_slap'; valid controllers: constant_grip, grip_slip, open_loop"));
   EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"grip_n", -1.0}}); }),
-              HasSubstr("grip_n = -1: must be in [0.01, 200] N"));
+              HasSubstr("grip_n = -1: must be in [0.01, 500] N"));
   EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"contact_confirm_frames", 2.5}}); }),
               HasSubstr("contact_confirm_frames = 2.5: must be a whole number"));
 }
