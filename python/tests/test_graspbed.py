@@ -258,9 +258,18 @@ def test_a_python_controller_runs_on_the_hand_over_the_serial_link(tmp_path):
     signals = result["signals"]
     assert "true_squeeze_n" not in signals  # no ground truth over the wire
     assert {"closing", "holding"} <= set(signals["phase"])
+    hand = json.loads(out)
+    # What follows holds when the link kept real time. On a machine too busy for it, frames are
+    # dropped, the state goes stale and the device's 100 ms watchdog stops the motor: skipped with
+    # the figures (pytest counts it), not passed and not failed.
+    bench = summary["bench"]
+    behind = {"stale periods": bench["stale_periods"], "dropped frames": bench["dropped"],
+              "watchdog trips": hand["watchdog_trips"]}
+    if any(behind.values()):
+        pytest.skip("the serial link fell behind real time (%s): the grasp is not judged" %
+                    ", ".join("%d %s" % (n, what) for what, n in behind.items()))
     # It held the box at its 3 N target, as it does in simulation: the sensed grip over the last
     # 0.3 s, and the hand's own account of the object (the emulator's ground truth).
     held = signals["est_total_fn_n"][signals["time_s"] > signals["time_s"][-1] - 0.3]
     assert np.mean(held) == pytest.approx(3.0, rel=0.1)
-    hand = json.loads(out)
     assert hand["metrics"]["grasped"] and not hand["metrics"]["dropped"], hand

@@ -242,11 +242,19 @@ def example_hw(source_dir, stage_dir):
     device = json.loads(out)
     if hw["controller"] != "threshold_grip":
         fail("hw ran controller " + hw["controller"])
-    if hw["corrupt"] != 0 or hw["frames"] < 1000:
+    if hw["corrupt"] != 0:
         fail("link: " + json.dumps(hw))
     metrics = device["metrics"]
-    if device["sim_time_s"] < 1.8:
-        fail("the emulator did not get past the lift (machine far slower than real time): " + json.dumps(device))
+    # The rest needs a machine that kept real time: a busy one drops frames, goes stale, trips the
+    # device's motor watchdog or simulates too little before the host stops. Skipped with the figures
+    # (ctest shows it skipped), not failed and not passed.
+    behind = {"stale periods": hw["stale_periods"], "dropped frames": hw["dropped"],
+              "watchdog trips": device["watchdog_trips"]}
+    if any(behind.values()) or hw["frames"] < 1000 or device["sim_time_s"] < 1.8:
+        print("the link fell behind real time (%s; %d frames, %.2f s simulated): the grasp is not judged"
+              % (", ".join("%d %s" % (n, what) for what, n in behind.items()), hw["frames"], device["sim_time_s"]),
+              file=sys.stderr)
+        sys.exit(SKIP)
     if not metrics["grasped"] or metrics["dropped"]:
         fail("over the emulator the example controller did not hold the object: " + json.dumps(metrics))
     print("hw with the plugin: %d frames, grasped, not dropped, max slip %.3f mm" % (hw["frames"],
