@@ -55,6 +55,14 @@ void MetricsTracker::OpenEvent(double time_s, double onset_s) {
   pending_count_ = 0;
 }
 
+void MetricsTracker::NoteEventTick(const TickSample& sample, double digit_speed_m_s) {
+  const sim::GroundTruth& truth = *sample.truth;
+  current_.finger_slid = current_.finger_slid || truth.finger_sliding_speed_m_s > digit_speed_m_s;
+  current_.thumb_slid = current_.thumb_slid || truth.thumb_sliding_speed_m_s > digit_speed_m_s;
+  for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
+    current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
+}
+
 void MetricsTracker::CloseEvent() {
   event_open_ = false;
   current_.gross = current_.ends_in_drop || current_.distance_m >= config_.gross_slip_m;
@@ -158,10 +166,7 @@ void MetricsTracker::Update(const TickSample& sample) {
       const bool own_event = !event_open_;
       if (own_event) OpenEvent(t, t);
       current_.ends_in_drop = true;
-      for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
-        current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
-      current_.finger_slid = current_.finger_slid || truth.finger_sliding_speed_m_s > config_.creep_speed_m_s;
-      current_.thumb_slid = current_.thumb_slid || truth.thumb_sliding_speed_m_s > config_.creep_speed_m_s;
+      NoteEventTick(sample, config_.creep_speed_m_s);
       if (own_event) CloseEvent();
     }
   }
@@ -210,12 +215,7 @@ void MetricsTracker::Update(const TickSample& sample) {
       last_above_s_ = t;
       current_.end_s = t;
       current_.peak_speed_m_s = std::max(current_.peak_speed_m_s, speed);
-      const double digit_speed_m_s =
-          speed > config_.slip_speed_m_s ? config_.slip_speed_m_s : config_.creep_speed_m_s;
-      current_.finger_slid = current_.finger_slid || truth.finger_sliding_speed_m_s > digit_speed_m_s;
-      current_.thumb_slid = current_.thumb_slid || truth.thumb_sliding_speed_m_s > digit_speed_m_s;
-      for (size_t u = 0; u < sample.true_loads.size() && !current_.sensed; ++u)
-        current_.sensed = sample.true_loads[u].fn_n >= contact_threshold_n_;
+      NoteEventTick(sample, speed > config_.slip_speed_m_s ? config_.slip_speed_m_s : config_.creep_speed_m_s);
     } else if (event_open_ && t - last_above_s_ >= config_.slip_event_gap_s) {
       CloseEvent();
       // Sliding that goes on after the event is a creep of its own from here, not one that began

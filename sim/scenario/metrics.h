@@ -182,6 +182,9 @@ class MetricsTracker {
   /// only once it has crept MetricsConfig::creep_event_m).
   void OpenEvent(double time_s, double onset_s);
   void CloseEvent();
+  /// One tick of the open event: which digits slid faster than `digit_speed_m_s`, whether a unit
+  /// carried load.
+  void NoteEventTick(const TickSample& sample, double digit_speed_m_s);
   void OnControllerFlag(double time_s, const char* cues);
   /// A flag that matched no event: false, or incipient when a contact slid just before it.
   void JudgeUnmatchedFlag(const PendingFlag& flag);

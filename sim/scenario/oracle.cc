@@ -1,7 +1,5 @@
 #include "sim/scenario/oracle.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,8 +11,8 @@
 #include <map>
 #include <mutex>
 #include <sstream>
-#include <thread>
 
+#include "sim/scenario/run_outputs.h"
 #include "sim/scenario/runner.h"
 
 namespace graspbed::scenario {
@@ -138,24 +136,15 @@ std::optional<OracleSearch> ReadDiskCache(const std::string& dir, const std::str
   }
 }
 
-/// Stores `search` (written to a temporary name and renamed: a reader never sees half a file). A
-/// cache that cannot be written is no error: the search stands.
+/// Stores `search` (WriteFileAtomic: a reader never sees half a file). A cache that cannot be
+/// written is no error: the search stands.
 void WriteDiskCache(const std::string& dir, const OracleSearch& search) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
-  const std::string path = dir + "/" + search.config_hash + ".json";
-  // Unique per process and thread: two processes of a sweep may store the same search at once.
-  const std::string temporary = path + ".tmp." + std::to_string(::getpid()) + "." +
-                                std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()));
-  std::ofstream file(temporary);
-  file << SearchJson(search).dump() << '\n';
-  file.close();
-  if (!file) {
-    std::filesystem::remove(temporary, error);
-    return;
+  try {
+    WriteFileAtomic(dir + "/" + search.config_hash + ".json", SearchJson(search).dump() + "\n");
+  } catch (const std::runtime_error&) {
   }
-  std::filesystem::rename(temporary, path, error);
-  if (error) std::filesystem::remove(temporary, error);
 }
 
 struct Cache {
@@ -301,10 +290,6 @@ OracleReport RunOracleReport(const ScenarioConfig& config, const OracleOptions& 
 
 namespace {
 
-nlohmann::json OptionalJson(const std::optional<double>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
-}
-
 OracleSearch SearchFromJson(const nlohmann::json& json) {
   OracleSearch search;
   if (!json.at("grip_n").is_null()) search.grip.grip_n = json.at("grip_n").get<double>();
@@ -335,8 +320,8 @@ nlohmann::json SearchJson(const OracleSearch& search) {
                      {"max_slip_mm", step.max_slip_mm},
                      {"outcome", step.outcome}});
   }
-  return {{"grip_n", OptionalJson(search.grip.grip_n)},
-          {"setpoint_n", OptionalJson(search.setpoint_n)},
+  return {{"grip_n", internal::OptionalJson(search.grip.grip_n)},
+          {"setpoint_n", internal::OptionalJson(search.setpoint_n)},
           {"reason", search.grip.reason.empty() ? nlohmann::json(nullptr) : nlohmann::json(search.grip.reason)},
           {"stall_pinch_n", search.stall_pinch_n},
           {"completed", search.completed},
@@ -349,13 +334,13 @@ nlohmann::json SearchJson(const OracleSearch& search) {
 nlohmann::json OracleReportJson(const ScenarioConfig& config, const OracleReport& report) {
   nlohmann::json json = {{"scenario", config.name},
                          {"source_file", config.source_file},
-                         {"oracle_grip_n", OptionalJson(report.full.grip.grip_n)},
+                         {"oracle_grip_n", internal::OptionalJson(report.full.grip.grip_n)},
                          {"oracle_grip_until_disturbance_n", nullptr},
                          {"first_disturbance", nullptr},
                          {"disturbance_ratio", nullptr},
                          {"full", SearchJson(report.full)}};
   if (report.until_disturbance) {
-    json["oracle_grip_until_disturbance_n"] = OptionalJson(report.until_disturbance->grip.grip_n);
+    json["oracle_grip_until_disturbance_n"] = internal::OptionalJson(report.until_disturbance->grip.grip_n);
     json["first_disturbance"] = {{"action", report.first_disturbance},
                                  {"script_index", report.first_disturbance_index}};
     json["until_disturbance"] = SearchJson(*report.until_disturbance);

@@ -102,6 +102,17 @@ void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& l
   row[kSession] = static_cast<double>(loop.session());
 }
 
+std::string OptionalText(const std::optional<double>& value, const char* format) {
+  if (!value) return "-";
+  char text[48];
+  std::snprintf(text, sizeof(text), format, *value);
+  return text;
+}
+
+nlohmann::json OptionalJson(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
 void WriteCsvAtomic(const SignalLog& log, const std::string& path) {
   const std::string temp = TempPath(path);
   std::FILE* file = std::fopen(temp.c_str(), "w");

@@ -4,9 +4,12 @@
 /// in signals.csv, and the plots drawn from them. Internal to graspbed_scenario.
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "common/plot.h"
 #include "controller/control_loop.h"
@@ -16,6 +19,11 @@
 #include "sim/scenario/signal_log.h"
 
 namespace graspbed::scenario::internal {
+
+/// `value` printed with `format` (one printf conversion), "-" when absent: tables' empty cells.
+std::string OptionalText(const std::optional<double>& value, const char* format);
+/// `value`, or JSON null when absent.
+nlohmann::json OptionalJson(const std::optional<double>& value);
 
 /// Name of the file that marks a run in progress or interrupted.
 inline constexpr const char* kIncompleteMarker = "INCOMPLETE";

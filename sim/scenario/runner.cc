@@ -247,10 +247,6 @@ void WritePlots(const RunResult& result, const SignalLog& log, const sensor::Lay
   WriteTaxelMaps(result, log, layout, time, title, dir);
 }
 
-nlohmann::json Optional(const std::optional<double>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
-}
-
 }  // namespace
 
 sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
@@ -523,20 +519,20 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"peak_grip_n", m.peak_grip_n},
       {"mean_held_grip_n", m.mean_held_grip_n},
       {"peak_load_bound_grip_n", m.peak_load_bound_grip_n},
-      {"oracle_grip_n", m.oracle ? Optional(m.oracle->grip_n) : nlohmann::json(nullptr)},
+      {"oracle_grip_n", m.oracle ? internal::OptionalJson(m.oracle->grip_n) : nlohmann::json(nullptr)},
       {"oracle_note", !m.oracle                 ? nlohmann::json("not computed (run --oracle)")
                       : m.oracle->grip_n        ? nlohmann::json(nullptr)
                                                 : nlohmann::json(m.oracle->reason)},
-      {"grip_efficiency", Optional(m.grip_efficiency)},
-      {"peak_grip_ratio", Optional(m.peak_grip_ratio)},
+      {"grip_efficiency", internal::OptionalJson(m.grip_efficiency)},
+      {"peak_grip_ratio", internal::OptionalJson(m.peak_grip_ratio)},
       {"crushed", m.crushed},
-      {"slip_detect_latency_ms", Optional(m.slip_detect_latency_ms)},
+      {"slip_detect_latency_ms", internal::OptionalJson(m.slip_detect_latency_ms)},
       {"false_slip_per_min", m.false_slip_per_min},
       {"false_slip_flag_s", m.false_slip_flag_s},
       {"false_slip_flag_pct", m.false_slip_flag_pct},
-      {"fn_rmse_n", Optional(m.fn_rmse_n)},
-      {"ft_rmse_n", Optional(m.ft_rmse_n)},
-      {"time_to_stable_s", Optional(m.time_to_stable_s)},
+      {"fn_rmse_n", internal::OptionalJson(m.fn_rmse_n)},
+      {"ft_rmse_n", internal::OptionalJson(m.ft_rmse_n)},
+      {"time_to_stable_s", internal::OptionalJson(m.time_to_stable_s)},
       {"sim_s", m.sim_s},
       {"wall_s", m.wall_s},
       {"grasped", m.grasped},
@@ -547,10 +543,10 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"missed_slip_events", m.missed_slip_events},
       {"gross_slip_events", m.gross.events},
       {"gross_slip_detected", m.gross.detected},
-      {"gross_detect_latency_ms", Optional(m.gross.worst_latency_ms)},
+      {"gross_detect_latency_ms", internal::OptionalJson(m.gross.worst_latency_ms)},
       {"micro_slip_events", m.micro.events},
       {"micro_slip_detected", m.micro.detected},
-      {"micro_detect_latency_ms", Optional(m.micro.worst_latency_ms)},
+      {"micro_detect_latency_ms", internal::OptionalJson(m.micro.worst_latency_ms)},
       {"missed_unsensed_slip_events", m.missed_unsensed_slip_events},
       {"missed_thumb_only_slip_events", m.missed_thumb_only_slip_events},
       {"controller_slip_flags", m.controller_slip_flags},
@@ -564,7 +560,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
   for (const ExpectationOutcome& o : result.outcomes) {
     expectations.push_back({{"name", o.name},
                             {"limit", o.limit},
-                            {"value", Optional(o.value)},
+                            {"value", internal::OptionalJson(o.value)},
                             {"value_text", o.value_text},
                             {"passed", o.passed},
                             {"note", o.note}});

@@ -13,6 +13,7 @@
 
 #include "common/plot.h"
 #include "common/yaml_map.h"
+#include "sim/scenario/run_outputs.h"
 #include "sim/scenario/suite.h"
 
 namespace graspbed::scenario {
@@ -20,6 +21,9 @@ namespace graspbed::scenario {
 namespace fs = std::filesystem;
 
 namespace {
+
+using internal::OptionalJson;
+using internal::OptionalText;
 
 [[noreturn]] void Fail(const std::string& file, const YAML::Node& node, const std::string& key,
                        const std::string& value, const std::string& reason) {
@@ -103,17 +107,6 @@ void Sample(const ScorecardVary& vary, std::mt19937_64& rng, std::vector<Overrid
   }
   const double u = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
   out.push_back({vary.key, FormatNumber(vary.min + u * (vary.max - vary.min))});
-}
-
-std::string OptionalText(const std::optional<double>& value, const char* format) {
-  if (!value) return "-";
-  char text[48];
-  std::snprintf(text, sizeof(text), format, *value);
-  return text;
-}
-
-nlohmann::json OptionalJson(const std::optional<double>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/yaml_map.h"
+#include "sim/scenario/run_outputs.h"
 #include "sim/scenario/schedule.h"
 
 namespace graspbed::scenario {
@@ -155,17 +156,11 @@ std::string SuiteTable(const SuiteResult& result) {
     const auto counts = [](const SlipClassCounts& c) {
       return std::to_string(c.detected) + "/" + std::to_string(c.events);
     };
-    const auto number = [](const std::optional<double>& value) {
-      if (!value) return std::string("-");
-      char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "%.2f", *value);
-      return std::string(buffer);
-    };
-    const std::string oracle_text = m.oracle ? number(m.oracle->grip_n) : std::string("-");
+    const std::string oracle_text = m.oracle ? internal::OptionalText(m.oracle->grip_n, "%.2f") : "-";
     std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7.2f %7s %7s %8.2f %8s %6s %7.2f  %s\n",
                   r.config.name.c_str(), r.config.controller.name.c_str(), verdict.c_str(), m.max_slip_mm,
                   counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n, oracle_text.c_str(),
-                  number(m.grip_efficiency).c_str(), m.wall_s, failures.c_str());
+                  internal::OptionalText(m.grip_efficiency, "%.2f").c_str(), m.wall_s, failures.c_str());
     out << line;
   }
   out << "  (gross, micro: slip events flagged / all; oracle_N: the lightest constant grip that holds; effic: mean "

@@ -227,7 +227,9 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
     ASSERT_GT(signals[column].size(), 100u) << column << " missing from the simulation's signals.csv";
   }
   EXPECT_TRUE(hw_metrics.at("grasped").get<bool>());
-  if (kept_pace) EXPECT_FALSE(hw_metrics.at("dropped").get<bool>()) << device.dump(2);
+  if (kept_pace) {
+    EXPECT_FALSE(hw_metrics.at("dropped").get<bool>()) << device.dump(2);
+  }
   const double hw_slip_mm = hw_metrics.at("max_slip_mm").get<double>();
   const double sim_slip_mm = sim_metrics.at("max_slip_mm").get<double>();
   EXPECT_LE(sim_slip_mm, kMaxSlipMm);

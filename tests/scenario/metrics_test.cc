@@ -607,7 +607,9 @@ TEST_F(TrackerTest, SlipsAreGrossFromTheirSizeOrADropAndCountedByClass) {
     sample.time_s = tick * kTickS;
     if (tick == 300) truth_.object_position_m = {0.0, 0.0, -0.03};  // gone at once
     dropping.Update(sample);
-    if (tick == 301) EXPECT_FALSE(dropping.in_slip_event()) << "the drop's event closes with the hold";
+    if (tick == 301) {
+      EXPECT_FALSE(dropping.in_slip_event()) << "the drop's event closes with the hold";
+    }
   }
   const Metrics d = dropping.Finish(0.4, 0.1, 0.0);
   EXPECT_TRUE(d.dropped);
