@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -268,6 +270,26 @@ bool IsShippedLayout(const std::string& name) {
          std::filesystem::exists(ShippedLayoutPath(name));
 }
 
+// kn and kt of the unit `config` describes, analysed once per process and unit: suites, sweeps and
+// the scorecard load the same unit many times, and an analysis takes about 0.1 s (over 10 s in a
+// sanitizer build). Keyed by the config's resolved values, so a file edited between loads is
+// analysed again and two files describing one unit share the result.
+fea::Sensitivities CachedSensitivities(const fea::FeaConfig& config) {
+  static std::mutex mutex;
+  static std::map<std::string, fea::Sensitivities> analysed;
+  constexpr size_t kCapacity = 16;  // units per process; beyond, the cache starts over
+  const std::string key = fea::FeaConfigFields().EmitYaml(config);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (const auto found = analysed.find(key); found != analysed.end()) return found->second;
+  }
+  const fea::Sensitivities sensitivities = fea::ComputeSensitivities(config);
+  std::lock_guard<std::mutex> lock(mutex);
+  if (analysed.size() >= kCapacity) analysed.clear();
+  analysed.emplace(key, sensitivities);
+  return sensitivities;
+}
+
 SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_file, int* unit_count) {
   SensorOptions s;
   // The plain fields (numbers, names, paths as written); the paths, the profile and the three
@@ -303,8 +325,8 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
         if (sub->Has(key)) sub->Fail(key, "set by the FEA with sensitivities: fea; remove one of the two");
       }
     }
-    // The unit's geometry and material decide kn and kt (about 0.1 s of analysis).
-    const fea::Sensitivities analysed = fea::ComputeSensitivities(
+    // The unit's geometry and material decide kn and kt (about 0.1 s of analysis, once per unit).
+    const fea::Sensitivities analysed = CachedSensitivities(
         fea::LoadFeaConfigFile(s.fea_config.empty() ? fea::DefaultFeaConfigPath() : s.fea_config));
     if (!(analysed.kn_per_n > 0.0) || !(analysed.kt_per_n > 0.0)) {
       std::ostringstream reason;

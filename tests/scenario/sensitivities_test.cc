@@ -80,6 +80,28 @@ TEST(SensitivitiesTest, AStifferSteelInTheFeaConfigHalvesTheSensitivities) {
   EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kn_per_n, stiff.sensor.strain_model.nominal.kn_per_n);
 }
 
+TEST(SensitivitiesTest, AFeaConfigEditedBetweenLoadsIsAnalysedAgain) {
+  // The loader keeps each unit's analysis for the process (the scorecard loads one unit many
+  // times); the key is the config's content, so a file edited between loads gives its new unit.
+  const TempDir temp("sensitivities_edited");
+  const std::filesystem::path& dir = temp.path();
+  std::ofstream(dir / "unit.yaml") << graspbed::test_support::ReadText(fea::DefaultFeaConfigPath());
+  std::ofstream(dir / "scenario.yaml") << "sensor: {sensitivities: fea, fea_config: unit.yaml}\n";
+  const ScenarioConfig first = LoadScenario((dir / "scenario.yaml").string());
+  const ScenarioConfig again = LoadScenario((dir / "scenario.yaml").string());
+  EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kn_per_n, first.sensor.strain_model.nominal.kn_per_n);
+  EXPECT_DOUBLE_EQ(again.sensor.strain_model.nominal.kt_per_n, first.sensor.strain_model.nominal.kt_per_n);
+
+  const std::string stiff = ShippedFeaConfigWith("youngs_modulus_gpa: 197", "youngs_modulus_gpa: 394");
+  ASSERT_FALSE(stiff.empty()) << "shipped FEA config no longer names youngs_modulus_gpa: 197";
+  std::ofstream(dir / "unit.yaml") << stiff;
+  const ScenarioConfig edited = LoadScenario((dir / "scenario.yaml").string());
+  EXPECT_NEAR(edited.sensor.strain_model.nominal.kn_per_n / first.sensor.strain_model.nominal.kn_per_n, 0.5,
+              kLinearTol);
+  EXPECT_NEAR(edited.sensor.strain_model.nominal.kt_per_n / first.sensor.strain_model.nominal.kt_per_n, 0.5,
+              kLinearTol);
+}
+
 TEST(SensitivitiesTest, BadValuesNameFileLineKeyAndValue) {
   std::string error = ErrorOf("duration_s: 1\nsensor:\n  sensitivities: ansys\n");
   EXPECT_NE(error.find("test.yaml:3"), std::string::npos) << error;
