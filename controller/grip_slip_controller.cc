@@ -97,6 +97,9 @@ const std::vector<Binding>& Bindings() {
                     "overall grip ceiling (sum of normal force over the units), honoured while slipping"),
       GRASPBED_BIND("safety_margin", safety_margin, 1.0, 5.0, "",
                     "grip target = tangential load / friction estimate x safety_margin"),
+      GRASPBED_BIND("preload_coupling", preload_coupling, 0.0, 1.0, "",
+                    "share of the shear locked in at grasp settle that the hold grip is coupled to, "
+                    "besides the load added since (1: the whole shear, 0: the load alone)"),
       GRASPBED_BIND("grip_decrease_rate_n_per_s", grip_decrease_rate_n_per_s, 0.0, 1000.0, "N/s",
                     "how fast the coupled grip target may fall when the load drops"),
       GRASPBED_BIND("unit_range_n", unit_range_n, 0.1, 1000.0, "N",
@@ -129,6 +132,9 @@ const std::vector<Binding>& Bindings() {
                     "on slip: grip target = max(target, grip) x (1 + slip_grip_gain) + slip_grip_step_n"),
       GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N",
                     "additive part of the slip response"),
+      GRASPBED_BIND("slip_landed_fraction", slip_landed_fraction, 0.0, 1.0, "",
+                    "a slip cue still up after a response asks for another only once the grip reached this "
+                    "fraction of the raised floor (and the ratio cue says the load still exceeds it)"),
       GRASPBED_BIND("slip_refractory_s", slip_refractory_s, 0.001, 1.0, "s",
                     "a further slip event is counted no sooner than this"),
       GRASPBED_BIND("slip_floor_decay_n_per_s", slip_floor_decay_n_per_s, 0.0, 1000.0, "N/s",
@@ -343,6 +349,7 @@ void GripSlipController::Reset() {
   target_n_ = 0.0;
   integrator_ = 0.0;
   refractory_until_s_ = 0.0;
+  cue_fell_since_response_ = true;
   ratio_was_up_ = false;
   ratio_counts_ = false;
   centroid_counts_ = false;
@@ -460,8 +467,9 @@ void GripSlipController::UpdateHoldTarget(double dt_s) {
   const SlipSignals& signals = detector_.signals();
   // The friction holds the whole shear, the locked-in preload too (constant while the contact
   // sticks, so coupling to it does not feed back through the grip).
-  const double coupled =
-      std::max(config_.min_grip_n, signals.contact_shear_n / friction_ * config_.safety_margin);
+  const double shear_n = signals.tangential_load_n +
+                        config_.preload_coupling * std::max(signals.contact_shear_n - signals.tangential_load_n, 0.0);
+  const double coupled = std::max(config_.min_grip_n, shear_n / friction_ * config_.safety_margin);
   // Rise at once, fall slowly: a load that drops for a moment must not loosen the grip with it.
   coupled_target_n_ = coupled >= coupled_target_n_
                           ? coupled
@@ -495,8 +503,11 @@ void GripSlipController::RespondToSlip(double time_s) {
           std::max(config_.friction_min, friction_ + config_.friction_learn_rate * (observed - friction_));
     }
   }
-  const double grip_n = diagnostics_.measured_grip_n;
-  slip_floor_n_ = std::max(target_n_, grip_n) * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
+  // From the target, not the measured grip: a slip that wedges the object into the pad (a ball
+  // rolling in the pinch) spikes the squeeze for a few ms, and a response from that spike went
+  // straight to the ceiling and stayed there.
+  slip_floor_n_ = target_n_ * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
+  cue_fell_since_response_ = false;
   Enter(Phase::kSlip, time_s);
 }
 
@@ -627,9 +638,18 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       ratio_counts_ = signals.ratio_slip && !ratio_held;
       centroid_counts_ = signals.centroid_slip && !ratio_held;
       slip_now = ratio_counts_ || signals.vibration_slip || centroid_counts_;
-      // Slip persisting within the refractory time: the step did not cover the load; keep raising.
-      if (slip_now && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
-      if (slip_now && time_s >= refractory_until_s_) RespondToSlip(time_s);
+      // A load cue persisting after a response (the ratio above the friction estimate, the contact
+      // travelling) says the step did not cover the load: the floor keeps rising
+      // (slip_grip_rate_n_per_s), and once the squeeze has reached it another step follows. A
+      // vibration cue that stays up while the grip steps up is also the step's own ringing of the
+      // contact: answered with a rising floor and a step every refractory period, it drove the grip
+      // to the ceiling (3 of the scorecard's runs), so on its own it asks again only after it fell.
+      if (!slip_now) cue_fell_since_response_ = true;
+      const bool load_cue = ratio_counts_ || centroid_counts_;
+      if (load_cue && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
+      const bool landed = grip_n >= config_.slip_landed_fraction * std::min(slip_floor_n_, ceiling_n);
+      const bool asks_again = cue_fell_since_response_ || (landed && load_cue);
+      if (slip_now && time_s >= refractory_until_s_ && asks_again) RespondToSlip(time_s);
       if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
       double base_n =
           phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;

@@ -41,6 +41,11 @@ struct GripSlipConfig {
   double max_grip_n =
       10.0;  ///< overall grip ceiling, sum over the units (tuning choice, docs/controller.md) [N]
   double safety_margin = 1.4;               ///< grip = tangential load / friction estimate x this
+  /// Share of the shear locked in when the grasp settled (SlipSignals::preload_shear_*) that the
+  /// hold grip is coupled to, besides the load added since [-]: 1 couples to the whole shear the
+  /// contact holds, 0 to the load alone (the preload of a non-antipodal pinch is made by the squeeze
+  /// and shrinks with it, so coupling to it asks a hard squeeze for a hard squeeze).
+  double preload_coupling = 0.0;
   double grip_decrease_rate_n_per_s = 2.0;  ///< how fast the coupled target may fall [N/s]
   double unit_range_n = 10.0;               ///< a saturated (out-of-range) unit counts as this force [N]
   /// With a sensor that cannot resolve shear (SlipSignals::shear_blind) the hold grip is this
@@ -72,6 +77,10 @@ struct GripSlipConfig {
   double slip_grip_gain = 0.25;           ///< on slip, grip target = grip x (1 + this) + step
   double slip_grip_step_n = 0.5;          ///< additive part of the slip response [N]
   double slip_refractory_s = 0.04;        ///< a new slip event is counted no sooner than this [s]
+  /// A cue still up after a slip response (no frame without slip since) asks for another only once
+  /// the measured grip has reached this fraction of the raised floor and the ratio cue still counts
+  /// [-]; a cue that fell and rose again always may.
+  double slip_landed_fraction = 0.9;
   double slip_floor_decay_n_per_s = 0.5;  ///< the raised grip after slip relaxes this fast [N/s]
   /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
   /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
@@ -175,6 +184,7 @@ class GripSlipController final : public GraspController {
   double target_n_ = 0.0;
   double integrator_ = 0.0;
   double refractory_until_s_ = 0.0;
+  bool cue_fell_since_response_ = true;  ///< a frame without slip since the last slip response
   bool ratio_was_up_ = false;     ///< the ratio cue was up in the last frame
   bool ratio_counts_ = false;     ///< the ratio cue counts as slip now (not held at the ceiling)
   bool centroid_counts_ = false;  ///< the centroid cue counts as slip now (likewise)

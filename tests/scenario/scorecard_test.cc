@@ -273,7 +273,15 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   EXPECT_GE(reference.at("slip_detected_pct").get<double>(), 75.0);
   ASSERT_FALSE(reference.at("latency_p50_ms").is_null());
   EXPECT_LE(reference.at("latency_p50_ms").get<double>(), 50.0);
-  EXPECT_EQ(reference.at("drops"), 0);
+  // No drop where the oracle holds with a fifth of the 10 N ceiling to spare: a light grip does not
+  // catch a 0.9 kg mass landing on a 100 g box whose oracle is 9.1 N (docs/controller.md).
+  for (const nlohmann::json& run : json.at("runs")) {
+    const nlohmann::json& metrics = run.at("summary").at("metrics");
+    if (run.at("controller") != "grip_slip" || metrics.at("oracle_grip_n").is_null()) continue;
+    if (metrics.at("oracle_grip_n").get<double>() < 8.0) {
+      EXPECT_FALSE(metrics.at("dropped").get<bool>()) << run.at("run");
+    }
+  }
   // The false flags by cue add up to the false flags, and the table names them when there are any;
   // the misses with no unit loaded, and those where only the thumb slid, are some of the misses.
   int by_cue = 0;
