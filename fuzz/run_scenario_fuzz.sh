@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs the scenario loader's fuzz target (fuzz/scenario_fuzz.cc) for SECONDS from a fresh corpus
+# seeded from scenarios/ (fuzz/make_scenario_seeds.cc) with fuzz/scenario.dict; ctest's
+# scenario_fuzz runs it for 30 s. Exits non-zero on any finding (crash, sanitizer report, leak,
+# an input over 1 s, over 2 GB) and when the fuzz tree is not built; a finding is kept as
+# FUZZ_DIR/scenario-fuzz-<kind>-<sha1> (replay: FUZZ_DIR/fuzz/scenario_fuzz FILE).
+#   fuzz/run_scenario_fuzz.sh FUZZ_DIR [SECONDS]
+set -euo pipefail
+fuzz_dir=$(realpath -m "$1")
+seconds=${2:-30}
+source_dir=$(cd "$(dirname "$0")/.." && pwd)
+target=$fuzz_dir/fuzz/scenario_fuzz
+seeds_tool=$fuzz_dir/fuzz/make_scenario_seeds
+
+if [ ! -x "$target" ] || [ ! -x "$seeds_tool" ]; then
+  echo "scenario_fuzz: $target is not built. ./setup.sh builds it; or, from $source_dir:" >&2
+  echo "  CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DGRASPBED_FUZZ=ON -DGRASPBED_PYTHON=OFF \\" >&2
+  echo "      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO='-O1 -gline-tables-only'" >&2
+  echo "  cmake --build build-fuzz -j2 --target scenario_fuzz make_scenario_seeds" >&2
+  if [ -f "$fuzz_dir.build.log" ]; then echo "setup.sh's log of its build: $fuzz_dir.build.log" >&2; fi
+  exit 1
+fi
+# The sources may have changed since setup.sh built it: fuzz what is checked out (no-op when current).
+cmake --build "$fuzz_dir" -j2 --target scenario_fuzz make_scenario_seeds > "$fuzz_dir.test-build.log" 2>&1 ||
+  { cat "$fuzz_dir.test-build.log" >&2; exit 1; }
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/scenario_fuzz.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+"$seeds_tool" "$source_dir/scenarios" "$work/seeds"
+mkdir "$work/corpus"
+cd "$work"  # nothing is written, and were it, not into the repository
+"$target" -max_total_time="$seconds" -timeout=1 -rss_limit_mb=2048 -print_final_stats=1 \
+  -dict="$source_dir/fuzz/scenario.dict" -artifact_prefix="$fuzz_dir/scenario-fuzz-" \
+  "$work/corpus" "$work/seeds" 2>&1 | grep -v -E '^#[0-9]+[[:space:]]+(NEW|REDUCE|pulse)'
