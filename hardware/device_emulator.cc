@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <vector>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -86,6 +87,9 @@ void DeviceEmulator::OpenPty() {
   symlink_made_ = true;
   decoder_.Reset();
   out_size_ = 0;
+  held_size_ = 0;
+  hellos_this_connection_ = 0;
+  answers_this_connection_ = 0;
   stats_.host_connected = false;
   stats_.streaming = false;
 }
@@ -103,6 +107,7 @@ void DeviceEmulator::ClosePty() {
   master_fd_ = -1;
   slave_path_.clear();
   out_size_ = 0;
+  held_size_ = 0;  // a held-back frame goes with the queue
   if (stats_.host_connected || motor_.enable) SetMotor({});
   stats_.host_connected = false;
   stats_.streaming = false;
@@ -129,10 +134,33 @@ void DeviceEmulator::SetMotor(const EmulatedMotor& motor) {
   if (sink_) sink_(motor_);
 }
 
-void DeviceEmulator::Queue(std::span<const uint8_t> bytes) {
-  if (out_size_ + bytes.size() > out_.size()) return;  // host not reading: drop, as a full USB FIFO would
+bool DeviceEmulator::Queue(std::span<const uint8_t> bytes) {
+  // Host not reading: drop the whole packet, as a full USB FIFO would (never a part of one).
+  if (out_size_ + bytes.size() > out_.size()) return false;
   std::copy(bytes.begin(), bytes.end(), out_.begin() + static_cast<long>(out_size_));
   out_size_ += bytes.size();
+  return true;
+}
+
+void DeviceEmulator::SendFrame(std::span<const uint8_t> bytes, uint64_t index, bool intact) {
+  if (!Queue(bytes)) {
+    ++stats_.frames_overflowed;
+    return;
+  }
+  ++stats_.frames_sent;
+  if (!intact) return;
+  if (newest_intact_valid_ && index < newest_intact_index_) {
+    ++stats_.frames_reordered;  // a newer intact frame went before it: the host sees it late
+  } else {
+    newest_intact_valid_ = true;
+    newest_intact_index_ = index;
+  }
+}
+
+void DeviceEmulator::ReleaseHeld() {
+  if (held_size_ == 0) return;
+  SendFrame(std::span<const uint8_t>(held_.data(), held_size_), held_index_, /*intact=*/true);
+  held_size_ = 0;
 }
 
 void DeviceEmulator::QueueHello() {
@@ -143,8 +171,9 @@ void DeviceEmulator::QueueHello() {
   hello.nominal_rate_hz = static_cast<uint16_t>(config_.frame_rate_hz);
   hello.nominal_r0_milliohm = OhmToMilliohm(config_.nominal_r0_ohm);
   std::array<uint8_t, kMaxWirePacketSize> out;
-  Queue(std::span<const uint8_t>(out.data(), EncodePacket(hello, out)));
+  if (!Queue(std::span<const uint8_t>(out.data(), EncodePacket(hello, out)))) return;  // FIFO full
   ++stats_.hellos_sent;
+  ++hellos_this_connection_;
   hello_sent_this_connection_ = true;
 }
 
@@ -178,6 +207,7 @@ void DeviceEmulator::HandleHostPacket(const DecodedPacket& packet, int64_t now_n
     case PacketType::kStreamControl:
       if (packet.stream.start) {
         ++stats_.stream_starts;
+        ++answers_this_connection_;  // the host answers every HELLO it decodes with a start
         stats_.streaming = true;
       } else {
         ++stats_.stream_stops;
@@ -219,6 +249,8 @@ void DeviceEmulator::Tick(int64_t now_ns) {
     stats_.host_connected = true;
     ++stats_.connects;
     hello_sent_this_connection_ = false;
+    hellos_this_connection_ = 0;
+    answers_this_connection_ = 0;
     hello_due_ns_ = now_ns + SecondsToNs(config_.connect_delay_s);
     decoder_.Reset();
   }
@@ -245,6 +277,7 @@ void DeviceEmulator::Tick(int64_t now_ns) {
       stats_.host_connected = false;
       stats_.streaming = false;
       out_size_ = 0;
+      held_size_ = 0;
     }
     return;
   }
@@ -254,6 +287,7 @@ void DeviceEmulator::Tick(int64_t now_ns) {
   }
   if (stats_.streaming && !paused_) {
     const uint16_t sequence = frame_seq_++;
+    const uint64_t index = frame_index_++;
     if (drop_frames_ > 0) {
       --drop_frames_;
       ++stats_.frames_dropped;
@@ -263,28 +297,37 @@ void DeviceEmulator::Tick(int64_t now_ns) {
       if (frame_unit_count_ > 0) wire_frame_.unit_count = static_cast<uint8_t>(frame_unit_count_);
       std::array<uint8_t, kMaxWirePacketSize> out;
       size_t size = EncodePacket(wire_frame_, out);
-      if (size > 0 && corrupt_frames_ > 0) {
-        --corrupt_frames_;
-        ++stats_.frames_corrupted;
-        uint8_t& byte = out[size / 2];
-        byte = (byte ^ 0x5A) != 0 ? static_cast<uint8_t>(byte ^ 0x5A) : static_cast<uint8_t>(byte ^ 0xA5);
-      }
-      if (size > 0 && truncate_bytes_ > 0) {
-        // Remove bytes just before the delimiter: the packet ends early.
-        const size_t cut = std::min<size_t>(static_cast<size_t>(truncate_bytes_), size - 2);
-        out[size - 1 - cut] = 0x00;
-        size -= cut;
-        truncate_bytes_ = 0;
-        ++stats_.frames_corrupted;
-      }
-      if (out_size_ + size <= out_.size()) {
-        Queue(std::span<const uint8_t>(out.data(), size));
-        ++stats_.frames_sent;
-      } else {
-        ++stats_.frames_overflowed;
+      const bool corrupt = size > 0 && corrupt_frames_ > 0;
+      const bool truncate = size > 0 && truncate_bytes_ > 0 && !corrupt;  // one fault per frame: one refusal
+      if (size > 0 && reorder_frames_ > 0 && held_size_ == 0 && !corrupt && !truncate) {
+        // Held back; sent after the next reorder_later_ sequence numbers.
+        std::copy_n(out.begin(), size, held_.begin());
+        held_size_ = size;
+        held_index_ = index;
+        held_countdown_ = reorder_later_;
+        --reorder_frames_;
+      } else if (size > 0 && out_size_ + size > out_.size()) {
+        ++stats_.frames_overflowed;  // a pending corruption waits for a frame that is sent
+      } else if (size > 0) {
+        if (corrupt) {
+          --corrupt_frames_;
+          ++stats_.frames_corrupted;
+          uint8_t& byte = out[size / 2];
+          byte = (byte ^ 0x5A) != 0 ? static_cast<uint8_t>(byte ^ 0x5A) : static_cast<uint8_t>(byte ^ 0xA5);
+        }
+        if (truncate) {
+          // Remove bytes just before the delimiter: the packet ends early.
+          const size_t cut = std::min<size_t>(static_cast<size_t>(truncate_bytes_), size - 2);
+          out[size - 1 - cut] = 0x00;
+          size -= cut;
+          truncate_bytes_ = 0;
+          ++stats_.frames_corrupted;
+        }
+        SendFrame(std::span<const uint8_t>(out.data(), size), index, !corrupt && !truncate);
       }
       stats_.last_frame_sequence = sequence;
     }
+    if (held_size_ > 0 && index != held_index_ && --held_countdown_ <= 0) ReleaseHeld();
   }
   Flush();
 }
@@ -310,6 +353,15 @@ void DeviceEmulator::CorruptFrames(int count) {
   corrupt_frames_ += count;
 }
 
+void DeviceEmulator::ReorderFrames(int count, int later) {
+  if (later < 1)
+    throw std::invalid_argument("emulator: ReorderFrames later = " + std::to_string(later) +
+                                ": must be >= 1");
+  std::lock_guard lock(mutex_);
+  reorder_frames_ += count;
+  reorder_later_ = later;
+}
+
 void DeviceEmulator::DropFrames(int count) {
   std::lock_guard lock(mutex_);
   drop_frames_ += count;
@@ -317,15 +369,15 @@ void DeviceEmulator::DropFrames(int count) {
 
 void DeviceEmulator::InjectGarbage(int bytes, bool delimited) {
   std::lock_guard lock(mutex_);
+  std::vector<uint8_t> garbage;
+  garbage.reserve(static_cast<size_t>(bytes) + 1);
   for (int i = 0; i < bytes; ++i) {
     rng_ = rng_ * 1664525u + 1013904223u;  // fixed LCG: reproducible garbage
-    const uint8_t byte = static_cast<uint8_t>(1 + (rng_ >> 24) % 255);
-    Queue(std::span<const uint8_t>(&byte, 1));
+    garbage.push_back(static_cast<uint8_t>(1 + (rng_ >> 24) % 255));
   }
-  if (delimited) {
-    const uint8_t zero = 0;
-    Queue(std::span<const uint8_t>(&zero, 1));
-  }
+  if (delimited) garbage.push_back(0);
+  // All or nothing: a part of it would merge with the next packet and change what the host counts.
+  if (Queue(garbage) && delimited && bytes > 0) ++stats_.garbage_packets;
 }
 
 void DeviceEmulator::InjectOversize(int bytes) {
@@ -368,8 +420,38 @@ void DeviceEmulator::SetFrameUnitCount(int unit_count) {
   frame_unit_count_ = unit_count;
 }
 
+bool DeviceEmulator::Settle(double timeout_s) {
+  {
+    std::lock_guard lock(mutex_);
+    ++stats_.settles;
+    paused_ = true;
+    if (master_fd_ < 0 || !stats_.host_connected) {
+      ++stats_.settles_unconfirmed;
+      return false;
+    }
+    ReleaseHeld();
+    QueueHello();  // behind everything queued: its answer means all of it was read
+    hello_due_ns_ = NowNs() + SecondsToNs(config_.hello_period_s);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    {
+      std::lock_guard lock(mutex_);
+      if (master_fd_ >= 0 && stats_.host_connected && out_size_ == 0 &&
+          answers_this_connection_ >= hellos_this_connection_)
+        return true;
+      if (master_fd_ < 0 || !stats_.host_connected || std::chrono::steady_clock::now() >= deadline) {
+        ++stats_.settles_unconfirmed;
+        return false;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
 void DeviceEmulator::Vanish() {
   std::lock_guard lock(mutex_);
+  if (master_fd_ >= 0) ++stats_.vanishes;
   ClosePty();
 }
 
@@ -381,6 +463,9 @@ void DeviceEmulator::Return() {
 void DeviceEmulator::Reboot() {
   std::lock_guard lock(mutex_);
   frame_seq_ = 0;
+  frame_index_ = 0;
+  newest_intact_valid_ = false;
+  held_size_ = 0;  // the old session's held-back frame is never sent
   hello_seq_ = 0;
   time_base_tick_ = tick_;
   stats_.streaming = false;
@@ -390,7 +475,9 @@ void DeviceEmulator::Reboot() {
 
 EmulatorStats DeviceEmulator::stats() const {
   std::lock_guard lock(mutex_);
-  return stats_;
+  EmulatorStats stats = stats_;
+  stats.frames_trailing = frame_index_ - (newest_intact_valid_ ? newest_intact_index_ + 1 : 0);
+  return stats;
 }
 
 EmulatedMotor DeviceEmulator::motor() const {

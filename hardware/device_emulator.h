@@ -42,10 +42,17 @@ struct EmulatedMotor {
 
 /// What the emulator has done; read with stats().
 struct EmulatorStats {
-  uint64_t frames_sent = 0;        ///< frames written to the pty (including corrupted ones)
+  uint64_t frames_sent = 0;        ///< frames written to the pty (including corrupted and late ones)
   uint64_t frames_dropped = 0;     ///< frames skipped by DropFrames (sequence numbers still advance)
-  uint64_t frames_corrupted = 0;   ///< frames sent with a flipped byte
+  uint64_t frames_corrupted = 0;   ///< frames sent with a flipped byte or truncated (TruncateNextFrame)
   uint64_t frames_overflowed = 0;  ///< frames not sent because the host did not read (pty full)
+  /// Frames sent after a newer intact frame (ReorderFrames): what the host must count as reordered. A
+  /// held-back frame that no newer intact frame overtook went out in order and is not counted.
+  uint64_t frames_reordered = 0;
+  uint64_t garbage_packets = 0;  ///< delimited garbage blocks sent (InjectGarbage with delimited = true)
+  /// Sequence numbers used after the newest intact frame sent (dropped, corrupted or overflowed ones
+  /// at the end of the stream so far): the host learns of them as a gap only when a newer frame comes.
+  uint64_t frames_trailing = 0;
   uint64_t hellos_sent = 0;
   uint64_t motor_commands = 0;      ///< valid MOTOR_COMMANDs received
   uint64_t motor_off_commands = 0;  ///< of those, with enable = 0
@@ -56,6 +63,9 @@ struct EmulatorStats {
   uint64_t stream_stops = 0;
   uint64_t watchdog_trips = 0;
   uint64_t connects = 0;      ///< times a host opened the port
+  uint64_t vanishes = 0;      ///< Vanish() calls that closed an open pty
+  uint64_t settles = 0;       ///< Settle() calls
+  uint64_t settles_unconfirmed = 0;  ///< of those, not confirmed by the host (timeout, no host)
   uint64_t host_corrupt = 0;  ///< host packets refused by our decoder
   uint16_t last_frame_sequence = 0;
   bool streaming = false;
@@ -97,8 +107,22 @@ class DeviceEmulator {
   void InjectBadVersion(uint8_t version);
   /// Truncates the next frame by `bytes` bytes before its delimiter (bytes lost mid-packet).
   void TruncateNextFrame(int bytes);
+  /// Sends frames out of order: each of the next `count` intact frames is held back and sent right
+  /// after the `later` frames that follow it (their sequence numbers; 1 = swapped with the next), with
+  /// its own sequence number and device time. One frame is held at a time. The host sees an older
+  /// frame after newer ones (docs/protocol.md, "Late frames"); frames_reordered counts them.
+  void ReorderFrames(int count, int later = 1);
   /// Pauses (true) or resumes the frame stream without telling the host (stale data).
   void PauseFrames(bool paused);
+  /// Brings the link to a known state before a disconnect or the end of a soak: pauses the frame
+  /// stream (PauseFrames(true); no sample taken, no sequence number used), sends a held-back frame
+  /// now, then a HELLO, and waits up to `timeout_s` until the host has answered every HELLO of this
+  /// connection with STREAM_CONTROL start. The host answers each HELLO it decodes, in order, so it
+  /// has then read every byte sent before: nothing is in flight. Blocks the caller (not the device
+  /// thread). True when confirmed; false (counted in settles_unconfirmed) on timeout, when no host
+  /// is connected, or when a HELLO of this connection was lost (the host flushes its input when it
+  /// opens the port: a HELLO sent before that is never answered). The stream stays paused.
+  bool Settle(double timeout_s);
   /// Frames carry `unit_count` units (0: as configured), HELLO keeps the configured count.
   void SetFrameUnitCount(int unit_count);
   /// The device disappears: the pty closes (the host reads EIO/POLLHUP) and the symlink goes.
@@ -120,8 +144,10 @@ class DeviceEmulator {
   void CheckWatchdog(int64_t now_ns);
   void OpenPty();
   void ClosePty();
-  void Queue(std::span<const uint8_t> bytes);
+  bool Queue(std::span<const uint8_t> bytes);
   void QueueHello();
+  void SendFrame(std::span<const uint8_t> bytes, uint64_t index, bool intact);
+  void ReleaseHeld();
   void Flush();
   void HandleHostPacket(const DecodedPacket& packet, int64_t now_ns);
   void SetMotor(const EmulatedMotor& motor);
@@ -145,6 +171,11 @@ class DeviceEmulator {
   uint64_t tick_ = 0;
   uint64_t time_base_tick_ = 0;
   uint16_t frame_seq_ = 0;
+  uint64_t frame_index_ = 0;              // sequence numbers used, never wrapping (reset by Reboot)
+  bool newest_intact_valid_ = false;      // an intact frame was queued in this session
+  uint64_t newest_intact_index_ = 0;      // the newest of them
+  uint64_t hellos_this_connection_ = 0;   // HELLOs queued since the host opened the port
+  uint64_t answers_this_connection_ = 0;  // STREAM_CONTROL starts received since then
   uint16_t hello_seq_ = 0;
   bool hello_sent_this_connection_ = false;
   int64_t hello_due_ns_ = 0;
@@ -157,6 +188,12 @@ class DeviceEmulator {
   int corrupt_frames_ = 0;
   int drop_frames_ = 0;
   int truncate_bytes_ = 0;
+  int reorder_frames_ = 0;  // frames still to hold back
+  int reorder_later_ = 1;
+  std::array<uint8_t, kMaxWirePacketSize> held_{};  // the held-back frame on the wire
+  size_t held_size_ = 0;                            // 0: none held
+  uint64_t held_index_ = 0;
+  int held_countdown_ = 0;  // sequence numbers still to pass before it is sent
   bool paused_ = false;
   int frame_unit_count_ = 0;
 };

@@ -36,6 +36,15 @@ uint32_t PackMotor(const hand::HandCommand& command) {
 
 }  // namespace
 
+FrameOrder ClassifyFrameOrder(int sequence_step, int64_t time_step_us, int64_t period_us) {
+  if (sequence_step < 0 && sequence_step >= -kLateFrameWindow && time_step_us < 0 &&
+      -time_step_us <= kLateFrameWindow * period_us) {
+    return FrameOrder::kLate;
+  }
+  if (sequence_step <= 0 || time_step_us <= 0) return FrameOrder::kRestart;
+  return sequence_step == 1 ? FrameOrder::kNext : FrameOrder::kGap;
+}
+
 SerialLink::SerialLink(std::string path, const HardwareConfig& config, LinkRole role, int expected_units,
                        std::string layout_name)
     : path_(std::move(path)),
@@ -252,6 +261,8 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
     std::lock_guard lock(info_mutex_);
     hello_ = hello;
   }
+  frame_period_us_ =
+      hello.nominal_rate_hz > 0 ? std::max<int64_t>(1, 1'000'000 / hello.nominal_rate_hz) : 1000;
   if (!handshake_) {
     handshake_ = true;
     last_refused_units_ = -1;  // refused frames of the new connection are reported afresh
@@ -299,10 +310,20 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   if (have_last_frame_) {
     const int seq_step = static_cast<int16_t>(frame.sequence - last_frame_seq_);
     const int64_t time_step = static_cast<int32_t>(frame.device_time_us - last_frame_time_us_);
-    if (seq_step <= 0 || time_step <= 0) {
-      NewSession();  // duplicate or backwards sequence / device time: the device restarted
-    } else if (seq_step > 1) {
-      counter_dropped_.fetch_add(static_cast<uint64_t>(seq_step - 1));
+    switch (ClassifyFrameOrder(seq_step, time_step, frame_period_us_)) {
+      case FrameOrder::kLate:
+        // Older than a frame already published: never handed to the loop (nor to the log), and its
+        // sequence number stays counted in dropped, where the newer frame's gap put it.
+        counter_reordered_.fetch_add(1, std::memory_order_acq_rel);
+        return;
+      case FrameOrder::kRestart:
+        NewSession();  // duplicate or backwards sequence / device time: the device restarted
+        break;
+      case FrameOrder::kGap:
+        counter_dropped_.fetch_add(static_cast<uint64_t>(seq_step - 1));
+        break;
+      case FrameOrder::kNext:
+        break;
     }
   }
   have_last_frame_ = true;

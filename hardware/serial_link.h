@@ -32,6 +32,23 @@ enum class LinkRole {
   kMotor,           ///< motor commands only (the hand electronics on a port of their own)
 };
 
+/// Late frames (docs/protocol.md, "Late frames"): a frame at most this many sequence numbers behind
+/// the newest accepted one, and behind it in device time by at most this many nominal frame periods,
+/// was delayed on its way (reordered); further back, or not back in time, the device restarted.
+inline constexpr int kLateFrameWindow = 32;
+
+/// How a frame's sequence number and device time relate to the newest accepted frame's.
+enum class FrameOrder {
+  kNext,     ///< the next one: +1
+  kGap,      ///< newer, with sequence numbers missing in between (counted dropped)
+  kLate,     ///< older, within kLateFrameWindow: reordered; counted, never used
+  kRestart,  ///< duplicate, or backwards beyond the window: the device restarted (new session)
+};
+
+/// Classifies a frame by `sequence_step` = int16(sequence - newest's) and `time_step_us` =
+/// int32(device time - newest's) [us], with `period_us` the nominal frame period (from HELLO).
+FrameOrder ClassifyFrameOrder(int sequence_step, int64_t time_step_us, int64_t period_us);
+
 /// One decoded frame with the device session it belongs to (for loggers that see every frame).
 struct TappedFrame {
   sensor::RawFrame frame;
@@ -70,6 +87,9 @@ class SerialLink {
   /// Device session: 1 after the first handshake, +1 on every detected reboot.
   uint64_t session() const { return counter_sessions_.load(std::memory_order_acquire); }
   sensor::BackendCounters counters() const;
+  /// Late frames (FrameOrder::kLate): arrived after a newer one, counted here and in `dropped` (their
+  /// sequence numbers were missing when the newer frame came), never published or tapped.
+  uint64_t reordered() const { return counter_reordered_.load(std::memory_order_acquire); }
   /// The newest HELLO (firmware, unit count, nominal rate and R0).
   HelloPacket hello() const;
   /// The newest refusal or fault worth telling the user ("" when none).
@@ -141,6 +161,7 @@ class SerialLink {
   bool have_last_frame_ = false;
   uint16_t last_frame_seq_ = 0;
   uint32_t last_frame_time_us_ = 0;
+  int64_t frame_period_us_ = 1000;  // nominal, from the newest HELLO's rate
   bool have_last_hello_ = false;
   uint16_t last_hello_seq_ = 0;
   bool stale_ = false;
@@ -160,7 +181,7 @@ class SerialLink {
   std::atomic<uint64_t> pending_motor_{0};
   std::atomic<uint64_t> motor_sent_{0};
   std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0}, counter_unknown_{0},
-      counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0};
+      counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0}, counter_reordered_{0};
 
   mutable std::mutex frame_mutex_;  // guards slot_, slot_id_, slot_session_; the loop only try_locks it
   sensor::RawFrame slot_;

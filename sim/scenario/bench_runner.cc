@@ -468,6 +468,7 @@ RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options) {
     bench["frames"] = counters.frames;
     bench["corrupt"] = counters.corrupt;
     bench["dropped"] = counters.dropped;
+    bench["reordered"] = link.reordered();
     bench["unknown_packets"] = counters.unknown_packets;
     bench["reconnects"] = counters.reconnects;
     bench["stale_periods"] = counters.stale_periods;
@@ -583,17 +584,19 @@ std::string BenchSummaryTable(const RunResult& result) {
                                   : "FAILED");
   out << line;
   if (result.config.backend == Backend::kSerial) {
-    std::snprintf(
-        line, sizeof(line),
-        "  %s: %.2f s (ended by %s), %llu frames, %llu corrupt, %llu dropped, %llu reconnects, %llu stale "
-        "periods%s\n",
-        b.value("port", std::string()).c_str(), result.metrics.sim_s,
-        b.value("ended_by", std::string()).c_str(), static_cast<unsigned long long>(b.value("frames", 0ull)),
-        static_cast<unsigned long long>(b.value("corrupt", 0ull)),
-        static_cast<unsigned long long>(b.value("dropped", 0ull)),
-        static_cast<unsigned long long>(b.value("reconnects", 0ull)),
-        static_cast<unsigned long long>(b.value("stale_periods", 0ull)),
-        b.value("connected_at_end", true) ? "" : "; device DISCONNECTED at the end");
+    std::snprintf(line, sizeof(line),
+                  "  %s: %.2f s (ended by %s), %llu frames, %llu corrupt, %llu dropped, %llu reordered, %llu "
+                  "reconnects, "
+                  "%llu stale periods%s\n",
+                  b.value("port", std::string()).c_str(), result.metrics.sim_s,
+                  b.value("ended_by", std::string()).c_str(),
+                  static_cast<unsigned long long>(b.value("frames", 0ull)),
+                  static_cast<unsigned long long>(b.value("corrupt", 0ull)),
+                  static_cast<unsigned long long>(b.value("dropped", 0ull)),
+                  static_cast<unsigned long long>(b.value("reordered", 0ull)),
+                  static_cast<unsigned long long>(b.value("reconnects", 0ull)),
+                  static_cast<unsigned long long>(b.value("stale_periods", 0ull)),
+                  b.value("connected_at_end", true) ? "" : "; device DISCONNECTED at the end");
     out << line;
   } else {
     std::snprintf(line, sizeof(line), "  replayed %llu ticks of %s (%s), intent from the %s\n",

@@ -321,6 +321,100 @@ TEST_F(HardwareTest, ScriptedFaultsGiveExactCounters) {
   EXPECT_EQ(emulator_->stats().frames_dropped - emu0.frames_dropped, 4u);
 }
 
+// Frames sent out of order (docs/protocol.md, "Late frames"): a frame older than one already
+// published is counted reordered (and its sequence number dropped, as the newer frame's gap), never
+// handed to the loop, and neither a huge gap nor a device restart.
+TEST_F(HardwareTest, LateFramesAreCountedAndNeverUsed) {
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 20; }));
+  emulator_->PauseFrames(true);
+  const auto emu0 = emulator_->stats();
+  sensor::RawFrame frame;
+  ASSERT_TRUE(WaitFor([&] {
+    backend_->Read(&frame);
+    return frame.sequence == emu0.last_frame_sequence;
+  }));
+  const auto host0 = backend_->counters();
+  const uint64_t reordered0 = backend_->link()->reordered();
+  // Every frame the loop reads is newer than the one before.
+  uint16_t newest = frame.sequence;
+  bool went_back = false;
+  auto read = [&] {
+    while (backend_->Read(&frame) == sensor::ReadStatus::kOk) {
+      if (static_cast<int16_t>(frame.sequence - newest) <= 0) went_back = true;
+      newest = frame.sequence;
+    }
+  };
+  emulator_->PauseFrames(false);
+  emulator_->ReorderFrames(2, 1);  // two frames each swapped with the next
+  ASSERT_TRUE(WaitFor([&] {
+    read();
+    return backend_->link()->reordered() - reordered0 == 2;
+  }));
+  emulator_->ReorderFrames(1, 3);  // one frame held back by three
+  ASSERT_TRUE(WaitFor([&] {
+    read();
+    return backend_->link()->reordered() - reordered0 == 3;
+  }));
+  const uint64_t frames = backend_->counters().frames;
+  ASSERT_TRUE(WaitFor([&] {
+    read();
+    return backend_->counters().frames > frames + 2;
+  }));
+  emulator_->PauseFrames(true);
+  const auto emu = emulator_->stats();
+  ASSERT_TRUE(WaitHostCaughtUp(host0.frames, emu0.frames_sent, /*lost=*/3))
+      << "the late frames are not frames";
+  read();
+  EXPECT_FALSE(went_back) << "the loop was given a frame older than one it had";
+  const auto host = backend_->counters();
+  EXPECT_EQ(emu.frames_reordered - emu0.frames_reordered, 3u);
+  EXPECT_EQ(backend_->link()->reordered() - reordered0, 3u);
+  // Each late frame's sequence number was missing when the newer one came: a gap of 1 each.
+  const uint64_t overflowed = emu.frames_overflowed - emu0.frames_overflowed;
+  EXPECT_EQ(host.dropped - host0.dropped, 3u + overflowed);
+  EXPECT_EQ(host.sessions, 1u);
+  EXPECT_EQ(host.corrupt, host0.corrupt);
+}
+
+// Settle: once the host has answered the HELLO sent behind the last frame, nothing is in flight, so a
+// disconnect then loses no frame, and the counts on both sides agree exactly.
+TEST_F(HardwareTest, ASettledDisconnectLosesNoFrame) {
+  hw_config_.reconnect_backoff_s = 0.01;
+  hw_config_.reconnect_backoff_max_s = 0.05;
+  StartEmulator();
+  StartHost();
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 50; }));
+  ASSERT_TRUE(emulator_->Settle(test_support::kWaitTimeoutS));
+  const auto settled = emulator_->stats();
+  EXPECT_EQ(backend_->counters().frames + backend_->counters().dropped + settled.frames_trailing,
+            settled.frames_sent + settled.frames_overflowed);
+  emulator_->Vanish();
+  ASSERT_TRUE(WaitFor([&] { return !backend_->link()->connected(); }));
+  emulator_->Return();
+  emulator_->PauseFrames(false);
+  ASSERT_TRUE(WaitFor([&] { return backend_->link()->connected(); }));
+  const uint64_t frames = backend_->counters().frames;
+  ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > frames + 50; }));
+  ASSERT_TRUE(emulator_->Settle(test_support::kWaitTimeoutS));
+  const auto emu = emulator_->stats();
+  const auto host = backend_->counters();
+  EXPECT_EQ(host.frames, emu.frames_sent);
+  EXPECT_EQ(host.dropped, emu.frames_overflowed - emu.frames_trailing);
+  EXPECT_EQ(host.reconnects, 1u);
+  EXPECT_EQ(host.sessions, 1u);
+  EXPECT_EQ(emu.vanishes, 1u);
+  EXPECT_EQ(emu.settles, 2u);
+  EXPECT_EQ(emu.settles_unconfirmed, 0u);
+}
+
+TEST_F(HardwareTest, SettleWithoutAHostIsUnconfirmed) {
+  StartEmulator();
+  EXPECT_FALSE(emulator_->Settle(0.1));
+  EXPECT_EQ(emulator_->stats().settles_unconfirmed, 1u);
+}
+
 TEST_F(HardwareTest, StaleThenDisconnectedThenRecovers) {
   hw_config_.stale_timeout_s = 0.05;
   hw_config_.disconnect_timeout_s = 0.3;
@@ -423,6 +517,43 @@ TEST(HardwareRebootWhileAway, HelloNumbersStartingAgainIsANewSession) {
   EXPECT_EQ(backend.session(), 2u);
   EXPECT_EQ(counters.dropped, 0u);
   EXPECT_EQ(counters.corrupt, 0u);
+}
+
+// The late-frame rule against a device that can send any sequence number and device time: a frame
+// a few numbers back is late (counted, never published); one far back is a restart.
+TEST(HardwareLateFrames, AFewBackIsLateFarBackIsARestart) {
+  HardwareConfig config;
+  config.port = test_support::UniqueLinkPath("late");
+  ScriptedDevice device(config.port);
+  device.Appear();
+  HardwareBackend backend(config, kUnits, "test_20");
+  std::thread starter([&] { backend.Start(); });
+  ASSERT_TRUE(device.Handshake(/*hello_seq=*/0, kUnits));
+  starter.join();
+  device.SendFrames(/*first_seq=*/65530, /*first_time_us=*/1'000'000, /*count=*/10, kUnits);  // wraps to 3
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.counters().frames == 10; }));
+  sensor::RawFrame frame;
+  ASSERT_EQ(backend.Read(&frame), sensor::ReadStatus::kOk);
+  EXPECT_EQ(frame.sequence, 3);
+  // Seq 65533 again (6 back, across the wrap), 6 ms back in device time: late.
+  device.SendFrames(/*first_seq=*/65533, /*first_time_us=*/1'003'000, /*count=*/1, kUnits);
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.link()->reordered() == 1; }));
+  EXPECT_NE(backend.Read(&frame), sensor::ReadStatus::kOk) << "a late frame was handed to the loop";
+  device.SendFrames(/*first_seq=*/4, /*first_time_us=*/1'010'000, /*count=*/1, kUnits);
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.counters().frames == 11; }));
+  ASSERT_EQ(backend.Read(&frame), sensor::ReadStatus::kOk);
+  EXPECT_EQ(frame.sequence, 4);
+  auto counters = backend.counters();
+  EXPECT_EQ(counters.dropped, 0u);  // not a gap of 65535
+  EXPECT_EQ(counters.sessions, 1u);
+  // 40 numbers back is beyond the window: the device restarted.
+  device.SendFrames(/*first_seq=*/static_cast<uint16_t>(4 - 40), /*first_time_us=*/970'000, /*count=*/1,
+                    kUnits);
+  ASSERT_TRUE(test_support::WaitFor([&] { return backend.counters().frames == 12; }));
+  counters = backend.counters();
+  EXPECT_EQ(counters.sessions, 2u);
+  EXPECT_EQ(backend.link()->reordered(), 1u);
+  EXPECT_EQ(counters.dropped, 0u);
 }
 
 // Open, shorted and implausible channels arrive as such over the wire, and the shared readout marks
