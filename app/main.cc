@@ -12,8 +12,10 @@ int main(int argc, char** argv) {
       "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
   root.require_subcommand(1);
   root.set_version_flag("--version", std::string("graspbed ") + GRASPBED_VERSION);
-  graspbed::app::InstallCommands(root);
   try {
+    // Inside the try: some options' defaults are data files, and a missing data directory is an
+    // error message, not std::terminate.
+    graspbed::app::InstallCommands(root);
     root.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     // Usage errors are bad input (exit 2); --help and --version exit 0; a subcommand that throws

@@ -703,5 +703,23 @@ TEST_F(CliTest, CtrlCDuringASweepLeavesNoResultsThatMergeWouldTake) {
   ExpectNoTemporaries(out);
 }
 
+// A binary that finds no data directory (moved away from its share/graspbed, GRASPBED_DATA_DIR unset)
+// says so and exits 1: the commands' option defaults name data files, and before they were
+// installed inside main's error handling this ended in std::terminate (abort, exit 134).
+TEST_F(CliTest, AMissingDataDirectoryIsAMessageAndExitOneNotAnAbort) {
+  const std::string moved = dir_.Path("bin/graspbed");
+  fs::create_directories(dir_.Path("bin"));
+  fs::copy_file(CliBinary(), moved);
+  const std::string err = dir_.Path("err.txt");
+  const int status =
+      std::system(("env -u GRASPBED_DATA_DIR " + moved + " run x.yaml >/dev/null 2>" + err).c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string message = ReadText(err);
+  EXPECT_NE(message.find("graspbed: error: graspbed's data"), std::string::npos) << message;
+  EXPECT_NE(message.find("set GRASPBED_DATA_DIR"), std::string::npos) << message;
+}
+
+
 }  // namespace
 }  // namespace graspbed::scenario
