@@ -24,6 +24,7 @@ packages=(
   libglfw3-dev xvfb xauth xdotool                # graspbed view: a window (GLFW); its tests run under xvfb-run and type keys with xdotool
   clang-14 libclang-rt-14-dev                    # libFuzzer targets (wire decoder, scenario loader): build-fuzz/
   python3 python3-dev pybind11-dev               # the graspbed Python module; python3 runs the install tests
+  strace                                         # the install test traces file access where unshare is refused
   python3-numpy python3-pytest                   # its signals as numpy arrays; its tests
 )
 
