@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -445,32 +446,37 @@ void RunSoak(const SoakOptions& options) {
   const double cycles_exact = options.duration_s / options.period_s;
   const int cycles = static_cast<int>(std::lround(cycles_exact));
   if (cycles < 1 || std::abs(cycles_exact - cycles) > 1e-9) {
-    throw std::invalid_argument("soak: --duration " + std::to_string(options.duration_s) +
-                                " must be a whole number (>= 1) of --period " +
-                                std::to_string(options.period_s));
+    std::ostringstream message;
+    message << "soak: --duration " << options.duration_s << " must be a whole number (>= 1) of --period "
+            << options.period_s << " (one disconnect per period)";
+    throw std::invalid_argument(message.str());
   }
   hardware::SoakSchedule schedule;
   schedule.cycles = cycles;
   schedule.period_s = options.period_s;
   schedule.downtime_s = options.downtime_s;
   schedule.Validate();
-  scenario::LoadScenario(options.scenario);  // refused here (exit 2) rather than in a child
   const std::string link =
       options.link.empty() ? "/tmp/graspbed-soak-" + std::to_string(::getpid()) : options.link;
-  if (fs::exists(fs::symlink_status(link))) {
-    throw std::invalid_argument("soak: --link " + link + " exists already (another emulator?)");
-  }
-  fs::create_directories(options.out_dir);
-  const std::string self = SelfExecutable();
+  const double host_duration_s = options.duration_s + kSoakHostTailS;
   const auto number = [](double value) {
     std::ostringstream text;
     text << value;
     return text.str();
   };
+  // Refused here (exit 2) rather than in a child: a bad file, a duration the loader refuses (over
+  // 3600 s, or a signal log over its bound). A script the bench cannot play is refused by the host.
+  scenario::LoadScenario(
+      options.scenario,
+      {{"serial.port", link}, {"backend", "serial"}, {"duration_s", number(host_duration_s)}});
+  if (fs::exists(fs::symlink_status(link))) {
+    throw std::invalid_argument("soak: --link " + link + " exists already (another emulator?)");
+  }
+  fs::create_directories(options.out_dir);
+  const std::string self = SelfExecutable();
   const std::string emulate_json = options.out_dir + "/emulate.json";
   const std::string host_json = options.out_dir + "/host.json";
   const std::string host_out = options.out_dir + "/host";
-  const double host_duration_s = options.duration_s + kSoakHostTailS;
   const double load_start = LoadAverage1Min();
   double load_max = load_start;
 
@@ -525,11 +531,18 @@ void RunSoak(const SoakOptions& options) {
     }
     host_exit = WaitExit(host_pid, options.rss_interval_s);
   }
-  // The emulator ends when the host stops streaming; it prints its summary then.
-  int emulator_exit = WaitExit(emulator_pid, 30.0);
+  // The emulator ends when the host stops streaming; it prints its summary then. A host that was
+  // refused never streamed.
+  int emulator_exit = WaitExit(emulator_pid, host_exit == 0 ? 30.0 : 2.0);
   if (emulator_exit == -1) emulator_exit = EndChild(emulator_pid);
   const double load_end = LoadAverage1Min();
   if (interrupted) throw CLI::RuntimeError(130);
+  if (host_exit == 2) {  // bad input to `run`: its message, as ours
+    std::ifstream log(options.out_dir + "/host.log");
+    std::string message((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+    while (!message.empty() && message.back() == '\n') message.pop_back();
+    throw std::invalid_argument("soak: the host (run --backend serial) refused to start: " + message);
+  }
 
   const nlohmann::json emulator = ReadJsonFile(emulate_json, "the emulator");
   const nlohmann::json host_summary = ReadJsonFile(host_json, "the host (run --backend serial)");

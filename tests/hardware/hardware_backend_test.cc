@@ -442,8 +442,10 @@ TEST_F(HardwareTest, DeviceVanishesAndReturns) {
   sensor::RawFrame frame;
   ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));
   emulator_->Vanish();
+  const auto at_vanish = emulator_->stats();  // nothing is sent while the device is away
   ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kDisconnected; }));
-  EXPECT_FALSE(backend_->link()->connected());
+  ASSERT_TRUE(WaitFor([&] { return !backend_->link()->connected(); }));
+  const uint64_t frames_before = backend_->counters().frames;  // all the old connection gave
   EXPECT_EQ(actuator_->Write({.grip_effort = 0.3}), hand::WriteStatus::kDisconnected);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few failed reopen attempts
   emulator_->Return();
@@ -455,13 +457,17 @@ TEST_F(HardwareTest, DeviceVanishesAndReturns) {
   const auto counters = backend_->counters();
   EXPECT_EQ(counters.reconnects, 1u);
   EXPECT_EQ(counters.sessions, 1u);  // sequence numbers went on: the same device session
-  // Frames in flight when the pty closed are lost: exactly those show up as dropped, no more.
+  // Frames in flight when the pty closed (sent, not yet read: how many depends on the machine's
+  // pace) are lost: exactly those show up as dropped, with any the FIFO overflowed with, no more.
   emulator_->PauseFrames(true);
   ASSERT_TRUE(WaitFor([&] {
     const auto c = backend_->counters();
-    return c.frames + c.dropped == emulator_->stats().frames_sent;
+    const auto e = emulator_->stats();
+    return c.frames + c.dropped + e.frames_trailing == e.frames_sent + e.frames_overflowed;
   }));
-  EXPECT_LE(backend_->counters().dropped, 10u);
+  const auto emu = emulator_->stats();
+  EXPECT_EQ(backend_->counters().dropped,
+            at_vanish.frames_sent - frames_before + emu.frames_overflowed - emu.frames_trailing);
   EXPECT_EQ(backend_->counters().corrupt, 0u);
   EXPECT_EQ(emulator_->stats().commands_before_hello, 0u);
   EXPECT_EQ(emulator_->stats().stream_starts >= 2, true);
@@ -477,7 +483,9 @@ TEST_F(HardwareTest, RebootStartsANewSession) {
   ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > frames + 10; }));  // streaming again
   const auto counters = backend_->counters();
   EXPECT_EQ(counters.sessions, 2u);
-  EXPECT_EQ(counters.dropped, 0u);  // the restart is not a gap
+  // The restart is not a gap: the only gaps are frames the device's FIFO overflowed with (none on an
+  // idle machine; on a loaded one the host falls behind and a real device would drop them too).
+  EXPECT_LE(counters.dropped, emulator_->stats().frames_overflowed);
   EXPECT_EQ(counters.reconnects, 0u);
   sensor::RawFrame frame;
   ASSERT_TRUE(WaitFor([&] { return backend_->Read(&frame) == sensor::ReadStatus::kOk; }));

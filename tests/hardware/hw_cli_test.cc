@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,25 @@ TEST_F(HwCliTest, CrossFieldChecksSeeEveryParameterWhateverTheirOrder) {
   EXPECT_EQ(result.exit_code, kExitBadInput);
   EXPECT_THAT(result.err, HasSubstr(config + ":3: controller.params.min_grip_n = 12"));
   EXPECT_THAT(result.err, HasSubstr("must not exceed max_grip_n"));
+}
+
+// `graspbed soak` refuses a schedule it cannot run before it starts anything (exit 2, no output).
+TEST_F(HwCliTest, SoakRefusesAScheduleItCannotRunNamingTheOption) {
+  const std::string out = dir_.Path("soak");
+  const std::string scenario = "tests/hardware/data/soak_hold.yaml";
+  CliResult result = RunCli("soak " + scenario + " --duration 25 --period 10 --out " + out);
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("--duration 25 must be a whole number (>= 1) of --period 10"));
+  result = RunCli("soak " + scenario + " --duration 30 --period 3 --out " + out);
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("soak.period_s = 3: must be >= 5 s"));
+  result = RunCli("soak " + scenario + " --duration 30 --period 10 --downtime 5 --out " + out);
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("soak.downtime_s = 5: must be > 0 and <= 0.1 x period_s"));
+  result = RunCli("emulate --link " + dir_.Path("dev") + " --soak-cycles 1 --soak-period 2");
+  EXPECT_EQ(result.exit_code, kExitBadInput);
+  EXPECT_THAT(result.err, HasSubstr("soak.period_s = 2"));
+  EXPECT_FALSE(std::filesystem::exists(out)) << "a refused soak left an output directory";
 }
 
 TEST_F(HwCliTest, AnUnwritableLogIsRefusedBeforeThePort) {
