@@ -13,6 +13,7 @@
 
 #include "sensor/raw_frame.h"
 #include "sim/hand_kinematics.h"
+#include "sim/object_shapes.h"
 
 namespace graspbed::sim {
 namespace {
@@ -123,8 +124,11 @@ double WrapPlaneHeightM(const ObjectConfig& object) {
 
 double PinchHeightM(const ObjectConfig& object) {
   const double centre = ObjectCentreZ(object);
-  // A ball is pinched at its equator (above it the squeeze would push it out of the grasp).
-  if (object.shape == ObjectShape::kSphere) return std::max(centre, kMinPadHeightM);
+  // A ball is pinched at its equator (above it the squeeze would push it out of the grasp), and so
+  // are an egg and a banana lying on the table.
+  if (object.shape == ObjectShape::kSphere || object.shape == ObjectShape::kEgg ||
+      object.shape == ObjectShape::kBanana)
+    return std::max(centre, kMinPadHeightM);
   const double top = centre + object.RestHalfHeightM();
   return std::max(top - kPinchBelowTopM, std::min(centre, kMinPadHeightM));
 }
@@ -399,7 +403,8 @@ std::vector<std::string> GeomNames(const std::string& mjcf_fragment) {
 // puts them in the order dynamic collision tests them, so the contacts are the same, in the same
 // order (ModelTest.ThePredefinedPairsGiveTheContactsOfDynamicCollision). Simulation updates the
 // object pairs' friction with the object's.
-void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<std::string>& hand_geoms) {
+void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<std::string>& hand_geoms,
+                       const std::vector<std::string>& object_geoms) {
   const ObjectConfig& object = scene.object;
   std::ostringstream& o = w.out();
   const std::string compliance = ComplianceAttributes(w, object);
@@ -417,10 +422,13 @@ void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<st
   if (scene.physics.table) {
     for (const std::string& geom : hand_geoms)
       o << "    <pair geom1=\"table_geom\" geom2=\"" << geom << "\"" << table_hand << "/>\n";
-    o << "    <pair geom1=\"table_geom\" geom2=\"object_geom\"" << with_object << "/>\n";
+    for (const std::string& part : object_geoms)
+      o << "    <pair geom1=\"table_geom\" geom2=\"" << part << "\"" << with_object << "/>\n";
   }
-  for (const std::string& geom : hand_geoms)
-    o << "    <pair geom1=\"" << geom << "\" geom2=\"object_geom\"" << with_object << "/>\n";
+  for (const std::string& part : object_geoms) {
+    for (const std::string& geom : hand_geoms)
+      o << "    <pair geom1=\"" << geom << "\" geom2=\"" << part << "\"" << with_object << "/>\n";
+  }
   o << "  </contact>\n";
 }
 
@@ -641,7 +649,20 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
       o << (ring == 0 && i == 0 ? "" : "  ") << w.Vec(x, a * std::sin(t), -b * std::cos(t));
     }
   }
-  o << "\"/>\n  </asset>\n";
+  o << "\"/>\n";
+  // The library's shapes and the user's mesh: the object's parts (one geom each, object frame).
+  const bool primitive = object.shape == ObjectShape::kBox || object.shape == ObjectShape::kCylinder ||
+                         object.shape == ObjectShape::kSphere;
+  std::vector<ObjectPart> parts;
+  if (!primitive) parts = ObjectParts(object);
+  for (size_t k = 0; k < parts.size(); ++k) {
+    if (parts[k].type != ObjectPart::Type::kMesh) continue;
+    o << "    <mesh name=\"object_mesh_" << k << "\" vertex=\"";
+    for (size_t v = 0; v < parts[k].vertices_m.size(); ++v)
+      o << (v == 0 ? "" : "  ") << w.Vec(parts[k].vertices_m[v]);
+    o << "\"/>\n";
+  }
+  o << "  </asset>\n";
 
   o << "  <worldbody>\n";
   o << "    <light pos=\"0 -0.3 0.6\" dir=\"0 0.4 -1\" directional=\"true\"/>\n";
@@ -680,6 +701,43 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     << w.Vec(object.initial_position_m[0], object.initial_position_m[1], ObjectCentreZ(object))
     << "\" quat=\"" << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
   o << "      <freejoint name=\"object_free\"/>\n";
+  std::vector<std::string> object_geoms = {"object_geom"};
+  if (!primitive) {
+    object_geoms.clear();
+    for (size_t k = 0; k < parts.size(); ++k) {
+      const ObjectPart& part = parts[k];
+      const std::string name = k == 0 ? "object_geom" : "object_geom_" + std::to_string(k);
+      if (part.collides) object_geoms.push_back(name);
+      o << "      <geom name=\"" << name << "\" ";
+      const Eigen::Vector3d half = part.size_m[1] * part.axis;
+      switch (part.type) {
+        case ObjectPart::Type::kBox:
+          o << "type=\"box\" size=\"" << w.Vec(part.size_m[0], part.size_m[1], part.size_m[2]) << "\" pos=\""
+            << w.Vec(part.position_m) << "\"";
+          break;
+        case ObjectPart::Type::kCylinder:
+        case ObjectPart::Type::kCapsule:
+          o << "type=\"" << (part.type == ObjectPart::Type::kCylinder ? "cylinder" : "capsule") << "\" size=\""
+            << w.Num(part.size_m[0]) << "\" fromto=\"" << w.Vec(part.position_m - half) << " "
+            << w.Vec(part.position_m + half) << "\"";
+          break;
+        case ObjectPart::Type::kSphere:
+          o << "type=\"sphere\" size=\"" << w.Num(part.size_m[0]) << "\" pos=\"" << w.Vec(part.position_m) << "\"";
+          break;
+        case ObjectPart::Type::kMesh:
+          o << "type=\"mesh\" mesh=\"object_mesh_" << k << "\"";
+          break;
+      }
+      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim << "\" friction=\""
+        << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " " << w.Num(kRollingFriction)
+        << "\"";
+      if (part.collides) {
+        o << " contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+      } else {
+        o << " contype=\"0\" conaffinity=\"0\" rgba=\"0.3 0.5 0.9 0.6\"/>\n";
+      }
+    }
+  } else {
   o << "      <geom name=\"object_geom\" ";
   switch (object.shape) {
     case ObjectShape::kBox:
@@ -693,13 +751,16 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     case ObjectShape::kSphere:
       o << "type=\"sphere\" size=\"" << w.Num(0.5 * object.size_m[0]) << "\"";
       break;
+    default:
+      break;
   }
   o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim
     << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " "
     << w.Num(kRollingFriction) << "\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+  }
   o << "    </body>\n";
   o << "  </worldbody>\n";
-  if (physics.contact_pairs) WriteContactPairs(w, scene, hand_geoms);
+  if (physics.contact_pairs) WriteContactPairs(w, scene, hand_geoms, object_geoms);
 
   if (hand.model == HandModel::kJaw) {
     WriteJawTransmission(w, scene);

@@ -1,9 +1,14 @@
 #include "sim/scene_config.h"
 
 #include <cmath>
+#include <filesystem>
+#include <iostream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "sim/object_library.h"
+#include "sim/object_shapes.h"
 
 namespace graspbed::sim {
 namespace {
@@ -32,6 +37,20 @@ const char* ToString(ObjectShape shape) {
       return "cylinder";
     case ObjectShape::kSphere:
       return "sphere";
+    case ObjectShape::kMug:
+      return "mug";
+    case ObjectShape::kBottle:
+      return "bottle";
+    case ObjectShape::kCup:
+      return "cup";
+    case ObjectShape::kWineGlass:
+      return "wine_glass";
+    case ObjectShape::kEgg:
+      return "egg";
+    case ObjectShape::kBanana:
+      return "banana";
+    case ObjectShape::kMesh:
+      return "mesh";
   }
   return "?";
 }
@@ -41,7 +60,18 @@ const char* ToString(HandModel model) { return model == HandModel::kJaw ? "jaw" 
 const char* ToString(GraspType grasp) { return grasp == GraspType::kWrap ? "wrap" : "pinch"; }
 
 double SceneConfig::ObjectWidthM() const {
-  if (object.shape != ObjectShape::kBox) return object.size_m[0];
+  const auto& size = object.size_m;
+  switch (object.shape) {
+    case ObjectShape::kBox:
+      break;
+    case ObjectShape::kBottle:  // pinched by the neck, 13 mm below the top
+    case ObjectShape::kBanana:  // across its thickness
+      return size[1];
+    case ObjectShape::kCup:  // its diameter 13 mm below the rim
+      return size[0] - (size[0] - size[1]) * std::min(1.0, 0.013 / size[2]);
+    default:
+      return size[0];
+  }
   // A box's extent along the pinch (world x), turned by its yaw.
   return std::abs(std::cos(object.initial_yaw_rad)) * object.size_m[0] +
          std::abs(std::sin(object.initial_yaw_rad)) * object.size_m[1];
@@ -63,8 +93,11 @@ double ObjectConfig::RestHalfHeightM() const {
       return 0.5 * size_m[2];
     case ObjectShape::kSphere:
       return 0.5 * size_m[0];
+    case ObjectShape::kBanana:
+      return 0.5 * size_m[1];
+    default:
+      return 0.5 * size_m[2];
   }
-  return 0.0;
 }
 
 const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
@@ -76,11 +109,20 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
           Table::Choice("shape", &C::shape,
                         {{ObjectShape::kBox, "box"},
                          {ObjectShape::kCylinder, "cylinder"},
-                         {ObjectShape::kSphere, "sphere"}},
-                        ""),
+                         {ObjectShape::kSphere, "sphere"},
+                         {ObjectShape::kMug, "mug"},
+                         {ObjectShape::kBottle, "bottle"},
+                         {ObjectShape::kCup, "cup"},
+                         {ObjectShape::kWineGlass, "wine_glass"},
+                         {ObjectShape::kEgg, "egg"},
+                         {ObjectShape::kBanana, "banana"},
+                         {ObjectShape::kMesh, "mesh"}},
+                        "the primitives, the library's everyday shapes (docs/scenarios.md, \"Object library\"), "
+                        "or `mesh` (set by the `mesh` key)"),
           Table::Numbers("size_m", &C::size_m, NumberRule::Between(0.0, kMaxObjectSizeM), "m",
                          "box: edge lengths x, y, z; cylinder: diameter, unused, height (axis along z); "
-                         "sphere: diameter, unused, unused")
+                         "sphere: diameter, unused, unused; the library's shapes: docs/scenarios.md, \"Object "
+                         "library\"; mesh: from the file")
               .Note("the ones the shape uses >= 0.001"),
           Table::Number("mass_kg", &C::mass_kg, NumberRule::Between(kMinObjectMassKg, kMaxObjectMassKg), "kg",
                         "uniform solid"),
@@ -105,14 +147,63 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
           Table::Number("crush_limit_n", &C::crush_limit_n, NumberRule::Between(0.0, kMaxForceN), "N",
                         "squeeze above which the object counts as crushed (scored, not simulated); 0 = not "
                         "fragile"),
+          Table::Custom("name", "", "none", "a library object (`graspbed objects`)",
+                        "start from this library object; the section's other keys override its values"),
+          Table::Custom("mesh", "", "none", "an .stl or .obj file",
+                        "the user's own object: this mesh (relative to the scenario's directory), hulled by "
+                        "MuJoCo; sets `shape: mesh` and `size_m` from the file"),
+          Table::OptionalNumber("scale", &C::scale, {0.0, 1000.0, true}, "-",
+                                "mesh only: multiplies the file's coordinates into metres (0.001 for mm)"),
+          Table::OptionalNumber("fill_fraction", &C::fill_fraction, NumberRule::Between(0.0, 1.0), "-",
+                                "bottle only: share of the body's inner height filled with water, part of "
+                                "`mass_kg`"),
+          Table::OptionalNumber("stiffness_n_m", &C::stiffness_n_m, NumberRule::Between(kMinStiffnessNM, kMaxStiffnessNM),
+                                "N/m",
+                                "contact stiffness against a rigid surface; sets `solref_timeconst_s` and "
+                                "`solimp` from it and the mass (docs/scenarios.md, \"Object compliance\")"),
       },
       [](const C& o) {
-        const int used_sizes = o.shape == ObjectShape::kBox ? 3 : 1;
-        for (int i = 0; i < used_sizes; ++i) {
+        const auto require_size = [&o](int i) {
           RequireIn("size_m[" + std::to_string(i) + "]", o.size_m[i], kMinObjectSizeM, kMaxObjectSizeM);
+        };
+        switch (o.shape) {
+          case ObjectShape::kBox:
+          case ObjectShape::kMug:
+          case ObjectShape::kBottle:
+          case ObjectShape::kCup:
+          case ObjectShape::kWineGlass:
+          case ObjectShape::kBanana:
+          case ObjectShape::kMesh:
+            for (int i = 0; i < 3; ++i) require_size(i);
+            break;
+          case ObjectShape::kCylinder:
+          case ObjectShape::kEgg:
+            require_size(0);
+            require_size(2);
+            break;
+          case ObjectShape::kSphere:
+            require_size(0);
+            break;
         }
-        if (o.shape == ObjectShape::kCylinder) {
-          RequireIn("size_m[2]", o.size_m[2], kMinObjectSizeM, kMaxObjectSizeM);
+        if (o.shape == ObjectShape::kMug && !(o.size_m[1] >= o.size_m[0] + 0.015))
+          Bad("size_m[1]", o.size_m[1], "a mug's depth with the handle must exceed its diameter by >= 0.015 m");
+        if (o.shape == ObjectShape::kBottle && !(o.size_m[1] < o.size_m[0]))
+          Bad("size_m[1]", o.size_m[1], "a bottle's neck must be narrower than its body (size_m[0])");
+        if (o.shape == ObjectShape::kWineGlass && !(o.size_m[2] >= 0.05 && o.size_m[0] >= 0.02))
+          Bad("size_m[2]", o.size_m[2], "a wine glass needs a height >= 0.05 m and a bowl >= 0.02 m across");
+        if (o.shape == ObjectShape::kBanana && !(o.size_m[2] < 0.5 * o.size_m[0]))
+          Bad("size_m[2]", o.size_m[2], "a banana's bow must be under half its chord (size_m[0])");
+        if (o.shape == ObjectShape::kMesh && o.mesh.empty())
+          throw common::ConfigError("", 0, "shape", "mesh", "give the file with `mesh: FILE` instead");
+        if (o.shape != ObjectShape::kMesh && o.scale)
+          Bad("scale", *o.scale, "only for a mesh (`mesh: FILE`)");
+        if (o.fill_fraction) {
+          if (o.shape != ObjectShape::kBottle) Bad("fill_fraction", *o.fill_fraction, "only for shape bottle");
+          const double liquid_kg = LiquidMassKg(o);
+          if (!(liquid_kg < o.mass_kg))
+            Bad("fill_fraction", *o.fill_fraction,
+                "the water alone weighs " + common::ReadableNumber(liquid_kg) + " kg, more than mass_kg (" +
+                    common::ReadableNumber(o.mass_kg) + " kg, bottle and water)");
         }
         if (!(o.solimp[0] > 0.0 && o.solimp[0] <= o.solimp[1] && o.solimp[1] < 1.0)) {
           Bad("solimp[1]", o.solimp[1], "need 0 < dmin <= dmax < 1");
@@ -348,10 +439,148 @@ const common::FieldTable<SceneConfig>& SceneConfigFields() {
 
 void SceneConfig::Validate() const { SceneConfigFields().Validate(*this); }
 
+double SolrefTimeconstForStiffness(double stiffness_n_m, double mass_kg, double dampratio) {
+  return std::sqrt(mass_kg / ((1.0 - kStiffnessImpedance) * stiffness_n_m)) / dampratio;
+}
+
+double StiffnessOfSolref(const ObjectConfig& object) {
+  const double tau = object.solref_timeconst_s * object.solref_dampratio;
+  return object.mass_kg / ((1.0 - object.solimp[1]) * tau * tau);
+}
+
+namespace {
+
+// Before the section's keys are read: the library entry or the mesh the section starts from.
+void StartObject(const common::YamlMap& map, ObjectConfig* object) {
+  if (map.Has("name")) {
+    if (map.Has("mesh")) map.Fail("mesh", "give either `name` (a library object) or `mesh` (your own), not both");
+    const std::string name = map.GetString("name", "");
+    const ObjectLibrary* library = nullptr;
+    try {
+      library = &ShippedObjectLibrary();
+    } catch (const common::ConfigError&) {
+      throw;
+    } catch (const std::exception& error) {
+      map.Fail("name", std::string("cannot read the object library: ") + error.what());
+    }
+    const LibraryObject* entry = library->Find(name);
+    if (entry == nullptr)
+      map.Fail("name", "unknown object; the library (" + library->path() + ") has: " + library->NameList());
+    *object = entry->object;
+  }
+  if (map.Has("mesh")) {
+    std::filesystem::path path(map.GetString("mesh", ""));
+    if (path.empty()) map.Fail("mesh", "empty path");
+    if (path.is_relative() && !map.file().empty() && map.file().front() != '<') {
+      path = std::filesystem::path(map.file()).parent_path() / path;
+    }
+    object->shape = ObjectShape::kMesh;
+    object->mesh = std::filesystem::absolute(path).lexically_normal().string();
+  }
+  // A section that sets the compliance directly drops the stiffness it would otherwise inherit.
+  if ((map.Has("solref_timeconst_s") || map.Has("solimp")) && !map.Has("stiffness_n_m"))
+    object->stiffness_n_m.reset();
+}
+
+// After the section's keys are read: a mesh's size from its file, the stiffness as solref / solimp.
+void FinishObject(const common::YamlMap& map, double timestep_s, ObjectConfig* object) {
+  if (object->shape == ObjectShape::kMesh && !object->mesh.empty()) {
+    if (map.Has("size_m")) map.Fail("size_m", "a mesh's size comes from its file; scale it with `scale`");
+    const std::string key = map.Has("mesh") ? "mesh" : "shape";
+    try {
+      const MeshFile mesh = ReadMeshFile(object->mesh);
+      const double scale = object->scale.value_or(1.0);
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+      for (const Eigen::Vector3d& v : mesh.vertices) {
+        lo = lo.cwiseMin(v * scale);
+        hi = hi.cwiseMax(v * scale);
+      }
+      for (int k = 0; k < 3; ++k) object->size_m[k] = hi[k] - lo[k];
+      for (int k = 0; k < 3; ++k) {
+        if (!(object->size_m[k] >= kMinObjectSizeM && object->size_m[k] <= kMaxObjectSizeM)) {
+          std::ostringstream why;
+          why << "the mesh scaled by " << scale << " is " << object->size_m[0] << " x " << object->size_m[1]
+              << " x " << object->size_m[2] << " m; each extent must be in [" << kMinObjectSizeM << ", "
+              << kMaxObjectSizeM << "] m (is the file in mm? `scale: 0.001`)";
+          map.Fail(key, why.str());
+        }
+      }
+      const std::string warning = MeshHullWarning(object->mesh, scale);
+      if (!warning.empty()) std::cerr << "warning: " << warning << "\n";
+    } catch (const std::invalid_argument& error) {
+      map.Fail(key, error.what());
+    }
+  }
+  if (object->stiffness_n_m) {
+    const std::string key = map.Has("stiffness_n_m") || !map.Has("name") ? "stiffness_n_m" : "name";
+    const double stiffness = *object->stiffness_n_m;
+    const double tau = SolrefTimeconstForStiffness(stiffness, object->mass_kg, object->solref_dampratio);
+    const double factor = object->mass_kg / ((1.0 - kStiffnessImpedance) * object->solref_dampratio *
+                                             object->solref_dampratio);
+    if (tau < 2.0 * timestep_s) {
+      map.Fail(key, "stiffness_n_m " + common::ReadableNumber(stiffness) + " N/m is too stiff for " +
+                        common::ReadableNumber(object->mass_kg) + " kg at physics.timestep_s " +
+                        common::ReadableNumber(timestep_s) + " (solref time constant " + common::ReadableNumber(tau) +
+                        " s < 2 x timestep); at most " +
+                        common::ReadableNumber(factor / (4.0 * timestep_s * timestep_s)) + " N/m");
+    }
+    if (tau > kMaxSolrefTimeconstS) {
+      map.Fail(key, "stiffness_n_m " + common::ReadableNumber(stiffness) + " N/m is too soft for " +
+                        common::ReadableNumber(object->mass_kg) + " kg (solref time constant " +
+                        common::ReadableNumber(tau) + " s > " + common::ReadableNumber(kMaxSolrefTimeconstS) +
+                        " s); at least " +
+                        common::ReadableNumber(factor / (kMaxSolrefTimeconstS * kMaxSolrefTimeconstS)) + " N/m");
+    }
+    object->solref_timeconst_s = tau;
+    object->solimp = {kStiffnessImpedance, kStiffnessImpedance, 0.001, 0.5, 2.0};
+  }
+}
+
+}  // namespace
+
 SceneConfig LoadSceneConfig(const common::YamlMap& map) {
   SceneConfig scene;
+  const std::optional<common::YamlMap> object_map = map.GetMap("object");
+  if (object_map) StartObject(*object_map, &scene.object);
   SceneConfigFields().Load(map, &scene);
+  if (object_map) {
+    FinishObject(*object_map, scene.physics.timestep_s, &scene.object);
+    // The size and compliance may have changed: the scene's rules again.
+    try {
+      SceneConfigFields().ValidateRelative(scene);
+    } catch (const common::ConfigError& error) {
+      map.FailAt(error);
+    }
+  }
   return scene;
+}
+
+ObjectConfig LoadLibraryObjectConfig(const common::YamlMap& map, const std::vector<std::string>& also_valid) {
+  if (map.Has("mesh")) map.Fail("mesh", "library objects are built from shapes, not from files");
+  ObjectConfig object;
+  ObjectConfigFields().Load(map, &object, also_valid);
+  object.name = map.RequireString("name");
+  FinishObject(map, PhysicsConfig{}.timestep_s, &object);
+  SceneConfig scene;
+  scene.object = object;
+  try {
+    SceneConfigFields().ValidateRelative(scene);
+    ObjectParts(object);  // a shape that cannot be built fails here, not in a run
+  } catch (const common::ConfigError& error) {
+    map.FailAt(error);
+  } catch (const std::invalid_argument& error) {
+    map.FailHere(error.what());
+  }
+  return object;
+}
+
+void EmitSceneConfig(const SceneConfig& scene, YAML::Emitter& out) {
+  out << YAML::Key << "object" << YAML::Value << YAML::BeginMap;
+  ObjectConfigFields().Emit(scene.object, out);
+  if (!scene.object.name.empty()) out << YAML::Key << "name" << YAML::Value << scene.object.name;
+  if (!scene.object.mesh.empty()) out << YAML::Key << "mesh" << YAML::Value << scene.object.mesh;
+  out << YAML::EndMap;
+  SceneConfigFields().Emit(scene, out, {"object"});
 }
 
 SceneConfig LoadSceneConfigFile(const std::string& path) {

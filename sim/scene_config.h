@@ -10,7 +10,9 @@
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "common/field_table.h"
 #include "common/yaml_map.h"
@@ -55,19 +57,45 @@ inline constexpr double kMinTolerance = 1e-15;   ///< physics.tolerance [-]
 inline constexpr double kMaxTolerance = 1e-2;    ///< [-]
 inline constexpr double kMaxGravityMS2 = 100.0;  ///< [m/s^2] (Jupiter: 24.8)
 
-/// Shape of the graspable object.
-enum class ObjectShape { kBox, kCylinder, kSphere };
+inline constexpr double kMinStiffnessNM = 10.0;   ///< object.stiffness_n_m [N/m]
+inline constexpr double kMaxStiffnessNM = 1e8;    ///< [N/m]
+/// Impedance (solimp dmin = dmax) of an object whose compliance is given as a stiffness: flat, so
+/// the force grows linearly with penetration at the stated stiffness (docs/scenarios.md, "Object
+/// compliance").
+inline constexpr double kStiffnessImpedance = 0.99;
 
-/// "box" / "cylinder" / "sphere".
+/// Shape of the graspable object. Beyond the three primitives, the everyday objects of the library
+/// (sim/object_shapes.h builds their parts), each sized by object.size_m as ObjectConfig says.
+enum class ObjectShape { kBox, kCylinder, kSphere, kMug, kBottle, kCup, kWineGlass, kEgg, kBanana, kMesh };
+
+/// "box" / "cylinder" / "sphere" / "mug" / "bottle" / "cup" / "wine_glass" / "egg" / "banana" / "mesh".
 const char* ToString(ObjectShape shape);
 
 /// The object on the table.
 struct ObjectConfig {
   ObjectShape shape = ObjectShape::kBox;
   /// Box: full edge lengths x, y, z [m]. Cylinder: {diameter, unused, height} (axis along world z).
-  /// Sphere: {diameter, unused, unused}.
+  /// Sphere: {diameter, unused, unused}. Mug: {body diameter, depth with the handle (along +y),
+  /// height}. Bottle: {body diameter, neck diameter, height}. Cup: {rim diameter, base diameter,
+  /// height}. Wine glass: {bowl diameter, foot diameter, height}. Egg: {diameter, unused, length}
+  /// (standing on its blunt end). Banana: {chord length (along y), thickness, bow (sagitta, towards
+  /// -x)}, lying on the table. Mesh: the bounding box of the scaled mesh, set from the file.
   std::array<double, 3> size_m = {0.05, 0.05, 0.08};
-  double mass_kg = 0.1;  ///< [kg], inertia from a uniform solid of that shape
+  /// Total mass [kg]: primitives are uniform solids; the library's shapes spread it over their parts
+  /// (sim/object_shapes.h).
+  double mass_kg = 0.1;
+  /// Library name the object came from ("" when none); not part of the physics.
+  std::string name;
+  /// Mesh shape: path of the STL or OBJ file (made absolute at load); scale multiplies its
+  /// coordinates into metres (e.g. 0.001 for a file in mm).
+  std::string mesh;
+  std::optional<double> scale;
+  /// Bottle: share of the body's inner height filled with water (0..1); the liquid's mass is part
+  /// of mass_kg.
+  std::optional<double> fill_fraction;
+  /// Contact stiffness against a rigid, immovable surface [N/m]: when set, solref_timeconst_s and
+  /// solimp are derived from it and the mass at load (docs/scenarios.md, "Object compliance").
+  std::optional<double> stiffness_n_m;
   /// Coulomb friction coefficient of every contact with the object (the object's geom has contact
   /// priority, so its friction and compliance govern its contacts with the fingers and the table).
   double friction = 0.8;
@@ -251,9 +279,26 @@ const common::FieldTable<PhysicsConfig>& PhysicsConfigFields();
 const common::FieldTable<SceneConfig>& SceneConfigFields();
 
 /// Reads a SceneConfig from a YAML map with optional sections object / hand (with motor) / physics;
-/// unknown keys are refused. Lengths in the file are in metres (keys end in _m).
-/// @throws common::ConfigError naming file, line, key and value.
+/// unknown keys are refused. Lengths in the file are in metres (keys end in _m). An object section
+/// with `name` starts from that entry of the object library (sim/object_library.h), its other keys
+/// overriding the entry's; with `mesh`, the object is that file's mesh (relative paths from the
+/// file's directory), sized from it; a hull warning goes to stderr (MeshHullWarning).
+/// @throws common::ConfigError naming file, line, key and value (an unknown library name lists the
+///   known ones; a mesh file that cannot be read is named).
 SceneConfig LoadSceneConfig(const common::YamlMap& map);
+/// Reads a library entry's object: the object keys of `map` besides `also_valid`, `name` the
+/// entry's own; stiffness turned into solref / solimp for the default physics.timestep_s.
+/// @throws common::ConfigError as LoadSceneConfig.
+ObjectConfig LoadLibraryObjectConfig(const common::YamlMap& map, const std::vector<std::string>& also_valid);
+/// The solref time constant that gives `object` its stiffness_n_m against a rigid surface with the
+/// flat impedance kStiffnessImpedance: tau = sqrt(m / ((1 - d) K)) / dampratio [s].
+double SolrefTimeconstForStiffness(double stiffness_n_m, double mass_kg, double dampratio);
+/// The stiffness against a rigid surface that solref / solimp give `object` at its impedance dmax
+/// (exact when dmin = dmax): K = m / ((1 - d) tau^2 dampratio^2) [N/m].
+double StiffnessOfSolref(const ObjectConfig& object);
+/// Writes the scene as the sections object, hand, physics of the map `out` is in (a scenario's
+/// config.yaml): the field tables' keys plus the object's name and mesh when it has them.
+void EmitSceneConfig(const SceneConfig& scene, YAML::Emitter& out);
 /// Loads a scene file (top-level map as above).
 /// @throws common::ConfigError as LoadSceneConfig, or when the file cannot be read.
 SceneConfig LoadSceneConfigFile(const std::string& path);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstring>
 #include <list>
@@ -173,7 +174,8 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   // and friction sweeps, a scorecard's variations, a suite's repeated scenes) share one compiled
   // model instead of parsing and compiling the same MJCF again.
   SceneConfig canonical = scene_;
-  canonical.object.mass_kg = kCompiledObjectMassKg;
+  // A part-filled bottle's water has a mass of its own, not a share of the total: it keeps its mass.
+  if (!scene_.object.fill_fraction) canonical.object.mass_kg = kCompiledObjectMassKg;
   canonical.object.friction = kCompiledObjectFriction;
   model_.reset(CompiledModels::Instance().Copy(GenerateMjcf(layout_, canonical)));
   data_.reset(mj_makeData(model_.get()));
@@ -182,9 +184,15 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
   const mjModel* m = model_.get();
   object_body_ = RequireId(m, mjOBJ_BODY, "object");
   object_geom_ = RequireId(m, mjOBJ_GEOM, "object_geom");
+  geom_is_object_.assign(m->ngeom, 0);
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_bodyid[g] == object_body_ && (m->geom_contype[g] != 0 || m->geom_conaffinity[g] != 0)) {
+      geom_is_object_[g] = 1;
+      object_geoms_.push_back(g);
+    }
+  }
   for (int pair = 0; pair < m->npair; ++pair) {
-    if (m->pair_geom1[pair] == object_geom_ || m->pair_geom2[pair] == object_geom_)
-      object_pairs_.push_back(pair);
+    if (geom_is_object_[m->pair_geom1[pair]] || geom_is_object_[m->pair_geom2[pair]]) object_pairs_.push_back(pair);
   }
   holder_body_ = RequireId(m, mjOBJ_BODY, "holder");
   holder_shell_geom_ = RequireId(m, mjOBJ_GEOM, "holder_shell");
@@ -335,7 +343,7 @@ void Simulation::SetObjectFriction(double friction) {
   if (!(friction > 0.0) || !std::isfinite(friction)) {
     throw std::invalid_argument("object friction = " + std::to_string(friction) + ": must be > 0");
   }
-  model_->geom_friction[3 * object_geom_] = friction;
+  for (const int geom : object_geoms_) model_->geom_friction[3 * geom] = friction;
   // The listed contact pairs carry their own friction (sliding along both tangents).
   for (const int pair : object_pairs_) {
     model_->pair_friction[5 * pair] = friction;
@@ -460,6 +468,46 @@ void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
   }
 }
 
+double Simulation::LowestObjectPointM() const {
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const int g : object_geoms_) {
+    const mjtNum* rot = d->geom_xmat + 9 * g;  // row-major; row 2 = world z in geom axes
+    const mjtNum* size = m->geom_size + 3 * g;
+    const double centre_z = d->geom_xpos[3 * g + 2];
+    double below = 0.0;
+    switch (m->geom_type[g]) {
+      case mjGEOM_BOX:
+        below = std::abs(rot[6]) * size[0] + std::abs(rot[7]) * size[1] + std::abs(rot[8]) * size[2];
+        break;
+      case mjGEOM_SPHERE:
+        below = size[0];
+        break;
+      case mjGEOM_CAPSULE:
+        below = std::abs(rot[8]) * size[1] + size[0];
+        break;
+      case mjGEOM_CYLINDER:
+        below = std::abs(rot[8]) * size[1] + size[0] * std::sqrt(std::max(0.0, 1.0 - rot[8] * rot[8]));
+        break;
+      case mjGEOM_MESH: {
+        const int mesh = m->geom_dataid[g];
+        const float* vertex = m->mesh_vert + 3 * m->mesh_vertadr[mesh];
+        double lowest_offset = std::numeric_limits<double>::infinity();
+        for (int v = 0; v < m->mesh_vertnum[mesh]; ++v, vertex += 3)
+          lowest_offset = std::min(lowest_offset, rot[6] * vertex[0] + rot[7] * vertex[1] + rot[8] * vertex[2]);
+        below = -lowest_offset;
+        break;
+      }
+      default:
+        below = m->geom_rbound[g];
+        break;
+    }
+    lowest = std::min(lowest, centre_z - below);
+  }
+  return lowest;
+}
+
 GroundTruth Simulation::truth() const {
   const mjModel* m = model_.get();
   const mjData* d = data_.get();
@@ -473,22 +521,9 @@ GroundTruth Simulation::truth() const {
     t.object_velocity_m_s[k] = object_vel[3 + k];
     t.wrist_position_m[k] = d->xpos[3 * wrist_body_ + k];
   }
-  // Lowest point of the object geom: centre z minus its half extent along world z.
-  const mjtNum* rot = d->geom_xmat + 9 * object_geom_;  // row-major; row 2 = world z in geom axes
-  const mjtNum* size = m->geom_size + 3 * object_geom_;
-  double half_extent = 0.0;
-  switch (scene_.object.shape) {
-    case ObjectShape::kBox:
-      half_extent = std::abs(rot[6]) * size[0] + std::abs(rot[7]) * size[1] + std::abs(rot[8]) * size[2];
-      break;
-    case ObjectShape::kCylinder:
-      half_extent = std::abs(rot[8]) * size[1] + size[0] * std::sqrt(std::max(0.0, 1.0 - rot[8] * rot[8]));
-      break;
-    case ObjectShape::kSphere:
-      half_extent = size[0];
-      break;
-  }
-  t.object_height_above_table_m = d->geom_xpos[3 * object_geom_ + 2] - half_extent;
+  // Lowest point of the object's geoms: each centre's z minus its half extent along world z (the
+  // same arithmetic for a box, cylinder or sphere as the single geom always had).
+  t.object_height_above_table_m = LowestObjectPointM();
   {
     const mjtNum* pad = d->site_xpos + 3 * finger_pad_site_;
     const mjtNum* tip = d->site_xpos + 3 * thumb_pad_site_;
@@ -542,7 +577,7 @@ GroundTruth Simulation::truth() const {
     } else {
       t.thumb_normal_force_n += normal;
     }
-    if (other_geom != object_geom_) continue;
+    if (!geom_is_object_[other_geom]) continue;
     if (side == kFinger) {
       finger_on_object += normal;
       ++t.finger_contacts;
@@ -558,7 +593,7 @@ GroundTruth Simulation::truth() const {
     // contact.frame rows are the normal (from geom1 to geom2) and the two tangent directions, world
     // frame; mj_contactForce gives the force on geom2 in it. MuJoCo orders the pair by geom type,
     // so the object may be either: flip the sign when it is geom1 to get the force on the object.
-    const double on_object = contact.geom2 == object_geom_ ? 1.0 : -1.0;
+    const double on_object = geom_is_object_[contact.geom2] ? 1.0 : -1.0;
     mjtNum* tangential = side == kFinger ? finger_tangential : thumb_tangential;
     for (int k = 0; k < 3; ++k) {
       const double along_tangents = local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k];

@@ -168,6 +168,8 @@ class Simulation {
   void ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const;
   /// Ground truth now (object state, slip, contact forces). Allocates nothing.
   GroundTruth truth() const;
+  /// World height of the lowest point of the object's colliding geoms [m] (compound objects).
+  double LowestObjectPointM() const;
   /// First physics fault (NaN, MuJoCo warning), if any.
   const PhysicsFault& fault() const { return fault_; }
 
@@ -201,7 +203,9 @@ class Simulation {
 
   // Ids resolved once at construction.
   int object_body_ = -1;
-  int object_geom_ = -1;
+  int object_geom_ = -1;                ///< the object's first geom ("object_geom")
+  std::vector<char> geom_is_object_;     ///< per geom: 1 when it is one of the object's colliding geoms
+  std::vector<int> object_geoms_;        ///< the object's colliding geoms
   std::vector<int> object_pairs_;  ///< the contact pairs (model pair ids) that include the object
   int holder_body_ = -1;
   int holder_shell_geom_ = -1;

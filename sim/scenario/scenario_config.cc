@@ -1072,7 +1072,7 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
     out << YAML::EndMap;
   }
   if (!config.log.empty()) out << YAML::Key << "log" << YAML::Value << config.log;
-  sim::SceneConfigFields().Emit(config.scene, out);
+  sim::EmitSceneConfig(config.scene, out);
   EmitSensor(out, config.sensor);
 
   out << YAML::Key << "controller" << YAML::Value << YAML::BeginMap;
