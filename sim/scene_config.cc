@@ -195,6 +195,9 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
           Bad("size_m[2]", o.size_m[2], "a banana's bow must be under half its chord (size_m[0])");
         if (o.shape == ObjectShape::kMesh && o.mesh.empty())
           throw common::ConfigError("", 0, "shape", "mesh", "give the file with `mesh: FILE` instead");
+        if (o.shape != ObjectShape::kMesh && !o.mesh.empty())
+          throw common::ConfigError("", 0, "shape", ToString(o.shape),
+                                    "an object given by `mesh` has shape mesh; drop `shape` (and `size_m`)");
         if (o.shape != ObjectShape::kMesh && o.scale)
           Bad("scale", *o.scale, "only for a mesh (`mesh: FILE`)");
         if (o.fill_fraction) {

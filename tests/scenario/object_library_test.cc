@@ -256,6 +256,10 @@ TEST(ObjectMeshModelTest, ABrokenOrMissingFileIsRefusedByName) {
   const std::string missing = error_of("object: {mesh: nowhere.stl}\n");
   EXPECT_THAT(missing, HasSubstr("nowhere.stl"));
   EXPECT_THAT(missing, HasSubstr("cannot open"));
+  WriteStl(dir.Path("cube.stl"), BoxTriangles({0, 0, 0}, {30, 40, 50}));
+  const std::string shaped = error_of("object: {shape: box, mesh: cube.stl, scale: 0.001}\n");
+  EXPECT_THAT(shaped, HasSubstr("object.shape = box"));
+  EXPECT_THAT(shaped, HasSubstr("has shape mesh"));
   const std::string format = error_of("object: {mesh: part.msh}\n");
   EXPECT_THAT(format, HasSubstr("part.msh"));
   EXPECT_THAT(format, HasSubstr("unsupported format"));
