@@ -135,6 +135,9 @@ const std::vector<Binding>& Bindings() {
       GRASPBED_BIND("slip_landed_fraction", slip_landed_fraction, 0.0, 1.0, "",
                     "a slip cue still up after a response asks for another only once the grip reached this "
                     "fraction of the raised floor (and the ratio cue says the load still exceeds it)"),
+      GRASPBED_BIND("slip_vibration_rate_n_per_s", slip_vibration_rate_n_per_s, 0.0, 10000.0, "N/s",
+                    "while only the vibration cue keeps reporting slip after a response, the slip floor "
+                    "rises this fast; 0 = off"),
       GRASPBED_BIND("slip_refractory_s", slip_refractory_s, 0.001, 1.0, "s",
                     "a further slip event is counted no sooner than this"),
       GRASPBED_BIND("slip_floor_decay_n_per_s", slip_floor_decay_n_per_s, 0.0, 1000.0, "N/s",
@@ -646,7 +649,13 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, double t
       // to the ceiling (3 of the scorecard's runs), so on its own it asks again only after it fell.
       if (!slip_now) cue_fell_since_response_ = true;
       const bool load_cue = ratio_counts_ || centroid_counts_;
-      if (load_cue && phase_ == Phase::kSlip) slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
+      if (load_cue && phase_ == Phase::kSlip) {
+        slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
+      } else if (slip_now && phase_ == Phase::kSlip) {
+        // Vibration alone: a slide the step did not stop, or the step's own ringing; the floor
+        // still rises, slower (a shaken box slid out of a grip that rose once and stopped).
+        slip_floor_n_ += config_.slip_vibration_rate_n_per_s * dt_s;
+      }
       const bool landed = grip_n >= config_.slip_landed_fraction * std::min(slip_floor_n_, ceiling_n);
       const bool asks_again = cue_fell_since_response_ || (landed && load_cue);
       if (slip_now && time_s >= refractory_until_s_ && asks_again) RespondToSlip(time_s);

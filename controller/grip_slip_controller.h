@@ -81,6 +81,9 @@ struct GripSlipConfig {
   /// the measured grip has reached this fraction of the raised floor and the ratio cue still counts
   /// [-]; a cue that fell and rose again always may.
   double slip_landed_fraction = 0.9;
+  /// While only the vibration cue keeps reporting slip after a response, the slip floor rises this
+  /// fast [N/s] (slip_grip_rate_n_per_s is for the load cues); 0 = off.
+  double slip_vibration_rate_n_per_s = 0.0;
   double slip_floor_decay_n_per_s = 0.5;  ///< the raised grip after slip relaxes this fast [N/s]
   /// While the cues keep reporting slip after a response (a load the step did not cover), the slip
   /// floor keeps rising at this rate until the next event may raise it again [N/s]; 0 = off.
