@@ -579,7 +579,10 @@ ObjectConfig LoadLibraryObjectConfig(const common::YamlMap& map, const std::vect
 
 void EmitSceneConfig(const SceneConfig& scene, YAML::Emitter& out) {
   out << YAML::Key << "object" << YAML::Value << YAML::BeginMap;
-  ObjectConfigFields().Emit(scene.object, out);
+  // A mesh's size comes from its file when the config is read back.
+  const std::vector<std::string> derived =
+      scene.object.mesh.empty() ? std::vector<std::string>{} : std::vector<std::string>{"size_m"};
+  ObjectConfigFields().Emit(scene.object, out, derived);
   if (!scene.object.name.empty()) out << YAML::Key << "name" << YAML::Value << scene.object.name;
   if (!scene.object.mesh.empty()) out << YAML::Key << "mesh" << YAML::Value << scene.object.mesh;
   out << YAML::EndMap;
