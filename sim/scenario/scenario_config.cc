@@ -11,6 +11,7 @@
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 
 #include "common/data_dir.h"
 #include "controller/plugin_loader.h"
@@ -261,13 +262,21 @@ void AtMap(const YamlMap& map, Fn&& fn) {
   }
 }
 
+// Whether `path` names an existing file. A name the file system refuses to look up (a component
+// over NAME_MAX, no permission on a directory) names none either: bad input, refused at its key,
+// where std::filesystem::exists(path) would throw filesystem_error (exit 1, no file, line or key).
+bool Exists(const std::filesystem::path& path) {
+  std::error_code error;
+  return std::filesystem::exists(path, error);
+}
+
 std::string ShippedLayoutPath(const std::string& name) {
   return common::DataPath("sensor/layouts/" + name + ".yaml");
 }
 
 bool IsShippedLayout(const std::string& name) {
   return name.find('/') == std::string::npos && name.find(".yaml") == std::string::npos &&
-         std::filesystem::exists(ShippedLayoutPath(name));
+         Exists(ShippedLayoutPath(name));
 }
 
 // kn and kt of the unit `config` describes, analysed once per process and unit: suites, sweeps and
@@ -298,7 +307,7 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   if (!IsShippedLayout(s.layout)) {
     std::filesystem::path path(s.layout);
     if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
-    if (!std::filesystem::exists(path)) {
+    if (!Exists(path)) {
       map.Fail("layout",
                "no such layout: give default_20, paper_3x3 or a layout file path (relative to "
                "the scenario file)");
@@ -315,7 +324,7 @@ SensorOptions LoadSensorOptions(const YamlMap& map, const std::string& scenario_
   if (!s.fea_config.empty()) {
     std::filesystem::path path(s.fea_config);
     if (path.is_relative()) path = std::filesystem::path(scenario_file).parent_path() / path;
-    if (!std::filesystem::exists(path)) map.Fail("fea_config", "no such file");
+    if (!Exists(path)) map.Fail("fea_config", "no such file");
     s.fea_config = std::filesystem::absolute(path).lexically_normal().string();
   }
   if (s.sensitivities == "fea") {
@@ -528,6 +537,10 @@ ControllerOptions LoadControllerOptions(const YamlMap& map, const std::string& d
     declared = controller::ControllerParameters(c.name);
   } catch (const std::invalid_argument& error) {
     map.Fail(name_key, error.what());
+  } catch (const std::filesystem::filesystem_error& error) {
+    // The plugin loader's look-up of a library name the file system refuses (e.g. too long).
+    map.Fail(name_key, std::string("cannot look up the plugin library: ") + error.code().message() + ": " +
+                           error.path1().string());
   }
   for (const auto& parameter : declared) c.params[parameter.name] = parameter.default_value;
   if (auto params = map.GetMap("params")) {

@@ -93,6 +93,27 @@ script:
   EXPECT_EQ(config.script[2].line, 3);
 }
 
+TEST(ScenarioConfigTest, APathTheFileSystemRefusesIsBadInputAtItsKey) {
+  // A file name over NAME_MAX (255 bytes): std::filesystem::exists throws for it ("File name too
+  // long"), which the loader once let through as a failure (exit 1) instead of bad input (exit 2).
+  // Found by fuzz/scenario_fuzz.cc.
+  const std::string long_name(300, 'x');
+  std::string error = ErrorOf("sensor:\n  layout: " + long_name + "\n");
+  EXPECT_NE(error.find("test.yaml:2: sensor.layout"), std::string::npos) << error;
+  EXPECT_NE(error.find("no such layout"), std::string::npos) << error;
+  error = ErrorOf("sensor:\n  layout: " + long_name + ".yaml\n");
+  EXPECT_NE(error.find("no such layout"), std::string::npos) << error;
+  error = ErrorOf("sensor:\n  sensitivities: fea\n  fea_config: " + long_name + ".yaml\n");
+  EXPECT_NE(error.find("test.yaml:3: sensor.fea_config"), std::string::npos) << error;
+  EXPECT_NE(error.find("no such file"), std::string::npos) << error;
+  error = ErrorOf("controller:\n  plugin: ./" + long_name + ".so\n");
+  EXPECT_NE(error.find("test.yaml:2: controller.plugin"), std::string::npos) << error;
+  EXPECT_NE(error.find("File name too long"), std::string::npos) << error;
+  error = ErrorOf("duration_s: 1\n", {{"controller.name", "plugin:" + long_name}});
+  EXPECT_NE(error.find("--set controller.name=plugin:"), std::string::npos) << error;
+  EXPECT_NE(error.find("controller.name"), std::string::npos) << error;
+}
+
 TEST(ScenarioConfigTest, UnknownTopLevelKeyNamesLineAndValidKeys) {
   const std::string error = ErrorOf("duration_s: 1\nobjekt:\n  mass_kg: 0.2\n");
   EXPECT_NE(error.find("test.yaml:2: objekt: unknown key; valid keys: "), std::string::npos) << error;
