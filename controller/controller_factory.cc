@@ -78,7 +78,8 @@ std::unique_ptr<GraspController> MakeController(const std::string& name, const C
   for (const ControllerParameter& parameter : declared) resolved[parameter.name] = parameter.default_value;
   for (const auto& [key, value] : params) {
     const auto match = std::find_if(declared.begin(), declared.end(),
-                                    [&](const ControllerParameter& p) { return p.name == key; });
+                                    // Captured by name: clang 14 (the fuzz tree's) refuses a structured binding in a lambda.
+                                    [&key = key](const ControllerParameter& p) { return p.name == key; });
     if (match == declared.end()) {
       std::string valid;
       for (const ControllerParameter& p : declared) valid += (valid.empty() ? "" : ", ") + p.name;
