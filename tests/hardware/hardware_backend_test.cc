@@ -149,6 +149,17 @@ class HardwareTest : public ::testing::Test {
     });
   }
 
+  // A baseline with nothing in flight: pauses the stream and waits until the host holds the last
+  // frame sent (left in `frame`). Returns false when it never does. The stream stays paused.
+  bool PauseAndWaitHostHoldsLastFrame(EmulatorStats* emulator_stats, sensor::RawFrame* frame) {
+    emulator_->PauseFrames(true);
+    *emulator_stats = emulator_->stats();
+    return WaitFor([&] {
+      backend_->Read(frame);
+      return frame->sequence == emulator_stats->last_frame_sequence;
+    });
+  }
+
   void TearDown() override {
     actuator_.reset();
     backend_.reset();
@@ -275,14 +286,9 @@ TEST_F(HardwareTest, ScriptedFaultsGiveExactCounters) {
   StartEmulator();
   StartHost();
   ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 20; }));
-  // Baseline with nothing in flight: pause, wait for the host to hold the last frame sent.
-  emulator_->PauseFrames(true);
-  const auto emu0 = emulator_->stats();
+  EmulatorStats emu0;
   sensor::RawFrame frame;
-  ASSERT_TRUE(WaitFor([&] {
-    backend_->Read(&frame);
-    return frame.sequence == emu0.last_frame_sequence;
-  }));
+  ASSERT_TRUE(PauseAndWaitHostHoldsLastFrame(&emu0, &frame));
   const auto host0 = backend_->counters();
   emulator_->PauseFrames(false);
   uint64_t lost = 0;  // frames sent but not decodable
@@ -328,13 +334,9 @@ TEST_F(HardwareTest, LateFramesAreCountedAndNeverUsed) {
   StartEmulator();
   StartHost();
   ASSERT_TRUE(WaitFor([&] { return backend_->counters().frames > 20; }));
-  emulator_->PauseFrames(true);
-  const auto emu0 = emulator_->stats();
+  EmulatorStats emu0;
   sensor::RawFrame frame;
-  ASSERT_TRUE(WaitFor([&] {
-    backend_->Read(&frame);
-    return frame.sequence == emu0.last_frame_sequence;
-  }));
+  ASSERT_TRUE(PauseAndWaitHostHoldsLastFrame(&emu0, &frame));
   const auto host0 = backend_->counters();
   const uint64_t reordered0 = backend_->link()->reordered();
   // Every frame the loop reads is newer than the one before.
