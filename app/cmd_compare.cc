@@ -7,8 +7,8 @@
 #include <string>
 
 #include "app/command_registry.h"
-#include "sim/scenario/compare.h"
-#include "sim/scenario/runner.h"
+#include "testbed/compare.h"
+#include "testbed/runner.h"
 
 namespace graspbed::app {
 namespace {
@@ -21,21 +21,21 @@ struct CompareOptions {
 };
 
 void RunCompare(const CompareOptions& options) {
-  const scenario::RunComparison comparison = scenario::CompareRuns(options.run_a, options.run_b);
+  const testbed::RunComparison comparison = testbed::CompareRuns(options.run_a, options.run_b);
   if (!options.out_dir.empty()) {
     std::error_code error;
     std::filesystem::create_directories(options.out_dir, error);
     if (error || !std::filesystem::is_directory(options.out_dir)) {
       throw std::invalid_argument("--out " + options.out_dir + ": cannot create the output directory");
     }
-    scenario::WriteFileAtomic(options.out_dir + "/compare.json",
-                              scenario::ComparisonJson(comparison).dump(2) + "\n");
-    scenario::WriteComparisonPlot(comparison, options.out_dir + "/compare.png");
+    common::WriteFileAtomic(options.out_dir + "/compare.json",
+                              testbed::ComparisonJson(comparison).dump(2) + "\n");
+    testbed::WriteComparisonPlot(comparison, options.out_dir + "/compare.png");
   }
   if (options.json) {
-    std::cout << scenario::ComparisonJson(comparison).dump(2) << '\n';
+    std::cout << testbed::ComparisonJson(comparison).dump(2) << '\n';
   } else {
-    std::cout << scenario::ComparisonTable(comparison);
+    std::cout << testbed::ComparisonTable(comparison);
     if (!options.out_dir.empty())
       std::cout << "  outputs: " << options.out_dir << "/ (compare.json, compare.png)\n";
   }

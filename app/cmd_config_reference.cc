@@ -5,18 +5,18 @@
 #include <string>
 
 #include "app/command_registry.h"
-#include "sim/scenario/config_reference.h"
+#include "testbed/config_reference.h"
 
 namespace graspbed::app {
 namespace {
 
 void RunConfigReference(const std::string& section) {
   if (!section.empty()) {
-    std::cout << scenario::ConfigReferenceMarkdown(section);
+    std::cout << testbed::ConfigReferenceMarkdown(section);
     return;
   }
   bool first = true;
-  for (const scenario::ConfigSection& entry : scenario::ConfigReference()) {
+  for (const testbed::ConfigSection& entry : testbed::ConfigReference()) {
     std::cout << (first ? "" : "\n") << "### `" << entry.path << "`\n\n"
               << common::ReferenceMarkdown(entry.rows);
     first = false;
@@ -29,7 +29,7 @@ void AddConfigReferenceCommand(CLI::App& root) {
       "config-reference",
       "Print the keys of the config sections (unit, default, allowed values, meaning) as Markdown");
   std::string sections;
-  for (const scenario::ConfigSection& entry : scenario::ConfigReference()) {
+  for (const testbed::ConfigSection& entry : testbed::ConfigReference()) {
     sections += (sections.empty() ? "" : ", ") + entry.path;
   }
   command->add_option("section", *section, "one section (" + sections + "); default: all");

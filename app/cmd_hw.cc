@@ -35,16 +35,16 @@
 #include "controller/control_loop.h"
 #include "controller/grasp_controller.h"
 #include "controller/plugin_loader.h"
+#include "hardware/device_emulator.h"
+#include "hardware/hardware_backend.h"
+#include "hardware/soak.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
 #include "sensor/readout.h"
-#include "hardware/device_emulator.h"
-#include "hardware/hardware_backend.h"
-#include "hardware/soak.h"
-#include "sim/scenario/emulated_hand.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/emulated_hand.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
 
 namespace graspbed::app {
 namespace {
@@ -57,7 +57,7 @@ struct HwRunConfig {
   /// The controller section exactly as in a scenario (name, params, grip_ceiling_n, rate_hz,
   /// stale_timeout_s), so a controller tuned in simulation runs with the same numbers on the hand.
   /// rate_hz: control ticks per second when frames do not arrive (ticks also follow every frame).
-  scenario::ControllerOptions controller;
+  testbed::ControllerOptions controller;
   controller::ControlLoopConfig loop;  ///< readout, inversion; stale timeout from `controller`
 };
 
@@ -69,11 +69,11 @@ HwRunConfig LoadHwRunConfig(const std::string& path) {
   HwRunConfig config;
   if (const auto section = root.GetMap("serial")) config.serial = hardware::LoadHardwareConfig(*section);
   if (const auto section = root.GetMap("controller")) {
-    config.controller = scenario::LoadControllerOptions(*section, "grip_slip");
+    config.controller = testbed::LoadControllerOptions(*section, "grip_slip");
   } else {
     YAML::Node empty(YAML::NodeType::Map);
     config.controller =
-        scenario::LoadControllerOptions(common::YamlMap(empty, root.file(), "controller"), "grip_slip");
+        testbed::LoadControllerOptions(common::YamlMap(empty, root.file(), "controller"), "grip_slip");
   }
   config.loop.stale_timeout_s = config.controller.stale_timeout_s;
   if (const auto section = root.GetMap("readout")) config.loop.readout = sensor::LoadReadoutConfig(*section);
@@ -142,7 +142,7 @@ void RunHw(const HwOptions& options) {
                                               ? sensor::PaperCalibration(units)
                                               : sensor::LoadCalibration(options.calibration, units);
   // --controller picks another controller than the config's; the config's parameters belong to its own.
-  scenario::ControllerOptions& chosen = config.controller;
+  testbed::ControllerOptions& chosen = config.controller;
   const std::string requested = controller::ResolvePluginName(options.controller, ".");
   if (!requested.empty() && requested != chosen.name) {
     chosen.name = requested;
@@ -166,9 +166,9 @@ void RunHw(const HwOptions& options) {
 
   // The session is a scenario on backend serial with one intent, given once the tare is done (the
   // first baseline_frames frames at the sensor's rate), and no outputs but the frame log.
-  scenario::ScenarioConfig scenario;
+  testbed::ScenarioConfig scenario;
   scenario.name = "hw";
-  scenario.backend = scenario::Backend::kSerial;
+  scenario.backend = testbed::Backend::kSerial;
   scenario.serial = config.serial;
   scenario.log = options.log;
   scenario.controller = chosen;
@@ -177,20 +177,20 @@ void RunHw(const HwOptions& options) {
   scenario.sensor.inversion = config.loop.inversion;
   scenario.duration_s =
       options.duration_s > 0.0 ? options.duration_s : std::numeric_limits<double>::infinity();
-  scenario::Action action;
-  action.kind = intent == controller::GraspIntent::kClose  ? scenario::ActionKind::kClose
-                : intent == controller::GraspIntent::kOpen ? scenario::ActionKind::kOpen
-                                                           : scenario::ActionKind::kIdle;
+  testbed::Action action;
+  action.kind = intent == controller::GraspIntent::kClose  ? testbed::ActionKind::kClose
+                : intent == controller::GraspIntent::kOpen ? testbed::ActionKind::kOpen
+                                                           : testbed::ActionKind::kIdle;
   action.at_s = config.loop.readout.baseline_frames / scenario.sensor.sample_rate_hz;
   scenario.script = {action};
-  scenario::RunOptions run;
+  testbed::RunOptions run;
   run.stop = &StopRequested();
   run.calibration = calibration;
   if (options.latency_report) run.latency_frames = kLatencyReportFrames;
   if (options.realtime_priority > 0) UseRealTimePriority(options.realtime_priority);
   // Before the port is opened: Ctrl-C while waiting for HELLO still ends with the port restored.
   StopSignalGuard signals;
-  const scenario::RunResult result = scenario::RunScenario(scenario, run);
+  const testbed::RunResult result = testbed::RunScenario(scenario, run);
 
   // hw's own summary keys (docs/hardware.md), from the run's.
   const nlohmann::json& bench = result.bench;
@@ -254,15 +254,15 @@ struct EmulateOptions {
 };
 
 void RunEmulate(const EmulateOptions& options) {
-  scenario::ScenarioConfig config;
+  testbed::ScenarioConfig config;
   if (!options.scenario.empty()) {
-    config = scenario::LoadScenario(options.scenario);
+    config = testbed::LoadScenario(options.scenario);
   } else {
     config.name = "plain";
     config.duration_s = 0.0;  // no scenario: until stopped
   }
-  const sensor::Layout layout = sensor::LoadLayout(scenario::ResolveLayoutPath(config));
-  scenario::EmulatedHand device(config, layout);
+  const sensor::Layout layout = sensor::LoadLayout(testbed::ResolveLayoutPath(config));
+  testbed::EmulatedHand device(config, layout);
 
   hardware::EmulatorConfig emulator_config;
   emulator_config.link_path = options.link;
@@ -466,7 +466,7 @@ void RunSoak(const SoakOptions& options) {
   };
   // Refused here (exit 2) rather than in a child: a bad file, a duration the loader refuses (over
   // 3600 s, or a signal log over its bound). A script the bench cannot play is refused by the host.
-  scenario::LoadScenario(
+  testbed::LoadScenario(
       options.scenario,
       {{"serial.port", link}, {"backend", "serial"}, {"duration_s", number(host_duration_s)}});
   if (fs::exists(fs::symlink_status(link))) {
@@ -643,7 +643,7 @@ void RunSoak(const SoakOptions& options) {
                    {"samples", samples}};
   report["load_average_1min"] = {{"start", load_start}, {"max", load_max}, {"end", load_end}};
   if (!options.keep_signals) fs::remove(host_out + "/signals.csv");  // a row per tick: 1-2 GB for 10 min
-  scenario::WriteFileAtomic(options.out_dir + "/soak.json", report.dump(2) + "\n");
+  common::WriteFileAtomic(options.out_dir + "/soak.json", report.dump(2) + "\n");
 
   if (options.json) {
     std::cout << report.dump(2) << '\n';

@@ -6,8 +6,8 @@
 
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
-#include "sim/scenario/oracle.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/oracle.h"
+#include "testbed/scenario_config.h"
 
 namespace graspbed::app {
 namespace {
@@ -19,21 +19,21 @@ struct OracleCommandOptions {
 };
 
 void OracleCommand(const OracleCommandOptions& options) {
-  std::vector<scenario::Override> overrides;
-  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
-  const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
-  if (config.backend != scenario::Backend::kSim) {
+  std::vector<testbed::Override> overrides;
+  for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
+  const testbed::ScenarioConfig config = testbed::LoadScenario(options.scenario, overrides);
+  if (config.backend != testbed::Backend::kSim) {
     throw std::invalid_argument(std::string("the oracle runs the simulation; backend ") +
-                                scenario::BackendName(config.backend) + " has none");
+                                testbed::BackendName(config.backend) + " has none");
   }
-  scenario::OracleOptions oracle;
+  testbed::OracleOptions oracle;
   oracle.stop = &StopRequested();
   StopSignalGuard guard;
-  const scenario::OracleReport report = scenario::RunOracleReport(config, oracle);
+  const testbed::OracleReport report = testbed::RunOracleReport(config, oracle);
   if (options.json) {
-    std::cout << scenario::OracleReportJson(config, report).dump(2) << '\n';
+    std::cout << testbed::OracleReportJson(config, report).dump(2) << '\n';
   } else {
-    std::cout << scenario::OracleReportTable(config, report);
+    std::cout << testbed::OracleReportTable(config, report);
   }
   const bool completed =
       report.full.completed && (!report.until_disturbance || report.until_disturbance->completed);

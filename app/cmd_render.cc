@@ -7,8 +7,8 @@
 
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
-#include "sim/render/stills.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/scenario_config.h"
+#include "testbed/show/stills.h"
 
 namespace graspbed::app {
 namespace {
@@ -32,11 +32,11 @@ struct RenderCommandOptions {
 };
 
 void RenderCommand(const RenderCommandOptions& options) {
-  std::vector<scenario::Override> overrides;
-  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
-  const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
+  std::vector<testbed::Override> overrides;
+  for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
+  const testbed::ScenarioConfig config = testbed::LoadScenario(options.scenario, overrides);
 
-  render::StillsOptions stills;
+  show::StillsOptions stills;
   stills.times_s = options.times_s;
   stills.out_dir = options.out_dir;
   stills.render.width_px = options.width_px;
@@ -53,8 +53,8 @@ void RenderCommand(const RenderCommandOptions& options) {
   stills.label = !options.no_label;
   stills.stop = &StopRequested();
   StopSignalGuard guard;
-  const render::StillsResult result = render::RenderStills(config, stills);
-  for (const render::Still& still : result.stills) {
+  const show::StillsResult result = show::RenderStills(config, stills);
+  for (const show::Still& still : result.stills) {
     std::printf("%s  (t = %.3f s, rendered in %.0f ms)\n", still.path.c_str(), still.time_s, still.render_ms);
   }
   std::fprintf(stderr, "graspbed render: %s\n", result.gl_description.c_str());

@@ -13,11 +13,11 @@
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
 #include "controller/plugin_loader.h"
-#include "sim/render/video.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
-#include "sim/scenario/suite.h"
-#include "sim/scenario/sweep.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
+#include "testbed/show/video.h"
+#include "testbed/suite.h"
+#include "testbed/sweep.h"
 
 namespace graspbed::app {
 namespace {
@@ -32,7 +32,7 @@ bool StderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
 /// --video and its settings, shared by run, suite and sweep.
 struct VideoCommandOptions {
   bool enabled = false;
-  double fps = render::kDefaultVideoFps;
+  double fps = show::kDefaultVideoFps;
   std::string size = "640x480";
   std::string camera;
   bool shadows = false;
@@ -49,10 +49,10 @@ struct VideoCommandOptions {
   }
 
   /// Checked before any run starts (exit 2 on a bad value).
-  render::VideoOptions Resolve() const {
-    render::VideoOptions video;
+  show::VideoOptions Resolve() const {
+    show::VideoOptions video;
     video.fps = fps;
-    render::ParseVideoSize(size, video.render);
+    show::ParseVideoSize(size, video.render);
     video.camera = sim::CameraByName(camera);
     video.render.shadows = shadows;
     video.Validate();
@@ -60,14 +60,14 @@ struct VideoCommandOptions {
   }
 
   /// For suites and sweeps: each run gets its video in `dir`/<run name>/ ("" = the run's own out_dir).
-  scenario::PrepareRun Preparer(const std::string& dir) const {
+  testbed::PrepareRun Preparer(const std::string& dir) const {
     if (!enabled) return {};
-    const render::VideoOptions video = Resolve();
-    return [video, dir](const scenario::ScenarioConfig& config, const std::string& name,
-                        scenario::RunOptions& run) {
+    const show::VideoOptions video = Resolve();
+    return [video, dir](const testbed::ScenarioConfig& config, const std::string& name,
+                        testbed::RunOptions& run) {
       const std::string out = dir.empty() ? run.out_dir : dir + "/" + name;
       fs::create_directories(out);
-      render::AttachVideo(config, video, out + "/video.mp4", out + "/video_strip.png", run);
+      show::AttachVideo(config, video, out + "/video.mp4", out + "/video_strip.png", run);
     };
   }
 };
@@ -99,7 +99,7 @@ struct RunCommandOptions {
 };
 
 void RunCommand(const RunCommandOptions& options) {
-  std::vector<scenario::Override> overrides;
+  std::vector<testbed::Override> overrides;
   // The port and the log before the backend that needs them (each override is checked as applied).
   if (!options.port.empty()) overrides.push_back({"serial.port", options.port});
   if (!options.log.empty()) overrides.push_back({"log", options.log});
@@ -108,39 +108,39 @@ void RunCommand(const RunCommandOptions& options) {
     overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
   }
   if (options.seed >= 0) overrides.push_back({"seed", std::to_string(options.seed)});
-  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
-  const scenario::ScenarioConfig config = scenario::LoadScenario(options.scenario, overrides);
+  for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
+  const testbed::ScenarioConfig config = testbed::LoadScenario(options.scenario, overrides);
 
-  scenario::RunOptions run;
+  testbed::RunOptions run;
   run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
   run.write_plots = !options.no_plots;
   run.stop = &StopRequested();
-  if (options.oracle) run.oracle = scenario::OracleMode::kAlways;
+  if (options.oracle) run.oracle = testbed::OracleMode::kAlways;
   run.prompt_actions = options.prompt_actions;
-  run.intent_stdin = config.backend == scenario::Backend::kSerial && !options.no_stdin_intent;
+  run.intent_stdin = config.backend == testbed::Backend::kSerial && !options.no_stdin_intent;
   run.intent_fifo = options.intent_fifo;
   // The progress line would run into the bench's prompts and intent echoes.
-  const bool terminal = StderrIsTerminal() && config.backend == scenario::Backend::kSim;
+  const bool terminal = StderrIsTerminal() && config.backend == testbed::Backend::kSim;
   if (terminal) {
     run.progress = [&config](double sim_s, double duration_s) {
       std::fprintf(stderr, "\r  %s: %.2f / %.2f s simulated ", config.name.c_str(), sim_s, duration_s);
       std::fflush(stderr);
     };
   }
-  std::shared_ptr<const render::VideoCost> video_cost;
-  if (options.video.enabled && config.backend != scenario::Backend::kSim) {
+  std::shared_ptr<const show::VideoCost> video_cost;
+  if (options.video.enabled && config.backend != testbed::Backend::kSim) {
     throw std::invalid_argument(std::string("--video: renders the simulation, and backend ") +
-                                scenario::BackendName(config.backend) + " has none");
+                                testbed::BackendName(config.backend) + " has none");
   }
   if (options.video.enabled) {
-    const render::VideoOptions video = options.video.Resolve();
+    const show::VideoOptions video = options.video.Resolve();
     std::error_code error;
     fs::create_directories(run.out_dir, error);  // the encoder writes there from the first frame
     video_cost =
-        render::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
+        show::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
   }
   StopSignalGuard guard;
-  const scenario::RunResult result = scenario::RunScenario(config, run);
+  const testbed::RunResult result = testbed::RunScenario(config, run);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   if (video_cost && video_cost->frames > 0) {
     std::fprintf(
@@ -151,10 +151,10 @@ void RunCommand(const RunCommandOptions& options) {
   }
 
   if (options.json) {
-    std::cout << scenario::SummaryJson(result).dump(2) << '\n';
+    std::cout << testbed::SummaryJson(result).dump(2) << '\n';
   } else {
-    std::cout << scenario::SummaryTable(result);
-    const bool sim = config.backend == scenario::Backend::kSim;
+    std::cout << testbed::SummaryTable(result);
+    const bool sim = config.backend == testbed::Backend::kSim;
     std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
               << (options.no_plots ? ""
                   : sim            ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, "
@@ -238,22 +238,22 @@ struct SuiteCommandOptions {
 };
 
 void SuiteCommand(const SuiteCommandOptions& options) {
-  std::vector<scenario::Override> overrides;
+  std::vector<testbed::Override> overrides;
   if (!options.controller.empty()) {
     overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
   }
-  for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
-  const std::vector<scenario::ScenarioConfig> configs =
-      scenario::LoadScenarios(scenario::ListScenarioFiles(options.dir), overrides);
+  for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
+  const std::vector<testbed::ScenarioConfig> configs =
+      testbed::LoadScenarios(testbed::ListScenarioFiles(options.dir), overrides);
 
-  scenario::SuiteOptions suite;
+  testbed::SuiteOptions suite;
   suite.jobs = options.jobs;
   suite.out_dir = options.out_dir;
   suite.write_plots = !options.no_plots;
   suite.stop = &StopRequested();
   suite.prepare_run = options.video.Preparer("");
   const bool terminal = StderrIsTerminal();
-  suite.on_finished = [terminal](int done, int total, const scenario::SuiteRun& run) {
+  suite.on_finished = [terminal](int done, int total, const testbed::SuiteRun& run) {
     if (!terminal) return;
     std::fprintf(stderr, "\r\033[K  [%d/%d] %s: %s", done, total, run.result.config.name.c_str(),
                  !run.error.empty()  ? "error"
@@ -262,12 +262,12 @@ void SuiteCommand(const SuiteCommandOptions& options) {
     std::fflush(stderr);
   };
   StopSignalGuard guard;
-  const scenario::SuiteResult result = scenario::RunSuite(configs, suite);
+  const testbed::SuiteResult result = testbed::RunSuite(configs, suite);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   if (options.json) {
-    std::cout << scenario::SuiteJson(result).dump(2) << '\n';
+    std::cout << testbed::SuiteJson(result).dump(2) << '\n';
   } else {
-    std::cout << scenario::SuiteTable(result);
+    std::cout << testbed::SuiteTable(result);
     std::cout << "  outputs: " << options.out_dir << "/ (suite.json, one directory per scenario)\n";
   }
   if (!result.completed) ExitWith(kExitInterrupted);
@@ -305,15 +305,15 @@ struct SweepCommandOptions {
 };
 
 void SweepCommand(const SweepCommandOptions& options) {
-  scenario::SweepSpec spec = scenario::LoadSweepSpec(options.spec);
+  testbed::SweepSpec spec = testbed::LoadSweepSpec(options.spec);
   if (!options.controller.empty()) {
     // Before the spec's own `set:` (which may tune this controller); shards must agree on it to merge.
     const std::string name = controller::ResolvePluginName(options.controller, ".");
     spec.fixed.insert(spec.fixed.begin(), {"controller.name", name});
     spec.fingerprint += " controller=" + name;
   }
-  scenario::SweepOptions sweep;
-  sweep.shard = scenario::ParseShard(options.shard);
+  testbed::SweepOptions sweep;
+  sweep.shard = testbed::ParseShard(options.shard);
   sweep.jobs = options.jobs;
   sweep.out_dir = options.out_dir;
   sweep.stop = &StopRequested();
@@ -325,7 +325,7 @@ void SweepCommand(const SweepCommandOptions& options) {
     std::fflush(stderr);
   };
   StopSignalGuard guard;
-  const scenario::SweepOutcome outcome = scenario::RunSweep(spec, sweep);
+  const testbed::SweepOutcome outcome = testbed::RunSweep(spec, sweep);
   if (terminal) std::fprintf(stderr, "\r\033[K");
   std::printf(
       "sweep %s shard %s: %d of %d runs finished, %d passed, %.2f s -> %s/results.csv, results.jsonl\n",
@@ -366,7 +366,7 @@ void AddSweepCommand(CLI::App& root) {
   merge->add_option("shards", *dirs, "shard output directories")->required();
   merge->add_option("--out", *out, "merged output directory (default out/sweep-merged)");
   merge->callback([dirs, out] {
-    const int rows = scenario::MergeSweeps(*dirs, *out);
+    const int rows = testbed::MergeSweeps(*dirs, *out);
     std::printf("merged %zu shards: %d rows -> %s/results.csv, results.jsonl\n", dirs->size(), rows,
                 out->c_str());
   });

@@ -12,7 +12,7 @@
 #include "app/stop_signal.h"
 #include "common/data_dir.h"
 #include "controller/plugin_loader.h"
-#include "sim/scenario/scorecard.h"
+#include "testbed/scorecard.h"
 
 namespace graspbed::app {
 namespace {
@@ -35,12 +35,12 @@ struct ScoreCommandOptions {
 void ScoreCommand(const ScoreCommandOptions& options) {
   const std::string set_dir =
       options.set_dir.empty() ? common::DataPath("scenarios/scorecard") : options.set_dir;
-  scenario::ScorecardSet set = scenario::LoadScorecardSet(set_dir + "/set.yaml");
+  testbed::ScorecardSet set = testbed::LoadScorecardSet(set_dir + "/set.yaml");
   // A set tuned against is flattered by its own draws: the same bases and ranges drawn with another
   // seed, and more of them, show how a controller generalises (the figures are then not the set's).
   if (options.seed) set.seed = *options.seed;
-  for (scenario::ScorecardBase& base : set.bases) base.variations *= options.variations_scale;
-  scenario::ScorecardOptions score;
+  for (testbed::ScorecardBase& base : set.bases) base.variations *= options.variations_scale;
+  testbed::ScorecardOptions score;
   if (!options.controllers.empty()) {
     score.controllers.clear();
     for (const std::string& name : options.controllers) {
@@ -50,7 +50,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   score.jobs = options.jobs;
   score.limit = options.limit;
   score.runs_dir = options.runs_dir;
-  for (const std::string& text : options.sets) score.overrides.push_back(scenario::ParseOverride(text));
+  for (const std::string& text : options.sets) score.overrides.push_back(testbed::ParseOverride(text));
   score.stop = &StopRequested();
   const bool terminal = ::isatty(STDERR_FILENO) == 1;
   score.on_finished = [terminal](int done, int total) {
@@ -59,12 +59,12 @@ void ScoreCommand(const ScoreCommandOptions& options) {
     std::fflush(stderr);
   };
   StopSignalGuard guard;
-  const scenario::Scorecard scorecard = scenario::RunScorecard(set, score);
+  const testbed::Scorecard scorecard = testbed::RunScorecard(set, score);
   if (terminal) std::fprintf(stderr, "\r\033[K");
-  scenario::WriteScorecard(scorecard, options.out_dir);
-  std::cout << scenario::ScorecardTable(scorecard);
-  std::cout << "  by sensor (profile/sensitivities):\n" << scenario::ScorecardBySensorTable(scorecard);
-  std::cout << "  by scenario (base and its variations):\n" << scenario::ScorecardByScenarioTable(scorecard);
+  testbed::WriteScorecard(scorecard, options.out_dir);
+  std::cout << testbed::ScorecardTable(scorecard);
+  std::cout << "  by sensor (profile/sensitivities):\n" << testbed::ScorecardBySensorTable(scorecard);
+  std::cout << "  by scenario (base and its variations):\n" << testbed::ScorecardByScenarioTable(scorecard);
   std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
   if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
 }

@@ -7,9 +7,9 @@
 
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
-#include "sim/render/video.h"
-#include "sim/render/viewer.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/scenario_config.h"
+#include "testbed/show/video.h"
+#include "testbed/show/viewer.h"
 
 namespace graspbed::app {
 namespace {
@@ -28,9 +28,9 @@ struct ViewCommandOptions {
 };
 
 void ViewCommand(const ViewCommandOptions& options) {
-  render::ViewerOptions viewer;
+  show::ViewerOptions viewer;
   sim::RenderOptions size;
-  render::ParseVideoSize(options.size, size);
+  show::ParseVideoSize(options.size, size);
   viewer.width_px = size.width_px;
   viewer.height_px = size.height_px;
   viewer.speed = options.speed;
@@ -41,15 +41,15 @@ void ViewCommand(const ViewCommandOptions& options) {
   viewer.stop = &StopRequested();
   viewer.Validate();
   StopSignalGuard guard;
-  render::ViewerResult result;
+  show::ViewerResult result;
   if (fs::is_directory(options.target)) {
     if (!options.sets.empty())
       throw std::invalid_argument("--set: a replay shows the run as it was; no overrides");
-    result = render::ViewReplay(options.target, viewer);
+    result = show::ViewReplay(options.target, viewer);
   } else {
-    std::vector<scenario::Override> overrides;
-    for (const std::string& text : options.sets) overrides.push_back(scenario::ParseOverride(text));
-    result = render::ViewLive(scenario::LoadScenario(options.target, overrides), viewer);
+    std::vector<testbed::Override> overrides;
+    for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
+    result = show::ViewLive(testbed::LoadScenario(options.target, overrides), viewer);
   }
   std::printf("graspbed view: %d frames shown, t = %.3f s, %d restarts (%s)\n", result.frames, result.time_s,
               result.restarts, result.gl_description.c_str());

@@ -19,8 +19,8 @@
 #include <string>
 
 #include "hardware/device_emulator.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
 
 namespace {
 
@@ -57,21 +57,21 @@ void BM_LoopLatency(benchmark::State& state) {
     });
     emulator.Start();
 
-    graspbed::scenario::ScenarioConfig host;
+    graspbed::testbed::ScenarioConfig host;
     host.name = "loop_latency_bench";
-    host.backend = graspbed::scenario::Backend::kSerial;
+    host.backend = graspbed::testbed::Backend::kSerial;
     host.serial.port = link;
     host.sensor.layout = "default_20";
     host.controller.name = "grip_slip";
     host.duration_s = static_cast<double>(frames) / 1000.0;
-    graspbed::scenario::Action close;
-    close.kind = graspbed::scenario::ActionKind::kClose;
+    graspbed::testbed::Action close;
+    close.kind = graspbed::testbed::ActionKind::kClose;
     close.at_s = 0.2;  // after the 100-frame tare
     host.script = {close};
     host.Validate();
-    graspbed::scenario::RunOptions run;
+    graspbed::testbed::RunOptions run;
     run.latency_frames = static_cast<size_t>(frames) + 1000;
-    const graspbed::scenario::RunResult result = graspbed::scenario::RunScenario(host, run);
+    const graspbed::testbed::RunResult result = graspbed::testbed::RunScenario(host, run);
     emulator.Stop();
 
     const auto& latency = result.bench.at("latency");

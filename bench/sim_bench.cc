@@ -25,13 +25,13 @@
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
-#include "sim/sim_rig.h"
 #include "sim/physics_checks.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
-#include "sim/scenario/suite.h"
+#include "sim/sim_rig.h"
 #include "sim/simulation.h"
 #include "sim/step_profile.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
+#include "testbed/suite.h"
 
 namespace graspbed::sim {
 namespace {
@@ -201,7 +201,7 @@ PhysicsConfig PhysicsBefore() {
   return physics;
 }
 
-std::vector<scenario::Override> PhysicsOverrides(const PhysicsConfig& physics) {
+std::vector<testbed::Override> PhysicsOverrides(const PhysicsConfig& physics) {
   return {{"physics.timestep_s", std::to_string(physics.timestep_s)},
           {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
           {"physics.impratio", std::to_string(physics.impratio)},
@@ -242,8 +242,8 @@ ProcessTime TimeProcess(const std::vector<std::string>& argv, int repeats) {
 struct SpeedRow {
   std::string label;
   PhysicsConfig physics;
-  scenario::ScenarioConfig config;                  ///< the default scenario
-  std::vector<scenario::ScenarioConfig> suite;      ///< the shipped suite
+  testbed::ScenarioConfig config;                  ///< the default scenario
+  std::vector<testbed::ScenarioConfig> suite;      ///< the shipped suite
   std::vector<std::string> process_argv;            ///< `graspbed run` of the default scenario
   std::vector<double> walls, cpus;                  ///< in-process runs [s]
   std::vector<double> process_walls, process_cpus;  ///< whole-process runs [s]
@@ -261,12 +261,12 @@ void PrintScenarioSpeedRows(std::vector<SpeedRow>& rows, const std::string& cli)
   const std::string out = (std::filesystem::temp_directory_path() / "graspbed_sim_bench").string();
   const std::string default_yaml = common::DataPath("scenarios/default.yaml");
   for (SpeedRow& row : rows) {
-    const std::vector<scenario::Override> overrides = PhysicsOverrides(row.physics);
-    row.config = scenario::LoadScenario(default_yaml, overrides);
+    const std::vector<testbed::Override> overrides = PhysicsOverrides(row.physics);
+    row.config = testbed::LoadScenario(default_yaml, overrides);
     row.suite =
-        scenario::LoadScenarios(scenario::ListScenarioFiles(common::DataPath("scenarios")), overrides);
+        testbed::LoadScenarios(testbed::ListScenarioFiles(common::DataPath("scenarios")), overrides);
     row.process_argv = {cli, "run", default_yaml, "--no-plots", "--out", out + "/process"};
-    for (const scenario::Override& o : overrides) {
+    for (const testbed::Override& o : overrides) {
       row.process_argv.push_back("--set");
       row.process_argv.push_back(o.key + "=" + o.value);
     }
@@ -276,12 +276,12 @@ void PrintScenarioSpeedRows(std::vector<SpeedRow>& rows, const std::string& cli)
   for (int round = 0; round < kRunRounds; ++round) {
     for (SpeedRow& row : rows) {
       // In this process: the run as a suite or sweep makes it (outputs written, no plots).
-      scenario::RunOptions options;
+      testbed::RunOptions options;
       options.out_dir = out + "/default";
       options.write_plots = false;
       const auto start = std::chrono::steady_clock::now();
       const double cpu_start = common::ThreadCpuSeconds();
-      const scenario::RunResult result = scenario::RunScenario(row.config, options);
+      const testbed::RunResult result = testbed::RunScenario(row.config, options);
       row.cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
       row.walls.push_back(WallSeconds(start));
       row.passed = row.passed && result.passed;
@@ -294,11 +294,11 @@ void PrintScenarioSpeedRows(std::vector<SpeedRow>& rows, const std::string& cli)
       }
       if (round >= kSuiteRounds) continue;
       for (int jobs = 1; jobs <= 2; ++jobs) {
-        scenario::SuiteOptions suite_options;
+        testbed::SuiteOptions suite_options;
         suite_options.jobs = jobs;
         suite_options.out_dir = out + "/suite";
         suite_options.write_plots = false;
-        const scenario::SuiteResult suite = scenario::RunSuite(row.suite, suite_options);
+        const testbed::SuiteResult suite = testbed::RunSuite(row.suite, suite_options);
         row.runs_per_min[jobs - 1].push_back(60.0 * static_cast<double>(row.suite.size()) / suite.wall_s);
         row.suite_passed = suite.passed;
       }
@@ -348,7 +348,7 @@ void PrintScenarioSpeeds(const std::string& cli) {
   if (cli.empty()) return;
   // What a user waits for by default: the same run writing its PNG plots too.
   const std::string default_yaml = common::DataPath("scenarios/default.yaml");
-  const double duration = scenario::LoadScenario(default_yaml).duration_s;
+  const double duration = testbed::LoadScenario(default_yaml).duration_s;
   const std::string out = (std::filesystem::temp_directory_path() / "graspbed_sim_bench").string();
   const ProcessTime with_plots = TimeProcess({cli, "run", default_yaml, "--out", out + "/plots"}, 5);
   std::printf(

@@ -35,12 +35,12 @@
 #include <vector>
 
 #include "common/data_dir.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
 
 namespace {
 
-using graspbed::scenario::Override;
+using graspbed::testbed::Override;
 
 /// The line between the scenario text and the override lines.
 constexpr std::string_view kSeparator = "#--set";
@@ -93,7 +93,7 @@ extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
   graspbed::common::DataDir();  // found once, before any input (throws when the data is missing)
   // The loader analyses each FEA unit once per process (`sensitivities: fea`); the shipped unit's
   // analysis takes over 10 s in this build, so it is done here rather than charged to an input.
-  graspbed::scenario::LoadScenarioFromString("sensor: {sensitivities: fea}\n", "warm_up.yaml");
+  graspbed::testbed::LoadScenarioFromString("sensor: {sensitivities: fea}\n", "warm_up.yaml");
   return 0;
 }
 
@@ -102,26 +102,26 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // A path inside the shipped scenarios/, as a shipped scenario's: relative paths in it (layouts, FEA
   // configs) resolve as they would for one. The file itself is never opened.
   static const std::string source_name = graspbed::common::DataPath("scenarios/fuzz_input.yaml");
-  graspbed::scenario::ScenarioConfig config;
+  graspbed::testbed::ScenarioConfig config;
   try {
     std::vector<Override> overrides;
-    for (const std::string& line : input.overrides) overrides.push_back(graspbed::scenario::ParseOverride(line));
-    config = graspbed::scenario::LoadScenarioFromString(input.yaml, source_name, overrides);
+    for (const std::string& line : input.overrides) overrides.push_back(graspbed::testbed::ParseOverride(line));
+    config = graspbed::testbed::LoadScenarioFromString(input.yaml, source_name, overrides);
   } catch (const std::invalid_argument&) {
     return 0;  // bad input, refused with a message: exit 2 on the command line
   } catch (const std::exception& error) {
     Finding("loading threw", error.what());
   }
-  if (config.backend != graspbed::scenario::Backend::kSim) return 0;
+  if (config.backend != graspbed::testbed::Backend::kSim) return 0;
 
   // Only the first kRunS of the run (its signal storage is sized by duration_s).
   config.duration_s = std::min(config.duration_s, kRunS);
-  graspbed::scenario::RunOptions run;
+  graspbed::testbed::RunOptions run;
   run.out_dir = "";
   run.write_plots = false;
-  run.oracle = graspbed::scenario::OracleMode::kNever;
+  run.oracle = graspbed::testbed::OracleMode::kNever;
   try {
-    const graspbed::scenario::RunResult result = graspbed::scenario::RunScenario(config, run);
+    const graspbed::testbed::RunResult result = graspbed::testbed::RunScenario(config, run);
     if (!result.completed) Finding("run", "did not complete");
   } catch (const std::invalid_argument&) {
     return 0;  // a scene the rig refuses (e.g. bodies that start inside each other): exit 2

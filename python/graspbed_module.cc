@@ -16,16 +16,16 @@
 #include <nlohmann/json.hpp>
 
 #include "common/data_dir.h"
+#include "common/signal_log.h"
 #include "controller/controller_api.h"
 #include "controller/grasp_controller.h"
 #include "controller/plugin_loader.h"
 #include "python/python_controller.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
-#include "sim/scenario/scorecard.h"
-#include "sim/scenario/signal_log.h"
-#include "sim/scenario/suite.h"
-#include "sim/scenario/sweep.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
+#include "testbed/scorecard.h"
+#include "testbed/suite.h"
+#include "testbed/sweep.h"
 
 namespace graspbed::python {
 namespace {
@@ -36,16 +36,16 @@ py::object ToPython(const nlohmann::json& value) {
   return py::module_::import("json").attr("loads")(value.dump());
 }
 
-std::vector<scenario::Override> ParseOverrides(const std::vector<std::string>& texts) {
-  std::vector<scenario::Override> overrides;
-  for (const std::string& text : texts) overrides.push_back(scenario::ParseOverride(text));
+std::vector<testbed::Override> ParseOverrides(const std::vector<std::string>& texts) {
+  std::vector<testbed::Override> overrides;
+  for (const std::string& text : texts) overrides.push_back(testbed::ParseOverride(text));
   return overrides;
 }
 
 /// What a run's `controller` argument asks for.
 struct ControllerChoice {
-  std::vector<scenario::Override> overrides;  ///< controller.name for a built-in or plugin name
-  scenario::ControllerFactory factory;        ///< set for a Python controller
+  std::vector<testbed::Override> overrides;  ///< controller.name for a built-in or plugin name
+  testbed::ControllerFactory factory;        ///< set for a Python controller
   std::string label;                          ///< "python:ClassName"
 };
 
@@ -80,7 +80,7 @@ ControllerChoice ChooseController(const py::object& controller, bool single_run)
     delete object;
   });
   const std::string label = choice.label;
-  choice.factory = [guarded, instance, label](const scenario::ControllerOptions&) {
+  choice.factory = [guarded, instance, label](const testbed::ControllerOptions&) {
     py::gil_scoped_acquire gil;
     py::object made = instance ? *guarded : (*guarded)();
     return std::unique_ptr<controller::GraspController>(new PythonController(made, label));
@@ -94,7 +94,7 @@ struct CollectedSignals {
   std::vector<std::vector<double>> numeric;
   std::vector<std::string> text_names;
   std::vector<std::vector<std::string>> text;
-  void Collect(const scenario::SignalLog& log) {
+  void Collect(const common::SignalLog& log) {
     numeric_names = log.numeric_columns();
     text_names = log.text_columns();
     numeric.assign(numeric_names.size(), std::vector<double>(log.rows()));
@@ -122,25 +122,25 @@ py::dict Run(const std::string& scenario_path, const std::vector<std::string>& o
              const py::object& controller, const std::string& out_dir, bool plots, bool prompt_actions,
              const std::string& intent_fifo) {
   ControllerChoice choice = ChooseController(controller, true);
-  std::vector<scenario::Override> all = choice.overrides;
-  for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
-  scenario::ScenarioConfig config = scenario::LoadScenario(scenario_path, all);
+  std::vector<testbed::Override> all = choice.overrides;
+  for (const testbed::Override& o : ParseOverrides(overrides)) all.push_back(o);
+  testbed::ScenarioConfig config = testbed::LoadScenario(scenario_path, all);
   if (choice.factory) config.controller.name = choice.label;
-  scenario::RunOptions options;
+  testbed::RunOptions options;
   options.out_dir = out_dir;
   options.write_plots = plots;
   options.make_controller = choice.factory;
   options.prompt_actions = prompt_actions;
   options.intent_fifo = intent_fifo;
   CollectedSignals signals;
-  options.on_signals = [&signals](const scenario::SignalLog& log) { signals.Collect(log); };
-  scenario::RunResult result;
+  options.on_signals = [&signals](const common::SignalLog& log) { signals.Collect(log); };
+  testbed::RunResult result;
   {
     py::gil_scoped_release release;
-    result = scenario::RunScenario(config, options);
+    result = testbed::RunScenario(config, options);
   }
   py::dict out;
-  out["summary"] = ToPython(scenario::SummaryJson(result));
+  out["summary"] = ToPython(testbed::SummaryJson(result));
   out["signals"] = signals.ToDict();
   return out;
 }
@@ -148,39 +148,39 @@ py::dict Run(const std::string& scenario_path, const std::vector<std::string>& o
 py::dict Suite(const std::vector<std::string>& files, const std::vector<std::string>& overrides,
                const py::object& controller, int jobs, const std::string& out_dir, bool plots) {
   ControllerChoice choice = ChooseController(controller, jobs == 1);
-  std::vector<scenario::Override> all = choice.overrides;
-  for (const scenario::Override& o : ParseOverrides(overrides)) all.push_back(o);
-  std::vector<scenario::ScenarioConfig> configs = scenario::LoadScenarios(files, all);
+  std::vector<testbed::Override> all = choice.overrides;
+  for (const testbed::Override& o : ParseOverrides(overrides)) all.push_back(o);
+  std::vector<testbed::ScenarioConfig> configs = testbed::LoadScenarios(files, all);
   if (choice.factory) {
-    for (scenario::ScenarioConfig& config : configs) config.controller.name = choice.label;
+    for (testbed::ScenarioConfig& config : configs) config.controller.name = choice.label;
   }
-  scenario::SuiteOptions options;
+  testbed::SuiteOptions options;
   options.jobs = jobs;
   options.out_dir = out_dir;
   options.write_plots = plots;
   options.make_controller = choice.factory;
-  scenario::SuiteResult result;
+  testbed::SuiteResult result;
   {
     py::gil_scoped_release release;
-    result = scenario::RunSuite(configs, options);
+    result = testbed::RunSuite(configs, options);
   }
-  return ToPython(scenario::SuiteJson(result));
+  return ToPython(testbed::SuiteJson(result));
 }
 
 py::dict Sweep(const std::string& spec_path, const py::object& controller, int jobs,
                const std::string& out_dir, const std::string& shard) {
   ControllerChoice choice = ChooseController(controller, jobs == 1);
-  scenario::SweepSpec spec = scenario::LoadSweepSpec(spec_path);
+  testbed::SweepSpec spec = testbed::LoadSweepSpec(spec_path);
   spec.fixed.insert(spec.fixed.begin(), choice.overrides.begin(), choice.overrides.end());
-  scenario::SweepOptions options;
-  options.shard = scenario::ParseShard(shard);
+  testbed::SweepOptions options;
+  options.shard = testbed::ParseShard(shard);
   options.jobs = jobs;
   options.out_dir = out_dir;
   options.make_controller = choice.factory;
-  scenario::SweepOutcome outcome;
+  testbed::SweepOutcome outcome;
   {
     py::gil_scoped_release release;
-    outcome = scenario::RunSweep(spec, options);
+    outcome = testbed::RunSweep(spec, options);
   }
   py::dict out;
   out["runs"] = outcome.runs;
@@ -199,7 +199,7 @@ py::dict Sweep(const std::string& spec_path, const py::object& controller, int j
 
 py::dict Score(const std::vector<py::object>& controllers, const std::string& set_dir, int jobs, int limit,
                const std::string& out_dir) {
-  scenario::ScorecardOptions options;
+  testbed::ScorecardOptions options;
   options.controllers.clear();
   options.jobs = jobs;
   options.limit = limit;
@@ -212,16 +212,16 @@ py::dict Score(const std::vector<py::object>& controllers, const std::string& se
       options.controllers.push_back(choice.overrides.at(0).value);
     }
   }
-  const scenario::ScorecardSet set = scenario::LoadScorecardSet(
+  const testbed::ScorecardSet set = testbed::LoadScorecardSet(
       (set_dir.empty() ? common::DataPath("scenarios/scorecard") : set_dir) + "/set.yaml");
-  scenario::Scorecard scorecard;
+  testbed::Scorecard scorecard;
   {
     py::gil_scoped_release release;
-    scorecard = scenario::RunScorecard(set, options);
-    if (!out_dir.empty()) scenario::WriteScorecard(scorecard, out_dir);
+    scorecard = testbed::RunScorecard(set, options);
+    if (!out_dir.empty()) testbed::WriteScorecard(scorecard, out_dir);
   }
-  py::dict out = ToPython(scenario::ScorecardJson(scorecard));
-  out["table"] = scenario::ScorecardTable(scorecard);
+  py::dict out = ToPython(testbed::ScorecardJson(scorecard));
+  out["table"] = testbed::ScorecardTable(scorecard);
   return out;
 }
 
@@ -347,7 +347,7 @@ PYBIND11_MODULE(_graspbed, m) {
         py::arg("shard"));
   m.def("_score", &Score, py::arg("controllers"), py::arg("set_dir"), py::arg("jobs"), py::arg("limit"),
         py::arg("out_dir"));
-  m.def("list_scenarios", &scenario::ListScenarioFiles, py::arg("directory"),
+  m.def("list_scenarios", &testbed::ListScenarioFiles, py::arg("directory"),
         "The scenario files of a directory, sorted.");
   m.def("controller_names", &controller::ControllerNames, "Names of the built-in controllers.");
   m.def(

@@ -21,7 +21,7 @@
 
 #include "controller/grasp_controller.h"
 #include "controller/plugin_loader.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/scenario_config.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/error_of.h"
@@ -166,13 +166,13 @@ TEST(PluginScenarioTest, APluginPathIsRelativeToTheScenarioFile) {
   const std::string file = dir.Write("s/p.yaml", std::string(kScenarioHead) +
                                                      "controller:\n  plugin: ../lib/libthreshold_grip.so\n"
                                                      "  params: {target_grip_n: 4}\n");
-  const scenario::ScenarioConfig config = scenario::LoadScenario(file);
+  const testbed::ScenarioConfig config = testbed::LoadScenario(file);
   EXPECT_EQ(config.controller.name, "plugin:" + dir.Path("lib/libthreshold_grip.so"));
   EXPECT_DOUBLE_EQ(config.controller.params.at("target_grip_n"), 4.0);
   EXPECT_DOUBLE_EQ(config.controller.params.at("approach_effort"), 0.3);  // defaults filled in
   // The resolved config (config.yaml of a run) loads again to the same controller.
-  const scenario::ScenarioConfig again =
-      scenario::LoadScenarioFromString(scenario::EmitScenarioYaml(config), dir.Path("elsewhere/config.yaml"));
+  const testbed::ScenarioConfig again =
+      testbed::LoadScenarioFromString(testbed::EmitScenarioYaml(config), dir.Path("elsewhere/config.yaml"));
   EXPECT_EQ(again.controller.name, config.controller.name);
   EXPECT_EQ(again.controller.params, config.controller.params);
 }
@@ -208,7 +208,7 @@ TEST(PluginScenarioTest, BadPluginSectionsNameFileLineAndKey) {
   for (const Case& c : cases) {
     const std::string file = dir.Write("bad.yaml", std::string(kScenarioHead) + c.controller);
     const std::string message =
-        graspbed::test_support::ErrorOf<std::invalid_argument>([&] { scenario::LoadScenario(file); });
+        graspbed::test_support::ErrorOf<std::invalid_argument>([&] { testbed::LoadScenario(file); });
     EXPECT_THAT(message, HasSubstr(file + c.expected)) << c.controller;
   }
 }

@@ -15,9 +15,9 @@
 
 #include "sim/render/offscreen_gl_context.h"
 #include "sim/render/renderer.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
 #include "sim/sim_rig.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
 #include "tests/support/files.h"
 
 namespace graspbed::sim {
@@ -112,13 +112,13 @@ class RenderTest : public ::testing::Test {
   void RunDefault(const std::function<void(double, SimRig&)>& at) {
     // The open-loop controller squeezes at its full effort: about 2 N on each unit the box touches
     // (the reference controller holds the 100 g box with about 0.3 N per unit).
-    const scenario::ScenarioConfig config =
-        scenario::LoadScenario(SourcePath("scenarios/default.yaml"), {{"controller.name", "open_loop"}});
-    scenario::RunOptions run;
+    const testbed::ScenarioConfig config =
+        testbed::LoadScenario(SourcePath("scenarios/default.yaml"), {{"controller.name", "open_loop"}});
+    testbed::RunOptions run;
     run.instants_s = {kBeforeContactS, kPinchS};
     run.stop_after_instants = true;
     run.at_instant = at;
-    scenario::RunScenario(config, run);
+    testbed::RunScenario(config, run);
   }
 
   Renderer& RendererFor(SimRig& rig, double object_alpha) {

@@ -13,9 +13,9 @@
 
 #include "common/rgb_image.h"
 #include "common/video_writer.h"
-#include "sim/render/video.h"
-#include "sim/scenario/runner.h"
-#include "sim/scenario/scenario_config.h"
+#include "testbed/runner.h"
+#include "testbed/scenario_config.h"
+#include "testbed/show/video.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
@@ -65,8 +65,8 @@ TEST(VideoCliTest, DefaultScenarioVideoHasTheFrameCountAndSizeAskedFor) {
   const CliResult result = RunCli("run " + SourcePath("scenarios/default.yaml") + " --no-plots --out " + out +
                                   " --video --video-fps 10 --video-size 320x240");
   ASSERT_EQ(result.exit_code, kExitOk) << result.err;
-  const scenario::ScenarioConfig config = scenario::LoadScenario(SourcePath("scenarios/default.yaml"));
-  const int expected_frames = render::VideoFrameCount(config.duration_s, kFps);
+  const testbed::ScenarioConfig config = testbed::LoadScenario(SourcePath("scenarios/default.yaml"));
+  const int expected_frames = show::VideoFrameCount(config.duration_s, kFps);
   EXPECT_EQ(expected_frames, 26);  // 0, 0.1, ..., 2.5 s
   EXPECT_EQ(Probe(out + "/video.mp4"), std::to_string(kWidthPx) + "," + std::to_string(kHeightPx) + "," +
                                            std::to_string(expected_frames));
@@ -126,26 +126,26 @@ TEST(VideoCliTest, RefusesBadVideoOptionsBeforeRunning) {
 }
 
 TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
-  const scenario::ScenarioConfig config = scenario::LoadScenario(SourcePath("scenarios/default.yaml"));
+  const testbed::ScenarioConfig config = testbed::LoadScenario(SourcePath("scenarios/default.yaml"));
   TempDir dir("video_same");
-  scenario::RunOptions plain;
+  testbed::RunOptions plain;
   plain.out_dir = dir.Path("plain");
   plain.write_plots = false;
-  const scenario::RunResult without = scenario::RunScenario(config, plain);
+  const testbed::RunResult without = testbed::RunScenario(config, plain);
 
-  scenario::RunOptions recorded;
+  testbed::RunOptions recorded;
   recorded.out_dir = dir.Path("video");
   recorded.write_plots = false;
   fs::create_directories(recorded.out_dir);
-  render::VideoOptions video;
+  show::VideoOptions video;
   video.fps = kFps;
   video.render.width_px = kWidthPx;
   video.render.height_px = kHeightPx;
   video.strip_tiles = 0;
-  const auto cost = render::AttachVideo(config, video, recorded.out_dir + "/video.mp4", "", recorded);
-  const scenario::RunResult with = scenario::RunScenario(config, recorded);
+  const auto cost = show::AttachVideo(config, video, recorded.out_dir + "/video.mp4", "", recorded);
+  const testbed::RunResult with = testbed::RunScenario(config, recorded);
 
-  EXPECT_EQ(cost->frames, render::VideoFrameCount(config.duration_s, kFps));
+  EXPECT_EQ(cost->frames, show::VideoFrameCount(config.duration_s, kFps));
   EXPECT_TRUE(fs::exists(recorded.out_dir + "/video.mp4"));
   // Every signal of every tick, and the state log, byte for byte.
   const std::string signals = ReadFile(plain.out_dir + "/signals.csv");
@@ -154,8 +154,8 @@ TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
   EXPECT_TRUE(ReadFile(plain.out_dir + "/states.csv") == ReadFile(recorded.out_dir + "/states.csv"));
   EXPECT_EQ(without.passed, with.passed);
   EXPECT_EQ(without.control_ticks, with.control_ticks);
-  nlohmann::json a = scenario::SummaryJson(without);
-  nlohmann::json b = scenario::SummaryJson(with);
+  nlohmann::json a = testbed::SummaryJson(without);
+  nlohmann::json b = testbed::SummaryJson(with);
   for (nlohmann::json* summary : {&a, &b}) {
     summary->erase("real_time_factor");
     (*summary)["metrics"].erase("wall_s");

@@ -20,7 +20,7 @@
 namespace graspbed::sensor {
 namespace {
 
-// The unit FEA's sensitivities for the shipped unit (docs/fea.md; tests/scenario/sensitivities_test
+// The unit FEA's sensitivities for the shipped unit (docs/fea.md; tests/testbed/sensitivities_test
 // checks the scenario loader takes them from the analysis).
 constexpr double kFeaKn = 3.36e-5;
 constexpr double kFeaKt = 6.31e-6;

@@ -1,0 +1,220 @@
+#include "testbed/run_outputs.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+namespace graspbed::testbed {
+namespace internal {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Files a run writes; removed at the start so an old result never sits next to a new run.
+constexpr const char* kOutputFiles[] = {
+    "config.yaml", "signals.csv", "summary.json",   "forces.png",    "estimate_vs_truth.png",
+    "grip.png",    "slip.png",    "height.png",     "taxels_fn.png", "taxels_ft.png",
+    "states.csv",  "video.mp4",   "video_strip.png"};
+// Smallest colour-scale end of the taxel maps [N]: an unloaded run shows its noise pale, not as load.
+constexpr double kTaxelScaleFloorN = 0.5;
+
+}  // namespace
+
+const char* const kLoopColumnNames[kLoopColumnCount] = {"time_s",
+                                                        "grip_effort",
+                                                        "motor_enable",
+                                                        "brake",
+                                                        "grip_target_n",
+                                                        "friction_estimate",
+                                                        "slip_flag",
+                                                        "safe_hold",
+                                                        "stale",
+                                                        "valid_units",
+                                                        "contact_units",
+                                                        "est_total_fn_n",
+                                                        "est_shear_axial_n",
+                                                        "est_shear_circumferential_n",
+                                                        "read_status",
+                                                        "frame_seq",
+                                                        "frame_time_s",
+                                                        "frame_flags",
+                                                        "session"};
+
+std::vector<std::string> DiagnosticColumns(const controller::GraspController& controller) {
+  const std::span<const controller::DiagnosticChannel> channels = controller.diagnostic_channels();
+  const auto refuse = [&controller](const std::string& what) {
+    throw std::invalid_argument("controller '" + controller.name() + "': " + what);
+  };
+  if (channels.size() > controller::kMaxDiagnosticChannels) {
+    refuse("declares " + std::to_string(channels.size()) + " diagnostic channels (at most " +
+           std::to_string(controller::kMaxDiagnosticChannels) + ")");
+  }
+  std::vector<std::string> columns;
+  for (const controller::DiagnosticChannel& channel : channels) {
+    const std::string name = channel.name != nullptr ? channel.name : "";
+    const bool valid = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    });
+    if (!valid) refuse("diagnostic channel '" + name + "': a name is lower-case letters, digits and '_'");
+    const std::string column = "ctl_" + name;
+    if (std::find(columns.begin(), columns.end(), column) != columns.end())
+      refuse("diagnostic channel '" + name + "' declared twice");
+    columns.push_back(column);
+  }
+  return columns;
+}
+
+void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
+                    const controller::ControllerTelemetry& telemetry) {
+  const hand::HandCommand& command = loop.command();
+  const sensor::TactileState& state = loop.state();
+  const sensor::RawFrame& frame = loop.frame();
+  row[kTime] = time_s;
+  row[kGripEffort] = command.grip_effort;
+  row[kEnable] = command.enable ? 1.0 : 0.0;
+  row[kBrake] = command.brake ? 1.0 : 0.0;
+  row[kGripTarget] = telemetry.grip_target_n;
+  row[kFrictionEstimate] = telemetry.friction_estimate;
+  row[kSlipFlag] = telemetry.slip_detected ? 1.0 : 0.0;
+  row[kSafeHold] = telemetry.safe_hold ? 1.0 : 0.0;
+  row[kStale] = state.stale ? 1.0 : 0.0;
+  row[kValidUnits] = state.valid_count;
+  row[kContactUnits] = state.contact_count;
+  row[kEstTotalFn] = state.total_fn_n;
+  row[kEstShearAxial] = state.total_shear_axial_n;
+  row[kEstShearCirc] = state.total_shear_circumferential_n;
+  row[kReadStatus] = static_cast<double>(loop.last_status());
+  row[kFrameSeq] = frame.sequence;
+  row[kFrameTime] = frame.time_s;
+  row[kFrameFlags] = frame.flags;
+  row[kSession] = static_cast<double>(loop.session());
+}
+
+std::string OptionalText(const std::optional<double>& value, const char* format) {
+  if (!value) return "-";
+  char text[48];
+  std::snprintf(text, sizeof(text), format, *value);
+  return text;
+}
+
+nlohmann::json OptionalJson(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+
+plot::Chart MakeChart(const std::string& title, const std::string& x_label, const std::string& y_label) {
+  plot::Chart chart;
+  chart.title = title;
+  chart.x_label = x_label;
+  chart.y_label = y_label;
+  return chart;
+}
+
+plot::Series HorizontalLine(const std::string& name, double x0, double x1, double y) {
+  plot::Series series;
+  series.name = name;
+  series.x = {x0, x1};
+  series.y = {y, y};
+  series.dashed = true;
+  return series;
+}
+
+plot::Series Line(const common::SignalLog& log, const std::vector<double>& time, const std::string& column,
+                  const std::string& name, double scale, bool dashed) {
+  plot::Series series;
+  series.name = name;
+  series.x = time;
+  series.y = log.ColumnValues(column);
+  for (double& value : series.y) value *= scale;
+  series.dashed = dashed;
+  return series;
+}
+
+plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time, int units) {
+  plot::Chart chart = MakeChart("Estimated normal force per unit", "time [s]", "Fn [N]");
+  for (int u = 0; u < units; ++u) {
+    chart.series.push_back(Line(log, time, "fn_est_n_" + std::to_string(u), "unit " + std::to_string(u)));
+  }
+  chart.include_zero_y = true;
+  return chart;
+}
+
+// One marker per action that fired, at the time it fired (an event action's time is the run's).
+std::vector<plot::Marker> ScriptMarkers(const RunResult& result) {
+  std::vector<plot::Marker> markers;
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
+    if (fired_s >= 0.0) markers.push_back({fired_s, ActionName(result.config.script[i].kind)});
+  }
+  return markers;
+}
+
+// Units x time colour maps of the estimated Fn and Ft ("which units were loaded when"): one row per
+// unit in layout order, labelled with its index, row and column and beam axis; an invalid estimate
+// (dead, shorted, saturated, not yet tared) is grey.
+void WriteTaxelMaps(const RunResult& result, const common::SignalLog& log, const sensor::Layout& layout,
+                    const std::vector<double>& time, const std::string& title, const std::string& dir) {
+  plot::Heatmap fn;
+  fn.x_label = "time [s]";
+  fn.row_label = "unit (row, column, beam axis)";
+  fn.x = time;
+  fn.markers = ScriptMarkers(result);
+  plot::Heatmap ft = fn;
+  double fn_max = kTaxelScaleFloorN;
+  double ft_max = kTaxelScaleFloorN;
+  for (int u = 0; u < layout.unit_count(); ++u) {
+    const sensor::UnitPose& pose = layout.units[static_cast<size_t>(u)];
+    const std::string label = std::to_string(u) + " (r" + std::to_string(pose.row) + " c" +
+                              std::to_string(pose.column) +
+                              (pose.orientation == sensor::BeamOrientation::kAxial ? ", ax)" : ", circ)");
+    fn.row_labels.push_back(label);
+    ft.row_labels.push_back(label);
+    std::vector<double> fn_row = log.ColumnValues("fn_est_n_" + std::to_string(u));
+    std::vector<double> ft_row = log.ColumnValues("ft_est_n_" + std::to_string(u));
+    const std::vector<double> validity = log.ColumnValues("validity_" + std::to_string(u));
+    for (size_t i = 0; i < validity.size(); ++i) {
+      if (validity[i] != static_cast<double>(sensor::UnitValidity::kValid)) {
+        fn_row[i] = ft_row[i] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      if (std::isfinite(fn_row[i])) fn_max = std::max(fn_max, fn_row[i]);
+      if (std::isfinite(ft_row[i])) ft_max = std::max(ft_max, std::abs(ft_row[i]));
+    }
+    fn.values.push_back(std::move(fn_row));
+    ft.values.push_back(std::move(ft_row));
+  }
+  fn.title = title + ": estimated Fn per unit";
+  fn.value_label = "Fn [N], estimated";
+  fn.value_max = fn_max;
+  ft.title = title + ": estimated Ft per unit (along its beam)";
+  ft.value_label = "Ft [N], estimated";
+  ft.signed_scale = true;
+  ft.value_max = ft_max;
+  plot::WritePng(fn, dir + "/taxels_fn.png");
+  plot::WritePng(ft, dir + "/taxels_ft.png");
+}
+
+void PrepareOutputDir(const std::string& dir) {
+  std::error_code error;
+  fs::create_directories(dir, error);
+  // A place the user named that cannot hold results is bad input (exit 2), not a failed expectation.
+  if (error || !fs::is_directory(dir)) {
+    throw std::invalid_argument("--out " + dir + ": cannot create the output directory" +
+                                (error ? " (" + error.message() + ")" : ""));
+  }
+  for (const char* name : kOutputFiles) fs::remove(fs::path(dir) / name, error);
+  common::WriteFileAtomic(dir + "/" + kIncompleteMarker,
+                  "This run is in progress or was interrupted; its results are not complete.\n");
+}
+
+}  // namespace internal
+
+
+}  // namespace graspbed::testbed

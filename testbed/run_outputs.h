@@ -1,0 +1,99 @@
+#pragma once
+/// Pieces every backend's run shares (RunScenario on the simulation, RunOnBench on the serial link
+/// and on a recording): the output directory and its atomic files, the columns of the control loop
+/// in signals.csv, and the plots drawn from them. Internal to graspbed_scenario.
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/plot.h"
+#include "common/signal_log.h"
+#include "controller/control_loop.h"
+#include "controller/grasp_controller.h"
+#include "sensor/layout.h"
+#include "testbed/runner.h"
+
+namespace graspbed::testbed::internal {
+
+/// `value` printed with `format` (one printf conversion), "-" when absent: tables' empty cells.
+std::string OptionalText(const std::optional<double>& value, const char* format);
+/// `value`, or JSON null when absent.
+nlohmann::json OptionalJson(const std::optional<double>& value);
+
+/// Name of the file that marks a run in progress or interrupted.
+inline constexpr const char* kIncompleteMarker = "INCOMPLETE";
+
+/// Creates `dir` (std::invalid_argument naming --out when it cannot), removes the files an earlier
+/// run left there, and marks it INCOMPLETE.
+void PrepareOutputDir(const std::string& dir);
+
+/// The columns of signals.csv every backend writes, in this order from time_s on: the command
+/// written, the controller's telemetry, the estimate's totals, and the tick's read: read_status
+/// (sensor::ReadStatus as 0..3), frame_seq, frame_time_s [s], frame_flags and session of the frame
+/// the loop holds. Everything a replay needs to feed the loop the same input again.
+enum LoopColumn : size_t {
+  kTime,
+  kGripEffort,
+  kEnable,
+  kBrake,
+  kGripTarget,
+  kFrictionEstimate,
+  kSlipFlag,
+  kSafeHold,
+  kStale,
+  kValidUnits,
+  kContactUnits,
+  kEstTotalFn,
+  kEstShearAxial,
+  kEstShearCirc,
+  kReadStatus,
+  kFrameSeq,
+  kFrameTime,
+  kFrameFlags,
+  kSession,
+  kLoopColumnCount
+};
+extern const char* const kLoopColumnNames[kLoopColumnCount];
+
+/// Fills the kLoopColumnCount loop cells of `row` for the tick at `time_s` [s] that just ran.
+void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
+                    const controller::ControllerTelemetry& telemetry);
+
+/// The signals.csv columns of `controller`'s diagnostic channels, "ctl_<name>" each, after the
+/// backend's own. @throws std::invalid_argument naming the controller when it declares more than
+/// controller::kMaxDiagnosticChannels, a name that is empty, repeated or not lower-case letters,
+/// digits and '_'.
+std::vector<std::string> DiagnosticColumns(const controller::GraspController& controller);
+/// Fills `count` cells of `row` from `first` on with the controller's diagnostics.
+inline void WriteDiagnosticCells(double* row, size_t first, size_t count,
+                                 const controller::GraspController& controller) {
+  if (count > 0) controller.ReadDiagnostics(std::span<double>(row + first, count));
+}
+
+/// A chart with its labels.
+plot::Chart MakeChart(const std::string& title, const std::string& x_label, const std::string& y_label);
+/// A dashed horizontal line from x0 to x1 at y.
+plot::Series HorizontalLine(const std::string& name, double x0, double x1, double y);
+/// Column `column` of `log` against `time`, scaled.
+plot::Series Line(const common::SignalLog& log, const std::vector<double>& time, const std::string& column,
+                  const std::string& name, double scale = 1.0, bool dashed = false);
+/// The estimated Fn of every unit against time (columns fn_est_n_K).
+plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time, int units);
+/// One marker per script action that fired, at the time it fired.
+std::vector<plot::Marker> ScriptMarkers(const RunResult& result);
+/// taxels_fn.png and taxels_ft.png: units x time maps of the estimated Fn and Ft (columns
+/// fn_est_n_K, ft_est_n_K, validity_K).
+void WriteTaxelMaps(const RunResult& result, const common::SignalLog& log, const sensor::Layout& layout,
+                    const std::vector<double>& time, const std::string& title, const std::string& dir);
+
+/// RunScenario for backend serial and replay (bench_runner.cc): same contract.
+RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options);
+/// SummaryTable for backend serial and replay.
+std::string BenchSummaryTable(const RunResult& result);
+
+}  // namespace graspbed::testbed::internal

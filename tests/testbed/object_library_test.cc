@@ -1,0 +1,321 @@
+// The object library and the shapes beyond primitives: every library object compiles with the
+// library's mass and the inertia computed apart from MuJoCo; a centre-of-mass offset gives the
+// gravity torque a hand computation gives; the compliance mapping holds; a user's mesh loads and a
+// broken one is refused by name; an egg squeezed past its crush force is reported crushed; a soft
+// object loads more units than a rigid one of the same size.
+#include <mujoco/mujoco.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/config_error.h"
+#include "common/yaml_map.h"
+#include "sensor/layout.h"
+#include "sim/model_generator.h"
+#include "sim/object_library.h"
+#include "sim/object_shapes.h"
+#include "sim/scene_config.h"
+#include "sim/simulation.h"
+#include "testbed/scenario_config.h"
+#include "tests/support/temp_dir.h"
+#include "tests/testbed/scenario_test_util.h"
+
+namespace graspbed {
+namespace {
+
+using ::testing::HasSubstr;
+
+// The model text carries each part's mass to 8 significant digits (Simulation then sets the body's
+// total exactly).
+constexpr double kMassRelTol = 5e-8;
+constexpr double kCentreTolM = 1e-5;
+// Principal moments: the analytic capsule and polygonal-frustum formulas against MuJoCo's.
+constexpr double kInertiaRelTol = 0.01;
+constexpr double kGravity = 9.81;
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
+
+ModelPtr CompileScene(const sim::SceneConfig& scene) {
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  return ModelPtr(sim::CompileMjcf(sim::GenerateMjcf(layout, scene)));
+}
+
+TEST(ObjectModelTest, TheLibraryHasTheIssuesObjects) {
+  const sim::ObjectLibrary& library = sim::ShippedObjectLibrary();
+  for (const char* name : {"can", "bottle", "bottle_half", "mug", "marker", "card", "banana", "tennis_ball",
+                           "apple", "egg", "plastic_cup", "foam_brick", "wine_glass"}) {
+    const sim::LibraryObject* object = library.Find(name);
+    ASSERT_NE(object, nullptr) << name;
+    EXPECT_FALSE(object->source.empty()) << name;
+  }
+  EXPECT_GT(library.Find("egg")->object.crush_limit_n, 0.0);
+  EXPECT_GT(library.Find("wine_glass")->object.crush_limit_n, 0.0);
+  EXPECT_LE(library.Find("plastic_cup")->object.crush_limit_n, 5.0);
+}
+
+TEST(ObjectModelTest, EveryLibraryObjectCompilesWithTheLibrarysMassCentreAndInertia) {
+  for (const sim::LibraryObject& entry : sim::ShippedObjectLibrary().objects()) {
+    SCOPED_TRACE(entry.name);
+    sim::SceneConfig scene;
+    scene.object = entry.object;
+    const ModelPtr model = CompileScene(scene);
+    ASSERT_NE(model, nullptr);
+    const int body = mj_name2id(model.get(), mjOBJ_BODY, "object");
+    ASSERT_GE(body, 0);
+    const sim::MassProperties expected = sim::ComputeMassProperties(sim::ObjectParts(entry.object));
+    EXPECT_NEAR(expected.mass_kg, entry.object.mass_kg, kMassRelTol * entry.object.mass_kg);
+    EXPECT_NEAR(model->body_mass[body], entry.object.mass_kg, kMassRelTol * entry.object.mass_kg);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(model->body_ipos[3 * body + k], expected.centre_of_mass_m[k], kCentreTolM) << "axis " << k;
+    std::vector<double> compiled(model->body_inertia + 3 * body, model->body_inertia + 3 * body + 3);
+    std::sort(compiled.begin(), compiled.end());
+    const Eigen::Vector3d principal = expected.PrincipalMomentsKgM2();
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(compiled[k], principal[k], kInertiaRelTol * principal[k]) << "principal moment " << k;
+  }
+}
+
+// The mug's handle on +y: gravity's torque about the pinch axis (world x) through the body's axis,
+// by hand. Ceramic volumes (sim/object_shapes.cc: 5 mm wall, 5 mm handle capsules), R = 40 mm,
+// H = 82 mm, handle reach 117 - 80 = 37 mm:
+//   wall   = pi (0.040^2 - 0.035^2) 0.082 + pi 0.035^2 0.005 = pi 3.6875e-5 m^3
+//   handle = pi 0.005^2 (grip 0.041 + 2 arms x 0.037)       = pi 2.875e-6 m^3
+//   handle share = 2.875 / 39.75 = 0.072327
+//   handle centroid y: grip at 0.040 + 0.037 - 0.005 = 0.072, arms centred at (0.035 + 0.072) / 2 =
+//   0.0535: (0.041 x 0.072 + 0.074 x 0.0535) / 0.115 = 0.060096 m
+//   centre of mass y = 0.072327 x 0.060096 = 4.3466 mm; torque = 0.118 x 9.81 x 0.0043466 = 5.0315e-3 N m
+TEST(ObjectModelTest, TheMugsHandleTwistsItAboutThePinchAxisByHandComputation) {
+  constexpr double kExpectedCentreY = 0.0043466;
+  constexpr double kExpectedTorqueNm = 0.118 * kGravity * kExpectedCentreY;
+  sim::SceneConfig scene;
+  scene.object = sim::ShippedObjectLibrary().Find("mug")->object;
+  const ModelPtr model = CompileScene(scene);
+  const int body = mj_name2id(model.get(), mjOBJ_BODY, "object");
+  EXPECT_NEAR(model->body_ipos[3 * body + 1], kExpectedCentreY, 1e-6);
+  std::unique_ptr<mjData, void (*)(mjData*)> data(mj_makeData(model.get()), mj_deleteData);
+  mj_forward(model.get(), data.get());
+  // The free joint's rotational dofs act about the body origin (the mug's axis), body axes = world
+  // axes at rest: qfrc_bias there is minus gravity's torque about world x.
+  const int dof = model->jnt_dofadr[model->body_jntadr[body]];
+  const double torque_about_x = -data->qfrc_bias[dof + 3];
+  EXPECT_NEAR(std::abs(torque_about_x), kExpectedTorqueNm, 0.01 * kExpectedTorqueNm);
+  EXPECT_LT(torque_about_x, 0.0) << "weight on +y tips the top towards +y: negative about +x";
+}
+
+TEST(ObjectModelTest, APartFilledBottleHasItsCentreOfMassLower) {
+  const sim::ObjectLibrary& library = sim::ShippedObjectLibrary();
+  const auto centre_z = [](const sim::ObjectConfig& o) {
+    return sim::ComputeMassProperties(sim::ObjectParts(o)).centre_of_mass_m.z();
+  };
+  EXPECT_LT(centre_z(library.Find("bottle_half")->object), centre_z(library.Find("bottle")->object) - 0.01);
+}
+
+// A ball on the table: one contact, whose penetration is its weight over the stated stiffness.
+TEST(ObjectModelTest, AStatedStiffnessGivesThatPenetrationUnderTheWeight) {
+  test_support::TempDir dir;
+  const std::string file = dir.Write("ball.yaml", R"(
+object: {name: tennis_ball, stiffness_n_m: 1000}
+)");
+  const sim::SceneConfig scene = sim::LoadSceneConfigFile(file);
+  EXPECT_EQ(scene.object.solimp[0], sim::kStiffnessImpedance);
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  sim::Simulation simulation(layout, scene);
+  simulation.StepUntil(1.5);
+  ASSERT_FALSE(simulation.fault().occurred) << simulation.fault().cause_text();
+  const double penetration = -simulation.truth().object_height_above_table_m;
+  const double expected = 0.058 * kGravity / 1000.0;  // 0.57 mm
+  EXPECT_NEAR(penetration, expected, 0.05 * expected);
+}
+
+TEST(ObjectModelTest, OverridesBesideTheNameWin) {
+  test_support::TempDir dir;
+  const sim::SceneConfig scene =
+      sim::LoadSceneConfigFile(dir.Write("can.yaml", "object: {name: can, mass_kg: 0.2, friction: 0.3}\n"));
+  EXPECT_EQ(scene.object.shape, sim::ObjectShape::kCylinder);
+  EXPECT_DOUBLE_EQ(scene.object.mass_kg, 0.2);
+  EXPECT_DOUBLE_EQ(scene.object.friction, 0.3);
+  EXPECT_DOUBLE_EQ(scene.object.size_m[0], 0.066);
+  // The stiffness is kept and re-derived for the new mass.
+  EXPECT_NEAR(sim::StiffnessOfSolref(scene.object), 3.0e5, 1.0);
+}
+
+TEST(ObjectModelTest, AnUnknownNameListsTheKnownOnes) {
+  test_support::TempDir dir;
+  const std::string file = dir.Write("bad.yaml", "object:\n  name: teapot\n");
+  try {
+    sim::LoadSceneConfigFile(file);
+    FAIL() << "loaded";
+  } catch (const common::ConfigError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("bad.yaml:2"));
+    EXPECT_THAT(error.what(), HasSubstr("object.name = teapot"));
+    EXPECT_THAT(error.what(), HasSubstr("unknown object"));
+    EXPECT_THAT(error.what(), HasSubstr("can, bottle"));
+  }
+}
+
+TEST(ObjectModelTest, TooStiffForTheStepIsRefusedWithTheMostItTakes) {
+  test_support::TempDir dir;
+  const std::string file = dir.Write("stiff.yaml", "object: {name: marker, stiffness_n_m: 1e8}\n");
+  try {
+    sim::LoadSceneConfigFile(file);
+    FAIL() << "loaded";
+  } catch (const common::ConfigError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("object.stiffness_n_m"));
+    EXPECT_THAT(error.what(), HasSubstr("too stiff"));
+    EXPECT_THAT(error.what(), HasSubstr("at most"));
+  }
+}
+
+// Binary STL of the given triangles.
+void WriteStl(const std::string& path, const std::vector<std::array<Eigen::Vector3f, 3>>& triangles) {
+  std::ofstream out(path, std::ios::binary);
+  char header[80] = {0};
+  out.write(header, 80);
+  const uint32_t count = static_cast<uint32_t>(triangles.size());
+  out.write(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& t : triangles) {
+    const float normal[3] = {0, 0, 0};
+    out.write(reinterpret_cast<const char*>(normal), 12);
+    for (const Eigen::Vector3f& v : t) out.write(reinterpret_cast<const char*>(v.data()), 12);
+    const uint16_t attributes = 0;
+    out.write(reinterpret_cast<const char*>(&attributes), 2);
+  }
+}
+
+// A closed box [0, x] x [0, y] x [0, z] as 12 outward-facing triangles.
+std::vector<std::array<Eigen::Vector3f, 3>> BoxTriangles(Eigen::Vector3f lo, Eigen::Vector3f hi) {
+  std::vector<std::array<Eigen::Vector3f, 3>> t;
+  const auto corner = [&](int i) {
+    return Eigen::Vector3f(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  };
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    t.push_back({corner(f[0]), corner(f[1]), corner(f[2])});
+    t.push_back({corner(f[0]), corner(f[2]), corner(f[3])});
+  }
+  return t;
+}
+
+TEST(ObjectMeshModelTest, AnStlInMillimetresLoadsWithItsSizeAndMass) {
+  test_support::TempDir dir;
+  WriteStl(dir.Path("cube.stl"), BoxTriangles({0, 0, 0}, {30, 40, 50}));
+  const std::string file = dir.Write("mesh.yaml", "object: {mesh: cube.stl, scale: 0.001, mass_kg: 0.2}\n");
+  const sim::SceneConfig scene = sim::LoadSceneConfigFile(file);
+  EXPECT_EQ(scene.object.shape, sim::ObjectShape::kMesh);
+  EXPECT_NEAR(scene.object.size_m[0], 0.030, 1e-9);
+  EXPECT_NEAR(scene.object.size_m[2], 0.050, 1e-9);
+  const ModelPtr model = CompileScene(scene);
+  const int body = mj_name2id(model.get(), mjOBJ_BODY, "object");
+  EXPECT_NEAR(model->body_mass[body], 0.2, 1e-9);
+  // A box is its own hull: no warning.
+  EXPECT_EQ(sim::MeshHullWarning(scene.object.mesh, 0.001), "");
+}
+
+TEST(ObjectMeshModelTest, AConcaveMeshWarnsWhatItsHullAdds) {
+  test_support::TempDir dir;
+  // Two 10 mm cubes touching only along an edge region: an L whose hull is much larger.
+  std::vector<std::array<Eigen::Vector3f, 3>> l_shape = BoxTriangles({0, 0, 0}, {30, 10, 10});
+  for (const auto& t : BoxTriangles({0, 0, 10}, {10, 10, 40})) l_shape.push_back(t);
+  WriteStl(dir.Path("l.stl"), l_shape);
+  const std::string warning = sim::MeshHullWarning(dir.Path("l.stl"), 0.001);
+  EXPECT_THAT(warning, HasSubstr("l.stl"));
+  EXPECT_THAT(warning, HasSubstr("convex hull"));
+  EXPECT_THAT(warning, HasSubstr("mesh 6 cm^3"));
+}
+
+TEST(ObjectMeshModelTest, ABrokenOrMissingFileIsRefusedByName) {
+  test_support::TempDir dir;
+  {
+    WriteStl(dir.Path("cut.stl"), BoxTriangles({0, 0, 0}, {30, 40, 50}));
+    std::ifstream in(dir.Path("cut.stl"), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir.Path("cut.stl"), std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() - 20);
+  }
+  const auto error_of = [&](const std::string& yaml) -> std::string {
+    try {
+      sim::LoadSceneConfigFile(dir.Write("m.yaml", yaml));
+    } catch (const common::ConfigError& error) {
+      return error.what();
+    }
+    return "loaded";
+  };
+  const std::string cut = error_of("object: {mesh: cut.stl, scale: 0.001}\n");
+  EXPECT_THAT(cut, HasSubstr("object.mesh = cut.stl"));
+  EXPECT_THAT(cut, HasSubstr("truncated"));
+  const std::string missing = error_of("object: {mesh: nowhere.stl}\n");
+  EXPECT_THAT(missing, HasSubstr("nowhere.stl"));
+  EXPECT_THAT(missing, HasSubstr("cannot open"));
+  WriteStl(dir.Path("cube.stl"), BoxTriangles({0, 0, 0}, {30, 40, 50}));
+  const std::string shaped = error_of("object: {shape: box, mesh: cube.stl, scale: 0.001}\n");
+  EXPECT_THAT(shaped, HasSubstr("object.shape = box"));
+  EXPECT_THAT(shaped, HasSubstr("has shape mesh"));
+  const std::string format = error_of("object: {mesh: part.msh}\n");
+  EXPECT_THAT(format, HasSubstr("part.msh"));
+  EXPECT_THAT(format, HasSubstr("unsupported format"));
+}
+
+// The egg between the prosthetic hand's digits, squeezed by the open-loop controller with motors
+// strong enough to pass its 30 N crush force.
+std::string EggScenario(double close_effort) {
+  return "duration_s: 0.6\n"
+         "object: {name: egg}\n"
+         "hand: {digit_motor: {stall_pinch_force_n: 80}}\n"
+         "controller: {name: open_loop, params: {close_effort: " +
+         std::to_string(close_effort) +
+         "}}\n"
+         "script:\n"
+         "  - {at_s: 0.05, action: close}\n";
+}
+
+TEST(ObjectScenarioTest, AnEggSqueezedPastItsCrushForceIsCrushedAndBelowItIsNot) {
+  test_support::TempDir dir;
+  const auto hard = testbed::test_support::RunScenarioText(dir, "hard", EggScenario(0.8));
+  EXPECT_TRUE(hard.result.metrics.crushed) << "peak grip " << hard.result.metrics.peak_grip_n << " N";
+  EXPECT_GT(hard.result.metrics.peak_grip_n, 30.0);
+  const auto gentle = testbed::test_support::RunScenarioText(dir, "gentle", EggScenario(0.2));
+  EXPECT_FALSE(gentle.result.metrics.crushed) << "peak grip " << gentle.result.metrics.peak_grip_n << " N";
+  EXPECT_GT(gentle.result.metrics.peak_grip_n, 5.0) << "it was held";
+}
+
+// The foam brick and a rigid brick of the same size, squeezed alike: the pad sinks into the foam
+// and more of its units bear.
+std::string BrickScenario(const std::string& stiffness) {
+  return "duration_s: 0.6\n"
+         "object: {name: foam_brick, stiffness_n_m: " +
+         stiffness +
+         "}\n"
+         "controller: {name: open_loop, params: {close_effort: 0.5}}\n"
+         "script:\n"
+         "  - {at_s: 0.05, action: close}\n";
+}
+
+TEST(ObjectScenarioTest, ASoftObjectLoadsMoreUnitsThanARigidOneAtTheSameGrip) {
+  test_support::TempDir dir;
+  const auto soft = testbed::test_support::RunScenarioText(dir, "soft", BrickScenario("500"));
+  const auto rigid = testbed::test_support::RunScenarioText(dir, "rigid", BrickScenario("5e5"));
+  const auto loaded_units = [](const testbed::test_support::Signals& s) {
+    int count = 0;
+    for (int unit = 0; unit < 20; ++unit) {
+      if (s.AtTime("fn_true_n_" + std::to_string(unit), 0.55) > 0.05) ++count;
+    }
+    return count;
+  };
+  const int soft_units = loaded_units(soft.signals);
+  const int rigid_units = loaded_units(rigid.signals);
+  EXPECT_GT(soft_units, rigid_units) << "soft " << soft_units << ", rigid " << rigid_units;
+  EXPECT_GT(rigid_units, 0);
+}
+
+}  // namespace
+}  // namespace graspbed

@@ -1,0 +1,211 @@
+// The oracle grip (the lightest constant grip that holds a scenario) on the real simulation: where it
+// lies against the load and against open loop, that grip efficiency measures what it claims (1 at
+// the oracle, 2 at twice it, far more for a squeeze), that it grows with the mass, that it is cached,
+// the unholdable case, and `graspbed oracle` through the CLI.
+#include "testbed/oracle.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "testbed/runner.h"
+#include "tests/support/cli_runner.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::testbed {
+namespace {
+
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::RunCliUnder;
+using graspbed::test_support::TempDir;
+
+const std::string kDefault = std::string(GRASPBED_SOURCE_DIR) + "/scenarios/default.yaml";
+
+/// The bisection stops at 2 % of its bracket: the oracle is that close to the true threshold.
+constexpr double kResolution = 0.02;
+/// The default box: 100 g at mu 0.8, g = 9.81: its load bound m g / (2 mu) [N].
+constexpr double kDefaultLoadBoundN = 0.1 * 9.81 / (2.0 * 0.8);
+/// Open loop at effort 0.08 held the default box (the measurement); the oracle is below it.
+constexpr double kOpenLoopHoldingEffort = 0.08;
+
+/// The default scenario with `overrides`, scored against its oracle.
+RunResult RunWith(const std::vector<Override>& overrides) {
+  const ScenarioConfig config = LoadScenario(kDefault, overrides);
+  RunOptions options;
+  options.oracle = OracleMode::kAlways;
+  return RunScenario(config, options);
+}
+
+TEST(OracleTest, TheDefaultBoxsOracleLiesAboveItsLoadBoundAndBelowWhatOpenLoopHeldItWith) {
+  const ScenarioConfig config = LoadScenario(kDefault);
+  const OracleSearch search = FindOracleGrip(config);
+  ASSERT_TRUE(search.grip.grip_n.has_value()) << search.grip.reason;
+  std::printf("[ measure ] default: oracle grip %.3f N (setpoint %.3f N) in %zu runs\n", *search.grip.grip_n,
+              *search.setpoint_n, search.steps.size());
+  EXPECT_GT(*search.grip.grip_n, kDefaultLoadBoundN);
+  // The bisection's last held and last failed setpoints bracket it within the resolution.
+  double below_n = 0.0;
+  for (const OracleStep& step : search.steps) {
+    if (!step.held && step.setpoint_n < *search.setpoint_n) below_n = std::max(below_n, step.setpoint_n);
+  }
+  EXPECT_LE(*search.setpoint_n - below_n, std::max(0.02, kResolution * 2.0 * *search.setpoint_n));
+  // Open loop at 0.08 holds the box (no drop, no gross slip) with more grip than the oracle.
+  const RunResult open_loop =
+      RunWith({{"controller.name", "open_loop"},
+                       {"controller.params.close_effort", std::to_string(kOpenLoopHoldingEffort)}});
+  ASSERT_FALSE(open_loop.metrics.dropped);
+  ASSERT_EQ(open_loop.metrics.gross.events, 0);
+  EXPECT_LT(*search.grip.grip_n, open_loop.metrics.mean_held_grip_n);
+  EXPECT_LT(*search.grip.grip_n, open_loop.metrics.peak_grip_n);
+}
+
+TEST(OracleTest, GripEfficiencyIsOneAtTheOracleTwoAtTwiceItAndFourForAFirmSqueeze) {
+  const ScenarioConfig config = LoadScenario(kDefault);
+  const OracleSearch search = FindOracleGrip(config);
+  ASSERT_TRUE(search.setpoint_n.has_value());
+  const auto constant = [&](double setpoint_n) {
+    return RunWith({{"controller.name", "constant_grip"},
+                            {"controller.params.grip_n", std::to_string(setpoint_n)},
+                            {"sensor.profile", "ideal"}});
+  };
+  const RunResult at_oracle = constant(*search.setpoint_n);
+  ASSERT_TRUE(at_oracle.metrics.grip_efficiency.has_value());
+  EXPECT_NEAR(*at_oracle.metrics.grip_efficiency, 1.0, kResolution);
+  EXPECT_FALSE(at_oracle.metrics.dropped);
+  const RunResult at_twice = constant(2.0 * *search.setpoint_n);
+  ASSERT_TRUE(at_twice.metrics.grip_efficiency.has_value());
+  EXPECT_NEAR(*at_twice.metrics.grip_efficiency, 2.0, 0.1);
+  // Open loop at effort 0.5 squeezes about 13 N: the efficiency says how far beyond need that is.
+  const RunResult squeeze = RunWith({{"controller.name", "open_loop"}, {"controller.params.close_effort", "0.5"}});
+  ASSERT_TRUE(squeeze.metrics.grip_efficiency.has_value());
+  std::printf("[ measure ] default: efficiency %.2f at the oracle, %.2f at twice it, %.2f open loop at 0.5\n",
+              *at_oracle.metrics.grip_efficiency, *at_twice.metrics.grip_efficiency,
+              *squeeze.metrics.grip_efficiency);
+  EXPECT_GE(*squeeze.metrics.grip_efficiency, 4.0);
+  EXPECT_GE(*squeeze.metrics.peak_grip_ratio, *squeeze.metrics.grip_efficiency);
+}
+
+TEST(OracleTest, TheOracleGrowsWithTheMassAndIsCachedPerConfiguration) {
+  const ScenarioConfig light = LoadScenario(kDefault);
+  const ScenarioConfig heavy = LoadScenario(kDefault, {{"object.mass_kg", "0.3"}});
+  const OracleCacheCounters before = OracleCacheCountersNow();
+  const OracleSearch light_search = FindOracleGrip(light);
+  const OracleSearch heavy_search = FindOracleGrip(heavy);
+  ASSERT_TRUE(light_search.grip.grip_n && heavy_search.grip.grip_n);
+  EXPECT_GT(*heavy_search.grip.grip_n, 1.5 * *light_search.grip.grip_n);
+  EXPECT_NE(light_search.config_hash, heavy_search.config_hash);
+  // The same scenario under another controller or sensor is the same oracle: answered from the cache.
+  const OracleCacheCounters middle = OracleCacheCountersNow();
+  const ScenarioConfig other_controller =
+      LoadScenario(kDefault, {{"controller.name", "open_loop"}, {"sensor.profile", "divider_12bit"}});
+  const OracleSearch again = FindOracleGrip(other_controller);
+  const OracleCacheCounters after = OracleCacheCountersNow();
+  EXPECT_EQ(after.searches - middle.searches, 1u);
+  EXPECT_EQ(after.cache_hits - middle.cache_hits, 1u);
+  EXPECT_EQ(again.config_hash, light_search.config_hash);
+  EXPECT_EQ(*again.grip.grip_n, *light_search.grip.grip_n);
+  EXPECT_GE(middle.searches - before.searches, 2u);
+}
+
+TEST(OracleTest, AnObjectTheStallPinchCannotHoldHasNoOracleAndSaysWhy) {
+  // 2 kg at mu 0.2: its weight alone needs 49 N per digit, beyond the 20 N stall pinch.
+  const ScenarioConfig config = LoadScenario(kDefault, {{"object.mass_kg", "2.0"}, {"object.friction", "0.2"}});
+  const OracleSearch search = FindOracleGrip(config);
+  EXPECT_FALSE(search.grip.grip_n.has_value());
+  EXPECT_FALSE(search.setpoint_n.has_value());
+  EXPECT_NE(search.grip.reason.find("not held at the motor's stall pinch of 20 N"), std::string::npos)
+      << search.grip.reason;
+  ASSERT_FALSE(search.steps.empty());
+  EXPECT_DOUBLE_EQ(search.steps.back().setpoint_n, 20.0);
+}
+
+TEST(OracleTest, UntilTheFirstDisturbanceCutsTheScriptAndTheDuration) {
+  const ScenarioConfig config =
+      LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/added_mass_step.yaml");
+  const std::optional<ScenarioConfig> until = UntilFirstDisturbance(config);
+  ASSERT_TRUE(until.has_value());
+  ASSERT_EQ(until->script.size(), 2u);  // close and lift; the add_mass is gone
+  EXPECT_EQ(until->script.back().kind, ActionKind::kLift);
+  EXPECT_DOUBLE_EQ(until->duration_s, config.script[2].at_s);
+  EXPECT_FALSE(UntilFirstDisturbance(LoadScenario(kDefault)).has_value());
+  // The oracle's runs: constant_grip on the ideal sensor at the default control rate (nothing of the
+  // controller under test), sensor faults left out.
+  const ScenarioConfig step =
+      OracleStepConfig(LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/sensor_dropout.yaml",
+                                    {{"controller.rate_hz", "500"}, {"controller.grip_ceiling_n", "3"}}),
+                       1.5);
+  EXPECT_EQ(step.controller.name, "constant_grip");
+  EXPECT_EQ(step.controller.rate_hz, ControllerOptions{}.rate_hz);
+  EXPECT_EQ(step.controller.grip_ceiling_n, 0.0);
+  EXPECT_DOUBLE_EQ(step.controller.params.at("grip_n"), 1.5);
+  EXPECT_EQ(step.sensor.profile, "ideal");
+  for (const Action& action : step.script) EXPECT_FALSE(IsSensorAction(action.kind)) << ActionName(action.kind);
+}
+
+TEST(OracleTest, AnInterruptedSearchSaysSoAndIsNotAppliedToTheRun) {
+  const ScenarioConfig config = LoadScenario(kDefault, {{"object.mass_kg", "0.11"}});
+  std::atomic<bool> stop{true};
+  OracleOptions options;
+  options.stop = &stop;
+  const OracleSearch search = FindOracleGrip(config, options);
+  EXPECT_FALSE(search.completed);
+  EXPECT_FALSE(search.grip.grip_n.has_value());
+  EXPECT_EQ(search.grip.reason, "interrupted");
+  // Not cached: asked again without the stop, it searches and finds the grip.
+  EXPECT_TRUE(FindOracleGrip(config).grip.grip_n.has_value());
+}
+
+TEST(OracleCliTest, PrintsBothOraclesAsJsonWithTheStepsAndRefusesBadInput) {
+  const CliResult result =
+      RunCli("oracle " + std::string(GRASPBED_SOURCE_DIR) + "/scenarios/added_mass_step.yaml --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = nlohmann::json::parse(result.out);
+  ASSERT_TRUE(json.at("oracle_grip_n").is_number());
+  ASSERT_TRUE(json.at("oracle_grip_until_disturbance_n").is_number());
+  EXPECT_GE(json.at("oracle_grip_n").get<double>(), 1.5 * json.at("oracle_grip_until_disturbance_n").get<double>());
+  EXPECT_EQ(json.at("first_disturbance").at("action"), "add_mass");
+  EXPECT_GE(json.at("full").at("steps").size(), 5u);
+  EXPECT_EQ(json.at("full").at("steps").back().at("setpoint_n").get<double>() > 0.0, true);
+  const CliResult table = RunCli("oracle " + kDefault);
+  ASSERT_EQ(table.exit_code, 0) << table.err;
+  EXPECT_NE(table.out.find("oracle grip:"), std::string::npos) << table.out;
+  EXPECT_NE(table.out.find("no disturbance action"), std::string::npos) << table.out;
+  const CliResult bad = RunCli("oracle " + kDefault + " --set object.mass_kg=-1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("object.mass_kg = -1"), std::string::npos) << bad.err;
+}
+
+TEST(OracleCliTest, TheOptInDiskCacheAnswersAnotherProcessAndAnUnreadableEntryIsSearchedAgain) {
+  TempDir dir;
+  const std::string env = "env GRASPBED_ORACLE_CACHE_DIR=" + dir.Path("cache") + " ";
+  const std::string arguments = "oracle " + kDefault + " --set object.mass_kg=0.12 --json";
+  const CliResult first = RunCliUnder(env, arguments);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const nlohmann::json searched = nlohmann::json::parse(first.out);
+  const std::string entry = dir.Path("cache") + "/" + searched.at("full").at("config_hash").get<std::string>() + ".json";
+  ASSERT_TRUE(std::filesystem::exists(entry));
+  // Another process reads it back: the same figures and steps. A stored search with a doctored
+  // figure proves the answer came from the file, not from a new search.
+  nlohmann::json stored = nlohmann::json::parse(graspbed::test_support::ReadText(entry));
+  stored["grip_n"] = 0.123;
+  std::ofstream(entry) << stored.dump();
+  const nlohmann::json cached = nlohmann::json::parse(RunCliUnder(env, arguments).out);
+  EXPECT_EQ(cached.at("oracle_grip_n").get<double>(), 0.123);
+  EXPECT_EQ(cached.at("full").at("steps"), searched.at("full").at("steps"));
+  // A file that does not parse is searched again and rewritten.
+  std::ofstream(entry) << "{ not json";
+  const nlohmann::json again = nlohmann::json::parse(RunCliUnder(env, arguments).out);
+  EXPECT_EQ(again.at("oracle_grip_n"), searched.at("oracle_grip_n"));
+  EXPECT_EQ(nlohmann::json::parse(graspbed::test_support::ReadText(entry)).at("grip_n"), searched.at("oracle_grip_n"));
+}
+
+}  // namespace
+}  // namespace graspbed::testbed
