@@ -97,6 +97,47 @@ void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& l
   row[kSession] = static_cast<double>(loop.session());
 }
 
+namespace {
+// Per-unit columns, in this order per unit; the truth's only on the simulation.
+struct UnitColumn {
+  const char* name;
+  bool truth;
+};
+constexpr UnitColumn kUnitColumns[] = {{"r1_ohm", false},   {"r2_ohm", false},   {"fn_est_n", false},
+                                       {"ft_est_n", false}, {"fn_true_n", true}, {"ft_true_n", true},
+                                       {"validity", false}};
+static_assert(std::size(kUnitColumns) <= kSignalBoundColumnsPerUnit,
+              "the loader's bound on signal memory must count every column");
+}  // namespace
+
+std::vector<std::string> UnitColumns(int units, bool with_truth) {
+  std::vector<std::string> names;
+  for (int u = 0; u < units; ++u) {
+    for (const UnitColumn& column : kUnitColumns) {
+      if (with_truth || !column.truth) names.push_back(std::string(column.name) + "_" + std::to_string(u));
+    }
+  }
+  return names;
+}
+
+void WriteUnitCells(double* cells, int units, const controller::ControlLoop& loop,
+                    std::span<const sensor::UnitLoad> true_loads) {
+  const sensor::RawFrame& frame = loop.frame();
+  const sensor::TactileState& state = loop.state();
+  const bool truth = !true_loads.empty();
+  for (int u = 0; u < units; ++u) {
+    *cells++ = frame.r1_ohm[u];
+    *cells++ = frame.r2_ohm[u];
+    *cells++ = state.fn_n[u];
+    *cells++ = state.ft_n[u];
+    if (truth) {
+      *cells++ = true_loads[static_cast<size_t>(u)].fn_n;
+      *cells++ = true_loads[static_cast<size_t>(u)].ft_n;
+    }
+    *cells++ = static_cast<double>(state.validity[u]);
+  }
+}
+
 std::string OptionalText(const std::optional<double>& value, const char* format) {
   if (!value) return "-";
   char text[48];

@@ -16,6 +16,7 @@
 #include "controller/control_loop.h"
 #include "controller/grasp_controller.h"
 #include "sensor/layout.h"
+#include "sensor/strain_model.h"
 #include "testbed/runner.h"
 
 namespace graspbed::testbed::internal {
@@ -64,6 +65,15 @@ extern const char* const kLoopColumnNames[kLoopColumnCount];
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry);
 
+/// The per-unit columns of signals.csv, declared once for every backend: r1_ohm, r2_ohm, fn_est_n,
+/// ft_est_n, then (`with_truth`: the simulation only) fn_true_n and ft_true_n, then validity; "_K"
+/// after each for unit K, unit by unit.
+std::vector<std::string> UnitColumns(int units, bool with_truth);
+/// Fills the UnitColumns of `units` units for the tick `loop` just ran into `cells`: its frame and
+/// estimate, and `true_loads` (one per unit) when not empty.
+void WriteUnitCells(double* cells, int units, const controller::ControlLoop& loop,
+                    std::span<const sensor::UnitLoad> true_loads);
+
 /// The signals.csv columns of `controller`'s diagnostic channels, "ctl_<name>" each, after the
 /// backend's own. @throws std::invalid_argument naming the controller when it declares more than
 /// controller::kMaxDiagnosticChannels, a name that is empty, repeated or not lower-case letters,
@@ -91,9 +101,7 @@ std::vector<plot::Marker> ScriptMarkers(const RunResult& result);
 void WriteTaxelMaps(const RunResult& result, const common::SignalLog& log, const sensor::Layout& layout,
                     const std::vector<double>& time, const std::string& title, const std::string& dir);
 
-/// RunScenario for backend serial and replay (bench_runner.cc): same contract.
-RunResult RunOnBench(const ScenarioConfig& config, const RunOptions& options);
-/// SummaryTable for backend serial and replay.
+/// SummaryTable for backend serial and replay (bench_run.cc).
 std::string BenchSummaryTable(const RunResult& result);
 
 }  // namespace graspbed::testbed::internal
