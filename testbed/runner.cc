@@ -37,6 +37,28 @@ std::unique_ptr<internal::RunBackend> MakeRun(const ScenarioConfig& config, cons
   throw std::logic_error("unknown backend");
 }
 
+// The signal rows of a run: the loop's columns, the backend's block, the controller's diagnostic
+// columns last; text columns intent, phase, slip_cues, then the backend's.
+common::SignalLog MakeSignalLog(internal::RunBackend& run, const std::vector<std::string>& diagnostic_columns) {
+  std::vector<std::string> columns(internal::kLoopColumnNames, internal::kLoopColumnNames + internal::kLoopColumnCount);
+  const std::vector<std::string> backend_columns = run.Columns();
+  columns.insert(columns.end(), backend_columns.begin(), backend_columns.end());
+  columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
+  std::vector<std::string> text_columns = {"intent", "phase", "slip_cues"};
+  const std::vector<std::string> backend_texts = run.TextColumns();
+  text_columns.insert(text_columns.end(), backend_texts.begin(), backend_texts.end());
+  return common::SignalLog(std::move(columns), std::move(text_columns), run.RowCapacity());
+}
+
+// signals.csv, the backend's files and plots, then summary.json; the INCOMPLETE marker goes last.
+void WriteRunOutputs(const RunResult& result, const common::SignalLog& log, internal::RunBackend& run,
+                     const RunOptions& options) {
+  common::WriteCsvAtomic(log, options.out_dir + "/signals.csv");
+  run.WriteOutputs(result, log, options.write_plots, options.out_dir);
+  common::WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
+  if (result.completed) fs::remove(fs::path(options.out_dir) / internal::kIncompleteMarker);
+}
+
 }  // namespace
 
 std::unique_ptr<controller::GraspController> internal::MakeRunController(const ScenarioConfig& config,
@@ -67,16 +89,9 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     common::WriteFileAtomic(options.out_dir + "/config.yaml", EmitScenarioYaml(config));
   }
 
-  // Everything the loop writes is allocated here: the loop's columns, the backend's, the controller's.
-  std::vector<std::string> columns(internal::kLoopColumnNames, internal::kLoopColumnNames + internal::kLoopColumnCount);
-  const std::vector<std::string> backend_columns = run->Columns();
-  columns.insert(columns.end(), backend_columns.begin(), backend_columns.end());
-  const size_t diagnostics_first = columns.size();
-  columns.insert(columns.end(), diagnostic_columns.begin(), diagnostic_columns.end());
-  std::vector<std::string> text_columns = {"intent", "phase", "slip_cues"};
-  const std::vector<std::string> backend_texts = run->TextColumns();
-  text_columns.insert(text_columns.end(), backend_texts.begin(), backend_texts.end());
-  common::SignalLog log(std::move(columns), std::move(text_columns), run->RowCapacity());
+  // Everything the loop writes is allocated here.
+  common::SignalLog log = MakeSignalLog(*run, diagnostic_columns);
+  const size_t diagnostics_first = log.numeric_column_count() - diagnostic_columns.size();
 
   const auto wall_start = std::chrono::steady_clock::now();
   run->Start();
@@ -126,12 +141,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   result.signal_rows_lost = log.lost_rows();
   if (options.on_signals) options.on_signals(log);
   if (options.on_finished) options.on_finished(result);
-  if (!options.out_dir.empty()) {
-    common::WriteCsvAtomic(log, options.out_dir + "/signals.csv");
-    run->WriteOutputs(result, log, options.write_plots, options.out_dir);
-    common::WriteFileAtomic(options.out_dir + "/summary.json", SummaryJson(result).dump(2) + "\n");
-    if (result.completed) fs::remove(fs::path(options.out_dir) / internal::kIncompleteMarker);
-  }
+  if (!options.out_dir.empty()) WriteRunOutputs(result, log, *run, options);
   return result;
 }
 

@@ -11,6 +11,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -303,6 +305,59 @@ TEST_F(BenchRunTest, ASessionRecordedOverTheWireReplaysCommandForCommand) {
 
   const nlohmann::json other = replay("open_loop", "replay_open_loop");
   EXPECT_GT(other.at("commands_differing").get<size_t>(), 0u) << other.dump(2);
+}
+
+/// One run loop, three backends (testbed/run_backend.h): the same scenario's intent script on the
+/// simulation, on the emulator over a pseudo-terminal, and on the replay of that session drives the
+/// controller through the same phases, and the three signals.csv differ only in the columns a
+/// backend cannot know (the simulation's ground truth; the replay's recorded command beside its own).
+TEST_F(BenchRunTest, OneIntentScriptDrivesTheSamePhasesOnEveryBackend) {
+  const CliResult sim =
+      RunCli(std::string("run ") + kScenario + " --controller " + kController +
+             " --set sensor.latency_s=" + kFramePeriodText + " --no-plots --out " + Path("sim"));
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS});
+  ChildProcess host({binary_, "run", kScenario, "--controller", kController, "--backend", "serial", "--port",
+                     Path("dev"), "--prompt-actions", "--no-plots", "--out", Path("serial")},
+                    Path("host.out"), Path("host.err"));
+  ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
+  ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
+  const CliResult replay = RunCli("run " + Path("serial") + "/config.yaml --backend replay --log " + Path("serial") +
+                                  "/signals.csv --no-plots --out " + Path("replay"));
+  ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+
+  const Csv simulated = ReadCsv(Path("sim") + "/signals.csv");
+  const Csv serial = ReadCsv(Path("serial") + "/signals.csv");
+  const Csv replayed = ReadCsv(Path("replay") + "/signals.csv");
+  const std::string sim_phases = Join(PhaseSequence(simulated));
+  ASSERT_EQ(sim_phases, "idle closed") << "the open-loop controller idles, then closes on the script's close";
+  EXPECT_EQ(Join(PhaseSequence(serial)), sim_phases);
+  EXPECT_EQ(Join(PhaseSequence(replayed)), sim_phases);
+  // The intent script, applied once per backend: close at its time (the replay follows the recording).
+  for (const auto& [name, run] : {std::pair{"serial", Path("serial")}, std::pair{"replay", Path("replay")}}) {
+    const nlohmann::json bench = nlohmann::json::parse(ReadText(run + "/summary.json")).at("bench");
+    ASSERT_EQ(bench.at("intent_events").size(), 1u) << name << ": " << bench.dump(2);
+    EXPECT_EQ(bench.at("intent_events")[0].at("intent").get<std::string>(), "close") << name;
+  }
+
+  // The columns: the serial run's are the simulation's less its ground truth, in the same order;
+  // the replay's are the serial run's plus the recorded command (and phase).
+  std::vector<std::string> sim_without_truth;
+  for (const std::string& name : simulated.header) {
+    const bool truth = name.rfind("fn_true_n_", 0) == 0 || name.rfind("ft_true_n_", 0) == 0 ||
+                       serial.numeric.count(name) + serial.text.count(name) == 0;
+    if (!truth) sim_without_truth.push_back(name);
+  }
+  EXPECT_EQ(Join(serial.header), Join(sim_without_truth));
+  EXPECT_GE(simulated.header.size(), serial.header.size() + 2 * 20 + 20) << "the truth columns are missing";
+  for (const char* truth : {"true_squeeze_n", "object_z_m", "slip_event", "fn_true_n_0"}) {
+    EXPECT_EQ(std::count(simulated.header.begin(), simulated.header.end(), truth), 1) << truth;
+  }
+  std::vector<std::string> replay_without_recorded;
+  for (const std::string& name : replayed.header) {
+    if (name.rfind("recorded_", 0) != 0 && name != "command_differs") replay_without_recorded.push_back(name);
+  }
+  EXPECT_EQ(Join(replay_without_recorded), Join(serial.header));
 }
 
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
