@@ -126,7 +126,15 @@ void MetricsTracker::Update(const TickSample& sample) {
   last_time_s_ = t;
 
   peak_grip_n_ = std::max(peak_grip_n_, truth.object_squeeze_n);
+  UpdateGrasp(sample, dt);
+  UpdateSlip(sample, dt);
+  UpdateEstimationError(sample);
+  UpdateStableGrasp(truth.object_squeeze_n, t);
+}
 
+void MetricsTracker::UpdateGrasp(const TickSample& sample, double dt) {
+  const sim::GroundTruth& truth = *sample.truth;
+  const double t = sample.time_s;
   // Grasp state: established by contact on both digits and enough finger force after a close;
   // lost (for scoring) when the intent changes.
   const bool closing = sample.intent == controller::GraspIntent::kClose;
@@ -170,7 +178,11 @@ void MetricsTracker::Update(const TickSample& sample) {
       if (own_event) CloseEvent();
     }
   }
+}
 
+void MetricsTracker::UpdateSlip(const TickSample& sample, double dt) {
+  const sim::GroundTruth& truth = *sample.truth;
+  const double t = sample.time_s;
   // Slip distance, slip events and the controller's flags, all while held.
   const bool flag = sample.controller_slip;
   const bool rising_flag = flag && !previous_flag_;
@@ -248,7 +260,9 @@ void MetricsTracker::Update(const TickSample& sample) {
     // A slip that ended in a drop closes with it: the object is no longer held.
     if (event_open_ && dropped_) CloseEvent();
   }
+}
 
+void MetricsTracker::UpdateEstimationError(const TickSample& sample) {
   // Estimation error over (tick, unit) pairs in contact, valid and fresh.
   const sensor::TactileState& state = *sample.state;
   if (!state.stale) {
@@ -264,10 +278,11 @@ void MetricsTracker::Update(const TickSample& sample) {
       ++estimation_samples_;
     }
   }
+}
 
+void MetricsTracker::UpdateStableGrasp(double squeeze, double t) {
   // Stable grasp: restart the candidate window whenever the squeeze leaves the band or slip occurs.
   if (stable_found_s_ < 0.0) {
-    const double squeeze = truth.object_squeeze_n;
     if (!holding_ || event_open_) {
       stable_start_s_ = -1.0;
     } else if (stable_start_s_ < 0.0) {

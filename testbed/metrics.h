@@ -167,6 +167,12 @@ class MetricsTracker {
   Metrics Finish(double sim_s, double wall_s, double first_close_time_s) const;
 
  private:
+  // Update's parts, in this order: the grasp (established, held, dropped), slip events and the
+  // controller's flags while held, the estimate's error, the first stable stretch of squeeze [N].
+  void UpdateGrasp(const TickSample& sample, double dt);
+  void UpdateSlip(const TickSample& sample, double dt);
+  void UpdateEstimationError(const TickSample& sample);
+  void UpdateStableGrasp(double squeeze_n, double time_s);
   /// A flag not (yet) matched to an event, within the early-detection window of now.
   struct PendingFlag {
     double time_s = 0.0;

@@ -145,41 +145,46 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   return result;
 }
 
-nlohmann::json SummaryJson(const RunResult& result) {
+namespace {
+
+// summary.json of a serial or replay run: no ground truth, so the bench's own record instead of the
+// simulation's metrics, and the expectations listed, not scored.
+nlohmann::json BenchSummaryJson(const RunResult& result) {
   const Metrics& m = result.metrics;
-  if (result.config.backend != Backend::kSim) {
-    // No ground truth: the bench's own record instead of the simulation's metrics.
-    nlohmann::json expectations = nlohmann::json::array();
-    for (const ExpectationOutcome& o : result.outcomes) {
-      expectations.push_back({{"name", o.name}, {"limit", o.limit}, {"scored", false}, {"note", o.note}});
-    }
-    nlohmann::json script = nlohmann::json::array();
-    for (size_t i = 0; i < result.config.script.size(); ++i) {
-      const Action& action = result.config.script[i];
-      const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
-      script.push_back({{"action", ActionName(action.kind)},
-                        {"line", action.line},
-                        {"at_s", action.at_s},
-                        {"fired_s", fired_s >= 0.0 ? nlohmann::json(fired_s) : nlohmann::json(nullptr)}});
-    }
-    return {{"scenario", result.config.name},
-            {"source_file", result.config.source_file},
-            {"controller", result.config.controller.name},
-            {"backend", BackendName(result.config.backend)},
-            {"completed", result.completed},
-            {"passed", result.passed},
-            {"duration_s", m.sim_s},
-            {"wall_s", m.wall_s},
-            {"bench", result.bench},
-            {"expectations", expectations},
-            {"script", script},
-            {"counters",
-             {{"control_ticks", result.control_ticks},
-              {"frames", result.frames},
-              {"stale_ticks", result.stale_ticks},
-              {"signal_rows_lost", result.signal_rows_lost}}}};
+  nlohmann::json expectations = nlohmann::json::array();
+  for (const ExpectationOutcome& o : result.outcomes) {
+    expectations.push_back({{"name", o.name}, {"limit", o.limit}, {"scored", false}, {"note", o.note}});
   }
-  nlohmann::json metrics = {
+  nlohmann::json script = nlohmann::json::array();
+  for (size_t i = 0; i < result.config.script.size(); ++i) {
+    const Action& action = result.config.script[i];
+    const double fired_s = i < result.script_timings.size() ? result.script_timings[i].fired_s : -1.0;
+    script.push_back({{"action", ActionName(action.kind)},
+                      {"line", action.line},
+                      {"at_s", action.at_s},
+                      {"fired_s", fired_s >= 0.0 ? nlohmann::json(fired_s) : nlohmann::json(nullptr)}});
+  }
+  return {{"scenario", result.config.name},
+          {"source_file", result.config.source_file},
+          {"controller", result.config.controller.name},
+          {"backend", BackendName(result.config.backend)},
+          {"completed", result.completed},
+          {"passed", result.passed},
+          {"duration_s", m.sim_s},
+          {"wall_s", m.wall_s},
+          {"bench", result.bench},
+          {"expectations", expectations},
+          {"script", script},
+          {"counters",
+           {{"control_ticks", result.control_ticks},
+            {"frames", result.frames},
+            {"stale_ticks", result.stale_ticks},
+            {"signal_rows_lost", result.signal_rows_lost}}}};
+}
+
+// The metrics of a simulated run (summary.json "metrics").
+nlohmann::json MetricsJson(const Metrics& m) {
+  return {
       {"dropped", m.dropped},
       {"ungrasped_closes", m.ungrasped_closes},
       {"max_slip_mm", m.max_slip_mm},
@@ -224,6 +229,11 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"estimation_samples", m.estimation_samples},
       {"physics_fault", m.physics_fault},
   };
+}
+
+// summary.json of a simulated run: metrics, scored expectations, slip events, the script's timing.
+nlohmann::json SimSummaryJson(const RunResult& result) {
+  const Metrics& m = result.metrics;
   nlohmann::json expectations = nlohmann::json::array();
   for (const ExpectationOutcome& o : result.outcomes) {
     expectations.push_back({{"name", o.name},
@@ -277,7 +287,7 @@ nlohmann::json SummaryJson(const RunResult& result) {
       {"seed", result.config.seed},
       {"completed", result.completed},
       {"passed", result.passed},
-      {"metrics", metrics},
+      {"metrics", MetricsJson(m)},
       {"expectations", expectations},
       {"slip_events", events},
       {"script", script},
@@ -291,6 +301,12 @@ nlohmann::json SummaryJson(const RunResult& result) {
         {"signal_rows_lost", result.signal_rows_lost}}},
       {"real_time_factor", result.real_time_factor},
   };
+}
+
+}  // namespace
+
+nlohmann::json SummaryJson(const RunResult& result) {
+  return result.config.backend == Backend::kSim ? SimSummaryJson(result) : BenchSummaryJson(result);
 }
 
 std::string SummaryTable(const RunResult& result) {
