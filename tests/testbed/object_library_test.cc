@@ -1,7 +1,7 @@
 // The object library and the shapes beyond primitives: every library object compiles with the
 // library's mass and the inertia computed apart from MuJoCo; a centre-of-mass offset gives the
 // gravity torque a hand computation gives; the compliance mapping holds; a user's mesh loads and a
-// broken one is refused by name; an egg squeezed past its crush force is reported crushed; a soft
+// broken one is refused by name; each object gets the grasp its size and shape call for; an egg squeezed past its crush force is reported crushed; a soft
 // object loads more units than a rigid one of the same size.
 #include <mujoco/mujoco.h>
 
@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -267,6 +268,70 @@ TEST(ObjectMeshModelTest, ABrokenOrMissingFileIsRefusedByName) {
 
 // The egg between the prosthetic hand's digits, squeezed by the open-loop controller with motors
 // strong enough to pass its 30 N crush force.
+// The grasp a scenario gets when it names a library object and no grasp: the prosthetic hand wraps
+// the can and the bottles by their 65-66 mm bodies and pinches everything else (the marker and the
+// card are small and thin, the balls and fruit round, the mug, cup, glass and banana shapes the wrap
+// does not take). Each default builds a hand that meets the object (PlaceHand does not refuse it).
+TEST(ObjectGraspTest, EachLibraryObjectGetsTheGraspItsSizeAndShapeCallFor) {
+  const std::map<std::string, sim::GraspType> expected = {
+      {"can", sim::GraspType::kWrap},           {"bottle", sim::GraspType::kWrap},
+      {"bottle_half", sim::GraspType::kWrap},   {"mug", sim::GraspType::kPinch},
+      {"marker", sim::GraspType::kPinch},       {"card", sim::GraspType::kPinch},
+      {"banana", sim::GraspType::kPinch},       {"tennis_ball", sim::GraspType::kPinch},
+      {"apple", sim::GraspType::kPinch},        {"egg", sim::GraspType::kPinch},
+      {"plastic_cup", sim::GraspType::kPinch},  {"foam_brick", sim::GraspType::kPinch},
+      {"wine_glass", sim::GraspType::kPinch},
+  };
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  const sim::ObjectLibrary& library = sim::ShippedObjectLibrary();
+  ASSERT_EQ(library.objects().size(), expected.size()) << "a new object needs its expected grasp here";
+  for (const sim::LibraryObject& entry : library.objects()) {
+    SCOPED_TRACE(entry.name);
+    ASSERT_TRUE(expected.count(entry.name));
+    const sim::SceneConfig scene =
+        sim::LoadSceneConfig(common::YamlMap::LoadString("object: {name: " + entry.name + "}\n", "<test>"));
+    EXPECT_EQ(sim::ToString(scene.hand.grasp), std::string(sim::ToString(expected.at(entry.name))));
+    EXPECT_EQ(sim::DefaultGrasp(entry.object, sim::HandConfig{}), expected.at(entry.name));
+    EXPECT_NO_THROW(sim::PlaceHand(layout, scene));
+    EXPECT_NE(CompileScene(scene), nullptr);
+  }
+}
+
+TEST(ObjectGraspTest, TheScenariosOwnGraspWins) {
+  const auto load = [](const std::string& yaml) {
+    return sim::LoadSceneConfig(common::YamlMap::LoadString(yaml, "<test>")).hand.grasp;
+  };
+  EXPECT_EQ(load("object: {name: can}\nhand: {grasp: pinch}\n"), sim::GraspType::kPinch);
+  EXPECT_EQ(load("object: {name: bottle}\nhand: {grasp: pinch}\n"), sim::GraspType::kPinch);
+  // An aperture is a pinch's: stating one keeps the pinch.
+  EXPECT_EQ(load("object: {name: can}\nhand: {open_gap_m: 0.09}\n"), sim::GraspType::kPinch);
+  // The jaw fixture only pinches.
+  EXPECT_EQ(load("object: {name: can}\nhand: {model: jaw}\n"), sim::GraspType::kPinch);
+  // Overrides beside the name change the choice: a can made 30 mm across is pinched.
+  EXPECT_EQ(load("object: {name: can, size_m: [0.03, 0, 0.101]}\n"), sim::GraspType::kPinch);
+  // A primitive object without a name keeps the pinch the scene has always had.
+  EXPECT_EQ(load("object: {shape: cylinder, size_m: [0.066, 0, 0.101]}\n"), sim::GraspType::kPinch);
+}
+
+// The table `graspbed objects` prints reads a cylinder as diameter x height, not "66 x 0 x 101".
+TEST(ObjectGraspTest, TheTableReadsSizesAsTheShapeHasThem) {
+  const std::vector<sim::ObjectSummary> rows = sim::SummarizeObjects(sim::ShippedObjectLibrary());
+  const auto row = [&rows](const std::string& name) {
+    for (const sim::ObjectSummary& r : rows)
+      if (r.name == name) return r;
+    ADD_FAILURE() << name;
+    return sim::ObjectSummary{};
+  };
+  EXPECT_EQ(sim::SizeTextMm(row("can")), "dia 66 x 101");
+  EXPECT_EQ(sim::SizeTextMm(row("tennis_ball")), "dia 65");
+  EXPECT_EQ(sim::SizeTextMm(row("card")), "1 x 86 x 54");
+  EXPECT_EQ(sim::SizeTextMm(row("bottle")), "dia 65 x 220, neck 28");
+  const std::string markdown = sim::ObjectTableMarkdown(rows);
+  EXPECT_THAT(markdown, HasSubstr("| `can` | cylinder | dia 66 x 101 |"));
+  EXPECT_THAT(markdown, ::testing::Not(HasSubstr(" x 0 x ")));
+  EXPECT_THAT(markdown, HasSubstr("| wrap |"));
+}
+
 std::string EggScenario(double close_effort) {
   return "duration_s: 0.6\n"
          "object: {name: egg}\n"
