@@ -7,6 +7,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdint>
@@ -26,6 +27,7 @@
 #include "sim/scene_config.h"
 #include "sim/simulation.h"
 #include "testbed/scenario_config.h"
+#include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
 #include "tests/testbed/scenario_test_util.h"
 
@@ -330,6 +332,25 @@ TEST(ObjectGraspTest, TheTableReadsSizesAsTheShapeHasThem) {
   EXPECT_THAT(markdown, HasSubstr("| `can` | cylinder | dia 66 x 101 |"));
   EXPECT_THAT(markdown, ::testing::Not(HasSubstr(" x 0 x ")));
   EXPECT_THAT(markdown, HasSubstr("| wrap |"));
+}
+
+// `graspbed objects` through the real executable: --json gives each object's default grasp,
+// --markdown the table as docs/scenarios.md carries it.
+TEST(ObjectGraspTest, TheObjectsCommandListsEachObjectsGrasp) {
+  if (test_support::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
+  const test_support::CliResult json = test_support::RunCli("objects --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const nlohmann::json rows = nlohmann::json::parse(json.out);
+  ASSERT_EQ(rows.size(), sim::ShippedObjectLibrary().objects().size());
+  for (const nlohmann::json& row : rows) {
+    SCOPED_TRACE(row["name"].get<std::string>());
+    const sim::LibraryObject* entry = sim::ShippedObjectLibrary().Find(row["name"]);
+    ASSERT_NE(entry, nullptr);
+    EXPECT_EQ(row["default_grasp"], sim::ToString(sim::DefaultGrasp(entry->object, sim::HandConfig{})));
+  }
+  const test_support::CliResult markdown = test_support::RunCli("objects --markdown");
+  ASSERT_EQ(markdown.exit_code, 0) << markdown.err;
+  EXPECT_EQ(markdown.out, sim::ObjectTableMarkdown(sim::SummarizeObjects(sim::ShippedObjectLibrary())));
 }
 
 std::string EggScenario(double close_effort) {
