@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdint>
@@ -313,6 +314,24 @@ TEST(ObjectGraspTest, TheScenariosOwnGraspWins) {
   EXPECT_EQ(load("object: {name: can, size_m: [0.03, 0, 0.101]}\n"), sim::GraspType::kPinch);
   // A primitive object without a name keeps the pinch the scene has always had.
   EXPECT_EQ(load("object: {shape: cylinder, size_m: [0.066, 0, 0.101]}\n"), sim::GraspType::kPinch);
+}
+
+// A run's config.yaml states the grasp the object got, so reading it back gives the same scene even
+// were the default to change.
+TEST(ObjectGraspTest, TheChosenGraspIsWrittenOutAndReadsBack) {
+  const sim::SceneConfig scene =
+      sim::LoadSceneConfig(common::YamlMap::LoadString("object: {name: bottle}\n", "<test>"));
+  ASSERT_EQ(scene.hand.grasp, sim::GraspType::kWrap);
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  sim::EmitSceneConfig(scene, out);
+  out << YAML::EndMap;
+  const std::string text = out.c_str();
+  EXPECT_THAT(text, HasSubstr("grasp: wrap"));
+  const sim::SceneConfig again = sim::LoadSceneConfig(common::YamlMap::LoadString(text, "<config.yaml>"));
+  EXPECT_EQ(again.hand.grasp, sim::GraspType::kWrap);
+  EXPECT_EQ(again.ObjectWidthM(), scene.ObjectWidthM());
+  EXPECT_DOUBLE_EQ(scene.ObjectWidthM(), 0.065) << "the bottle's body, not its 28 mm neck";
 }
 
 // The table `graspbed objects` prints reads a cylinder as diameter x height, not "66 x 0 x 101".
