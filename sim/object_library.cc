@@ -124,30 +124,32 @@ std::string ObjectTableText(const std::vector<ObjectSummary>& rows) {
         << std::setw(8) << mass << "  " << std::left << std::setw(20) << com << std::right << std::setw(10)
         << friction << std::setw(13) << stiffness << std::setw(11) << crush << "  " << grasp << '\n';
   };
-  line("name", "shape", "size [mm]", "mass [g]", "centre of mass [mm]", "friction", "stiff [N/m]", "crush [N]",
-       "grasp");
+  line("name", "shape", "size [mm]", "mass [g]", "centre of mass [mm]", "friction", "stiff [N/m]",
+       "crush [N]", "grasp");
   for (const ObjectSummary& row : rows) {
-    line(row.name, row.shape, SizeTextMm(row), Fixed(row.mass_kg * 1e3, 1), CentreMm(row), Fixed(row.friction, 2),
-         Stiffness(row.stiffness_n_m), row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-",
-         ToString(row.default_grasp));
+    line(row.name, row.shape, SizeTextMm(row), Fixed(row.mass_kg * 1e3, 1), CentreMm(row),
+         Fixed(row.friction, 2), Stiffness(row.stiffness_n_m),
+         row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-", ToString(row.default_grasp));
   }
-  out << "\nsize: object.size_m as the shape reads it, dia = diameter, heights last (docs/scenarios.md, \"Object "
-         "library\"); centre of mass from the centre of the bounding box (a mug: its body's axis); grasp: the "
-         "one a scenario naming the object gets unless it sets hand.grasp\n";
+  out << "\nsize: object.size_m as the shape reads it, dia = diameter, heights last "
+         "(docs/scenarios.md, \"Object library\"); centre of mass from the centre of the bounding box "
+         "(a mug: its body's axis); grasp: the one a scenario naming the object gets unless it sets "
+         "hand.grasp\n";
   for (const ObjectSummary& row : rows) out << row.name << ": " << row.source << '\n';
   return out.str();
 }
 
 std::string ObjectTableMarkdown(const std::vector<ObjectSummary>& rows) {
   std::ostringstream out;
-  out << "| object | shape | size [mm] | mass [g] | centre of mass [mm] | friction | stiffness [N/m] | crush [N] | "
-         "grasp | source |\n";
+  out << "| object | shape | size [mm] | mass [g] | centre of mass [mm] | friction | stiffness [N/m] | "
+         "crush [N] | grasp | source |\n";
   out << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const ObjectSummary& row : rows) {
     out << "| `" << row.name << "` | " << row.shape << " | " << SizeTextMm(row) << " | "
         << Fixed(row.mass_kg * 1e3, 1) << " | " << CentreMm(row) << " | " << Fixed(row.friction, 2) << " | "
-        << Stiffness(row.stiffness_n_m) << " | " << (row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-")
-        << " | " << ToString(row.default_grasp) << " | " << row.source << " |\n";
+        << Stiffness(row.stiffness_n_m) << " | "
+        << (row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-") << " | "
+        << ToString(row.default_grasp) << " | " << row.source << " |\n";
   }
   return out.str();
 }

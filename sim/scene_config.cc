@@ -80,7 +80,8 @@ double SceneConfig::ObjectWidthM() const {
 
 GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand) {
   if (hand.model != HandModel::kProsthetic) return GraspType::kPinch;
-  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle) return GraspType::kPinch;
+  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle)
+    return GraspType::kPinch;
   const double diameter = object.size_m[0];
   const double height = object.size_m[2];
   const bool wrappable =
@@ -340,12 +341,12 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
           Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}, {GraspType::kWrap, "wrap"}},
                         "the grasp the pre-shape prepares. `pinch`: index fingertip pad against the thumb "
                         "tip, near the object's top (a box or cylinder 13 mm below its top, a sphere at its "
-                        "equator). `wrap` (prosthetic hand, upright cylinder or a bottle's body): the palm faces "
-                        "the cylinder from the side at its mid-height, the index curls round it until its pad "
-                        "presses it against the palm, the thumb closes round its other side (docs/simulation.md, "
-                        "\"The wrap\"). Unset with a library object (`object: {name: ...}`): chosen from its "
-                        "shape and size, wrap for a can or a bottle 40 to 90 mm across, pinch for the rest "
-                        "(`graspbed objects` lists each one's)"),
+                        "equator). `wrap` (prosthetic hand, upright cylinder or a bottle's body): the palm "
+                        "faces the cylinder from the side at its mid-height, the index curls round it until "
+                        "its pad presses it against the palm, the thumb closes round its other side "
+                        "(docs/simulation.md, \"The wrap\"). Unset with a library object (`object: {name: "
+                        "...}`): chosen from its shape and size, wrap for a can or a bottle 40 to 90 mm "
+                        "across, pinch for the rest (`graspbed objects` lists each one's)"),
           Table::Number("open_gap_m", &C::open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM), "m",
                         "pre-shape aperture between the pad's mesa tops and the thumb's contact point. "
                         "Unset (auto), it follows the object: its width across the pinch + 2 x "

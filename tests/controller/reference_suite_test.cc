@@ -104,7 +104,8 @@ class ReferenceSuiteTest : public ::testing::Test {
 std::set<std::string> ListedExpectations(const std::string& reason) {
   std::set<std::string> names;
   std::stringstream list(reason.substr(0, reason.find(':')));
-  for (std::string name; std::getline(list, name, ',');) names.insert(name.substr(name.find_first_not_of(' ')));
+  for (std::string name; std::getline(list, name, ',');)
+    names.insert(name.substr(name.find_first_not_of(' ')));
   return names;
 }
 
@@ -128,7 +129,9 @@ TEST_F(ReferenceSuiteTest, GripSlipPassesEveryShippedScenarioButTheListedAndOpen
     const auto listed = kNotYetPassed.find(name);
     const std::set<std::string> listed_failures =
         listed == kNotYetPassed.end() ? std::set<std::string>{} : ListedExpectations(listed->second);
-    if (!listed_failures.count("not_dropped")) EXPECT_FALSE(run["metrics"]["dropped"].get<bool>());
+    if (!listed_failures.count("not_dropped")) {
+      EXPECT_FALSE(run["metrics"]["dropped"].get<bool>());
+    }
     if (listed == kNotYetPassed.end()) {
       EXPECT_TRUE(run["passed"].get<bool>()) << ::testing::PrintToString(failed);
       continue;

@@ -1,8 +1,9 @@
 // The object library and the shapes beyond primitives: every library object compiles with the
 // library's mass and the inertia computed apart from MuJoCo; a centre-of-mass offset gives the
 // gravity torque a hand computation gives; the compliance mapping holds; a user's mesh loads and a
-// broken one is refused by name; each object gets the grasp its size and shape call for; an egg squeezed past its crush force is reported crushed; a soft
-// object loads more units than a rigid one of the same size.
+// broken one is refused by name; each object gets the grasp its size and shape call for; an egg
+// squeezed past its crush force is reported crushed; a soft object loads more units than a rigid one
+// of the same size.
 #include <mujoco/mujoco.h>
 
 #include <gmock/gmock.h>
