@@ -17,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -315,6 +316,26 @@ TEST(ObjectGraspTest, TheScenariosOwnGraspWins) {
   EXPECT_EQ(load("object: {name: can, size_m: [0.03, 0, 0.101]}\n"), sim::GraspType::kPinch);
   // A primitive object without a name keeps the pinch the scene has always had.
   EXPECT_EQ(load("object: {shape: cylinder, size_m: [0.066, 0, 0.101]}\n"), sim::GraspType::kPinch);
+}
+
+// The wrap's diameter range is one the hand can wrap: a can at either end of it builds (the
+// kinematics solve the wrap), and just outside it, or squatter than it is wide, it is pinched.
+TEST(ObjectGraspTest, TheWrapRangeIsOneTheHandWraps) {
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  const auto load = [](double diameter_m, double height_m) {
+    std::ostringstream yaml;
+    yaml << "object: {name: can, size_m: [" << diameter_m << ", 0, " << height_m << "]}\n";
+    return sim::LoadSceneConfig(common::YamlMap::LoadString(yaml.str(), "<test>"));
+  };
+  for (const double diameter : {sim::kMinDefaultWrapDiameterM, sim::kMaxDefaultWrapDiameterM}) {
+    SCOPED_TRACE(diameter);
+    const sim::SceneConfig scene = load(diameter, 0.12);
+    EXPECT_EQ(scene.hand.grasp, sim::GraspType::kWrap);
+    EXPECT_NO_THROW(sim::PlaceHand(layout, scene));
+  }
+  EXPECT_EQ(load(sim::kMinDefaultWrapDiameterM - 0.001, 0.12).hand.grasp, sim::GraspType::kPinch);
+  EXPECT_EQ(load(sim::kMaxDefaultWrapDiameterM + 0.001, 0.12).hand.grasp, sim::GraspType::kPinch);
+  EXPECT_EQ(load(0.066, 0.05).hand.grasp, sim::GraspType::kPinch) << "a squat tin";
 }
 
 // A run's config.yaml states the grasp the object got, so reading it back gives the same scene even
