@@ -33,6 +33,7 @@ nlohmann::json ToJson(const sim::ObjectSummary& s) {
   row["crush_limit_n"] = s.crush_limit_n;
   if (s.fill_fraction) row["fill_fraction"] = *s.fill_fraction;
   row["parts"] = s.part_count;
+  row["default_grasp"] = sim::ToString(s.default_grasp);
   row["source"] = s.source;
   row["notes"] = s.notes;
   return row;

@@ -70,6 +70,7 @@ std::vector<ObjectSummary> SummarizeObjects(const ObjectLibrary& library) {
     row.crush_limit_n = o.crush_limit_n;
     row.fill_fraction = o.fill_fraction;
     row.part_count = static_cast<int>(parts.size());
+    row.default_grasp = DefaultGrasp(o, HandConfig{});
     row.source = entry.source;
     row.notes = entry.notes;
     rows.push_back(std::move(row));
@@ -85,10 +86,21 @@ std::string Fixed(double value, int digits) {
   return out.str();
 }
 
-std::string SizeMm(const ObjectSummary& row) {
-  return Fixed(row.size_m[0] * 1e3, 0) + " x " + Fixed(row.size_m[1] * 1e3, 0) + " x " +
-         Fixed(row.size_m[2] * 1e3, 0);
+}  // namespace
+
+std::string SizeTextMm(const ObjectSummary& row) {
+  const auto mm = [&row](int k) { return Fixed(row.size_m[k] * 1e3, 0); };
+  if (row.shape == "cylinder" || row.shape == "egg") return "dia " + mm(0) + " x " + mm(2);
+  if (row.shape == "sphere") return "dia " + mm(0);
+  if (row.shape == "mug") return "dia " + mm(0) + " x " + mm(2) + ", " + mm(1) + " deep with handle";
+  if (row.shape == "bottle") return "dia " + mm(0) + " x " + mm(2) + ", neck " + mm(1);
+  if (row.shape == "cup") return "rim " + mm(0) + ", base " + mm(1) + " x " + mm(2);
+  if (row.shape == "wine_glass") return "bowl " + mm(0) + ", foot " + mm(1) + " x " + mm(2);
+  if (row.shape == "banana") return "chord " + mm(0) + ", " + mm(1) + " thick, bow " + mm(2);
+  return mm(0) + " x " + mm(1) + " x " + mm(2);  // a box, a mesh's bounding box
 }
+
+namespace {
 
 std::string CentreMm(const ObjectSummary& row) {
   return Fixed(row.centre_of_mass_m[0] * 1e3, 1) + ", " + Fixed(row.centre_of_mass_m[1] * 1e3, 1) + ", " +
@@ -107,31 +119,37 @@ std::string ObjectTableText(const std::vector<ObjectSummary>& rows) {
   std::ostringstream out;
   const auto line = [&out](const std::string& name, const std::string& shape, const std::string& size,
                            const std::string& mass, const std::string& com, const std::string& friction,
-                           const std::string& stiffness, const std::string& crush) {
-    out << std::left << std::setw(12) << name << std::setw(11) << shape << std::setw(16) << size << std::right
+                           const std::string& stiffness, const std::string& crush, const std::string& grasp) {
+    out << std::left << std::setw(12) << name << std::setw(11) << shape << std::setw(35) << size << std::right
         << std::setw(8) << mass << "  " << std::left << std::setw(20) << com << std::right << std::setw(10)
-        << friction << std::setw(13) << stiffness << std::setw(11) << crush << '\n';
+        << friction << std::setw(13) << stiffness << std::setw(11) << crush << "  " << grasp << '\n';
   };
-  line("name", "shape", "size [mm]", "mass [g]", "centre of mass [mm]", "friction", "stiff [N/m]", "crush [N]");
+  line("name", "shape", "size [mm]", "mass [g]", "centre of mass [mm]", "friction", "stiff [N/m]",
+       "crush [N]", "grasp");
   for (const ObjectSummary& row : rows) {
-    line(row.name, row.shape, SizeMm(row), Fixed(row.mass_kg * 1e3, 1), CentreMm(row), Fixed(row.friction, 2),
-         Stiffness(row.stiffness_n_m), row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-");
+    line(row.name, row.shape, SizeTextMm(row), Fixed(row.mass_kg * 1e3, 1), CentreMm(row),
+         Fixed(row.friction, 2), Stiffness(row.stiffness_n_m),
+         row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-", ToString(row.default_grasp));
   }
-  out << "\nsize: object.size_m as the shape reads it (docs/scenarios.md, \"Object library\"); centre of mass "
-         "from the centre of the bounding box (a mug: its body's axis)\n";
+  out << "\nsize: object.size_m as the shape reads it, dia = diameter, heights last "
+         "(docs/scenarios.md, \"Object library\"); centre of mass from the centre of the bounding box "
+         "(a mug: its body's axis); grasp: the one a scenario naming the object gets unless it sets "
+         "hand.grasp\n";
   for (const ObjectSummary& row : rows) out << row.name << ": " << row.source << '\n';
   return out.str();
 }
 
 std::string ObjectTableMarkdown(const std::vector<ObjectSummary>& rows) {
   std::ostringstream out;
-  out << "| object | shape | size [mm] | mass [g] | centre of mass [mm] | friction | stiffness [N/m] | crush [N] | "
-         "source |\n";
-  out << "|---|---|---|---|---|---|---|---|---|\n";
+  out << "| object | shape | size [mm] | mass [g] | centre of mass [mm] | friction | stiffness [N/m] | "
+         "crush [N] | grasp | source |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const ObjectSummary& row : rows) {
-    out << "| `" << row.name << "` | " << row.shape << " | " << SizeMm(row) << " | " << Fixed(row.mass_kg * 1e3, 1)
-        << " | " << CentreMm(row) << " | " << Fixed(row.friction, 2) << " | " << Stiffness(row.stiffness_n_m)
-        << " | " << (row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-") << " | " << row.source << " |\n";
+    out << "| `" << row.name << "` | " << row.shape << " | " << SizeTextMm(row) << " | "
+        << Fixed(row.mass_kg * 1e3, 1) << " | " << CentreMm(row) << " | " << Fixed(row.friction, 2) << " | "
+        << Stiffness(row.stiffness_n_m) << " | "
+        << (row.crush_limit_n > 0.0 ? Fixed(row.crush_limit_n, 1) : "-") << " | "
+        << ToString(row.default_grasp) << " | " << row.source << " |\n";
   }
   return out.str();
 }

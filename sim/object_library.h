@@ -67,12 +67,19 @@ struct ObjectSummary {
   double crush_limit_n = 0.0;                ///< 0 = does not break [N]
   std::optional<double> fill_fraction;       ///< bottles
   int part_count = 0;                        ///< MuJoCo geoms
+  /// The grasp a scenario gets when it names the object and no grasp (DefaultGrasp, prosthetic hand).
+  GraspType default_grasp = GraspType::kPinch;
   std::string source;
   std::string notes;
 };
 
 /// The summaries of every object of `library`, in file order.
 std::vector<ObjectSummary> SummarizeObjects(const ObjectLibrary& library);
+/// object.size_m as a person reads it for the shape, in mm: a box "w x d x h", a cylinder or an egg
+/// "dia 66 x 101" (diameter x height), a sphere "dia 65", a mug "dia 80 x 82, 117 deep with handle", a
+/// bottle "dia 65 x 220, neck 28", a cup "rim 70, base 46 x 80", a wine glass "bowl 80, foot 70 x
+/// 190", a banana "chord 160, 36 thick, bow 30", a mesh its bounding box.
+std::string SizeTextMm(const ObjectSummary& row);
 /// An aligned plain-text table of `rows` (sizes and centre of mass in mm, mass in g), then one
 /// "name: source" line each.
 std::string ObjectTableText(const std::vector<ObjectSummary>& rows);

@@ -64,7 +64,8 @@ double SceneConfig::ObjectWidthM() const {
   switch (object.shape) {
     case ObjectShape::kBox:
       break;
-    case ObjectShape::kBottle:  // pinched by the neck, 13 mm below the top
+    case ObjectShape::kBottle:  // pinched by the neck, 13 mm below the top; wrapped by the body
+      return hand.grasp == GraspType::kWrap ? size[0] : size[1];
     case ObjectShape::kBanana:  // across its thickness
       return size[1];
     case ObjectShape::kCup:  // its diameter 13 mm below the rim
@@ -75,6 +76,17 @@ double SceneConfig::ObjectWidthM() const {
   // A box's extent along the pinch (world x), turned by its yaw.
   return std::abs(std::cos(object.initial_yaw_rad)) * object.size_m[0] +
          std::abs(std::sin(object.initial_yaw_rad)) * object.size_m[1];
+}
+
+GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand) {
+  if (hand.model != HandModel::kProsthetic) return GraspType::kPinch;
+  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle)
+    return GraspType::kPinch;
+  const double diameter = object.size_m[0];
+  const double height = object.size_m[2];
+  const bool wrappable =
+      diameter >= kMinDefaultWrapDiameterM && diameter <= kMaxDefaultWrapDiameterM && height >= diameter;
+  return wrappable ? GraspType::kWrap : GraspType::kPinch;
 }
 
 double SceneConfig::OpenGapM() const {
@@ -329,10 +341,12 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
           Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}, {GraspType::kWrap, "wrap"}},
                         "the grasp the pre-shape prepares. `pinch`: index fingertip pad against the thumb "
                         "tip, near the object's top (a box or cylinder 13 mm below its top, a sphere at its "
-                        "equator). `wrap` (prosthetic hand, upright cylinder): the palm faces the cylinder "
-                        "from the side at its mid-height, the index curls round it until its pad presses it "
-                        "against the palm, the thumb closes round its other side (docs/simulation.md, "
-                        "\"The wrap\")"),
+                        "equator). `wrap` (prosthetic hand, upright cylinder or a bottle's body): the palm "
+                        "faces the cylinder from the side at its mid-height, the index curls round it until "
+                        "its pad presses it against the palm, the thumb closes round its other side "
+                        "(docs/simulation.md, \"The wrap\"). Unset with a library object (`object: {name: "
+                        "...}`): chosen from its shape and size, wrap for a can or a bottle 40 to 90 mm "
+                        "across, pinch for the rest (`graspbed objects` lists each one's)"),
           Table::Number("open_gap_m", &C::open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM), "m",
                         "pre-shape aperture between the pad's mesa tops and the thumb's contact point. "
                         "Unset (auto), it follows the object: its width across the pinch + 2 x "
@@ -423,10 +437,10 @@ const common::FieldTable<SceneConfig>& SceneConfigFields() {
           };
           if (scene.hand.model != HandModel::kProsthetic)
             refuse("hand.grasp", "wrap", "needs hand.model prosthetic (the jaw fixture only pinches)");
-          if (scene.object.shape != ObjectShape::kCylinder)
-            refuse(
-                "hand.grasp", "wrap",
-                std::string("needs an upright cylinder, not object.shape ") + ToString(scene.object.shape));
+          if (scene.object.shape != ObjectShape::kCylinder && scene.object.shape != ObjectShape::kBottle)
+            refuse("hand.grasp", "wrap",
+                   std::string("needs an upright cylinder or a bottle (by its body), not object.shape ") +
+                       ToString(scene.object.shape));
           if (!std::isnan(scene.hand.open_gap_m))
             Bad("hand.open_gap_m", scene.hand.open_gap_m,
                 "is the pinch's aperture; a wrap opens each digit by hand.preshape_clearance_m");
@@ -548,6 +562,10 @@ SceneConfig LoadSceneConfig(const common::YamlMap& map) {
   SceneConfigFields().Load(map, &scene);
   if (object_map) {
     FinishObject(*object_map, scene.physics.timestep_s, &scene.object);
+    // A library object the scenario grasps without saying how: the grasp its size and shape call for.
+    const std::optional<common::YamlMap> hand_map = map.GetMap("hand");
+    const bool grasp_stated = hand_map && (hand_map->Has("grasp") || hand_map->Has("open_gap_m"));
+    if (object_map->Has("name") && !grasp_stated) scene.hand.grasp = DefaultGrasp(scene.object, scene.hand);
     // The size and compliance may have changed: the scene's rules again.
     try {
       SceneConfigFields().ValidateRelative(scene);

@@ -140,6 +140,12 @@ enum class GraspType {
 /// "pinch" / "wrap".
 const char* ToString(GraspType grasp);
 
+/// Diameter range of an upright cylinder, or of a bottle's body, that a library object's default
+/// grasp wraps [m]: narrower, the object is small enough to pinch (a marker); wider, the prosthetic
+/// hand cannot wrap it (ProstheticKinematics::Wrap refuses 100 mm) and pinches it instead.
+inline constexpr double kMinDefaultWrapDiameterM = 0.04;
+inline constexpr double kMaxDefaultWrapDiameterM = 0.09;
+
 /// The jaw fixture's single grip motor, driving both digits through the linkage. The digits close in
 /// parallel (the holder keeps its orientation), so the motor's output is a force on the grip tendon
 /// whose length is the closure of finger + thumb; pinch force = tendon force at rest.
@@ -232,6 +238,15 @@ struct HandConfig {
   DigitMotorConfig digit_motor;  ///< prosthetic hand only
 };
 
+/// The grasp a library object (`object: {name: ...}`) gets when the scenario does not name one
+/// (no hand.grasp, no hand.open_gap_m): `wrap` for the prosthetic hand and an upright cylinder or
+/// bottle whose body is kMinDefaultWrapDiameterM .. kMaxDefaultWrapDiameterM across and at least as
+/// tall as it is wide (a can, a bottle by its body); `pinch` for everything else: the small and
+/// thin (a marker, a card, an egg), the round (balls, fruit), the shapes the wrap does not take (a
+/// mug, a cup, a glass, a banana, a box, a mesh) and every grasp of the jaw fixture.
+/// Docs: docs/scenarios.md, "Object library".
+GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand);
+
 /// Solver and contact options (MuJoCo <option>); defaults chosen for grasping, docs/simulation.md.
 struct PhysicsConfig {
   double timestep_s = 0.001;   ///< physics step [s]
@@ -257,7 +272,7 @@ struct SceneConfig {
   PhysicsConfig physics;
 
   /// The object's extent across the grasp [m]: along world x for a pinch (box: with its yaw),
-  /// the diameter for a round object.
+  /// the diameter for a round object, a bottle's neck in a pinch and its body in a wrap.
   double ObjectWidthM() const;
   /// The pre-shape aperture in use [m]: hand.open_gap_m, or the object's width plus clearance on
   /// both sides when it is NaN (the pre-shape follows the object).

@@ -10,6 +10,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "tests/support/cli_runner.h"
@@ -32,12 +33,36 @@ const std::set<std::string> kSlipScenarios = {"added_mass_step", "pull_ramp", "p
 /// Light-object scenarios the baseline's effort must hold (so its failures above are not a weak grip).
 const std::set<std::string> kLightScenarios = {"default", "static_hold", "lift_unknown_mass"};
 
-/// Scenarios strengthened by the honest verdicts (max_grip_efficiency, gross slips) that grip_slip
-/// does not pass yet, with the expectation it fails and why. Do not loosen a scenario to empty it.
+/// Scenarios strengthened by the honest verdicts (max_grip_efficiency, gross slips) and the object
+/// library's tasks that grip_slip does not pass yet, with the expectations it fails (comma separated,
+/// before the colon) and why, as measured. Do not loosen a scenario to empty it.
 const std::map<std::string, std::string> kNotYetPassed = {
     {"ball_rolls",
      "max_grip_efficiency: holds about 4.6x the oracle of a 100 g ball (the ball rolling in the pinch "
      "spikes the shear and the grip; the coupled target falls from there at 2 N/s)"},
+    {"lift_can",
+     "max_slip_mm: the wrapped 349 g can (mu 0.5) slides 4.5 mm at lift-off: the grip target stays at "
+     "its 1.5 N contact level until slip is flagged at 0.88 s, then reaches its 10 N ceiling; pinched "
+     "(hand.grasp: pinch) it slides 1.1 mm and passes"},
+    {"lift_mug",
+     "max_peak_grip_n: the handle's torque about the pinch axis shears the pad without slip (0.0005 mm), "
+     "slip is flagged falsely (85/min) and the grip rises to the 10 N target ceiling, 15.8 N peak on "
+     "the 118 g mug"},
+    {"pick_marker",
+     "max_slip_mm: 3.8 mm of slip while the hand closes, before any load: the 15.8 g marker is pushed "
+     "from the index's side from 0.237 s, 16 ms before the thumb touches it and 24 ms before a unit "
+     "senses it, and ends 13.6 mm towards the thumb (open_loop at 0.3 effort: 3.3 mm); the hand's "
+     "acquisition, not the hold; held and lifted after"},
+    {"pour_bottle",
+     "max_slip_mm: the wrapped full bottle (470 g, mu 0.45) slides 3.7 mm, from the close (0.8 mm) "
+     "through the lift (to 3.7 mm at 1.6 s), before the pour; nothing more while 300 g pours out"},
+    {"lift_plastic_cup",
+     "not_crushed: the 3 g cup (2e3 N/m) is squeezed to 4.2 N against its 3 N crush force: the units "
+     "bear 2.05 N of the pad's 3.84 N (the rest lands on the holder between and beside the mesas, not "
+     "sensed), so the controller's 2.0-2.4 N target on the units is a 3.8-4.1 N squeeze; oracle 0.57 N"},
+    {"hold_foam_brick",
+     "not_dropped, max_slip_mm: the 500 N/m foam brick is dropped at 1.38 s during the lift: the pad "
+     "sinks into it and the grip the units feel falls from 7.4 N to 0 while the target is at 10 N"},
 };
 
 /// Number of shipped scenario files.
@@ -75,6 +100,15 @@ class ReferenceSuiteTest : public ::testing::Test {
   const fs::path dir_ = temp_dir_.path();
 };
 
+/// The expectations a kNotYetPassed reason names: "a, b: why" -> {a, b}.
+std::set<std::string> ListedExpectations(const std::string& reason) {
+  std::set<std::string> names;
+  std::stringstream list(reason.substr(0, reason.find(':')));
+  for (std::string name; std::getline(list, name, ',');)
+    names.insert(name.substr(name.find_first_not_of(' ')));
+  return names;
+}
+
 /// Names of the failed expectations of one run.
 std::set<std::string> FailedExpectations(const nlohmann::json& run) {
   std::set<std::string> failed;
@@ -91,9 +125,13 @@ TEST_F(ReferenceSuiteTest, GripSlipPassesEveryShippedScenarioButTheListedAndOpen
   for (const auto& [name, run] : reference.runs) {
     SCOPED_TRACE(name);
     EXPECT_EQ(run["controller"], "grip_slip");
-    EXPECT_FALSE(run["metrics"]["dropped"].get<bool>());
     const std::set<std::string> failed = FailedExpectations(run);
     const auto listed = kNotYetPassed.find(name);
+    const std::set<std::string> listed_failures =
+        listed == kNotYetPassed.end() ? std::set<std::string>{} : ListedExpectations(listed->second);
+    if (!listed_failures.count("not_dropped")) {
+      EXPECT_FALSE(run["metrics"]["dropped"].get<bool>());
+    }
     if (listed == kNotYetPassed.end()) {
       EXPECT_TRUE(run["passed"].get<bool>()) << ::testing::PrintToString(failed);
       continue;
@@ -101,8 +139,7 @@ TEST_F(ReferenceSuiteTest, GripSlipPassesEveryShippedScenarioButTheListedAndOpen
     // Listed: it fails, and for the reason given (the expectation named first), nothing else.
     std::printf("[ not yet ] %s: %s; fails %s\n", name.c_str(), listed->second.c_str(),
                 ::testing::PrintToString(failed).c_str());
-    const std::string expectation = listed->second.substr(0, listed->second.find(':'));
-    EXPECT_EQ(failed, std::set<std::string>{expectation}) << "listed in kNotYetPassed for " << listed->second;
+    EXPECT_EQ(failed, listed_failures) << "listed in kNotYetPassed for " << listed->second;
   }
 
   const SuiteRun baseline = RunSuite("--controller open_loop --set controller.params.close_effort=" +

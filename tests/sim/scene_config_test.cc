@@ -65,7 +65,8 @@ TEST(SceneConfigTest, CrossFieldRulesNameTheLineOfTheKeyTheyBlame) {
       0u);
   // A wrap is built for the prosthetic hand around an upright cylinder, and opens by its clearance.
   EXPECT_EQ(ErrorOf("hand:\n  grasp: wrap\n"),
-            "scene.yaml:2: hand.grasp = wrap: needs an upright cylinder, not object.shape box");
+            "scene.yaml:2: hand.grasp = wrap: needs an upright cylinder or a bottle (by its body), not "
+            "object.shape box");
   EXPECT_EQ(ErrorOf("object:\n  shape: cylinder\nhand:\n  model: jaw\n  grasp: wrap\n"),
             "scene.yaml:5: hand.grasp = wrap: needs hand.model prosthetic (the jaw fixture only pinches)");
   EXPECT_EQ(ErrorOf("object:\n  shape: cylinder\nhand:\n  grasp: wrap\n  open_gap_m: 0.08\n"),

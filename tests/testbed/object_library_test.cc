@@ -1,18 +1,23 @@
 // The object library and the shapes beyond primitives: every library object compiles with the
 // library's mass and the inertia computed apart from MuJoCo; a centre-of-mass offset gives the
 // gravity torque a hand computation gives; the compliance mapping holds; a user's mesh loads and a
-// broken one is refused by name; an egg squeezed past its crush force is reported crushed; a soft
-// object loads more units than a rigid one of the same size.
+// broken one is refused by name; each object gets the grasp its size and shape call for; an egg
+// squeezed past its crush force is reported crushed; a soft object loads more units than a rigid one
+// of the same size.
 #include <mujoco/mujoco.h>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -25,6 +30,7 @@
 #include "sim/scene_config.h"
 #include "sim/simulation.h"
 #include "testbed/scenario_config.h"
+#include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
 #include "tests/testbed/scenario_test_util.h"
 
@@ -267,6 +273,127 @@ TEST(ObjectMeshModelTest, ABrokenOrMissingFileIsRefusedByName) {
 
 // The egg between the prosthetic hand's digits, squeezed by the open-loop controller with motors
 // strong enough to pass its 30 N crush force.
+// The grasp a scenario gets when it names a library object and no grasp: the prosthetic hand wraps
+// the can and the bottles by their 65-66 mm bodies and pinches everything else (the marker and the
+// card are small and thin, the balls and fruit round, the mug, cup, glass and banana shapes the wrap
+// does not take). Each default builds a hand that meets the object (PlaceHand does not refuse it).
+TEST(ObjectGraspTest, EachLibraryObjectGetsTheGraspItsSizeAndShapeCallFor) {
+  const std::map<std::string, sim::GraspType> expected = {
+      {"can", sim::GraspType::kWrap},           {"bottle", sim::GraspType::kWrap},
+      {"bottle_half", sim::GraspType::kWrap},   {"mug", sim::GraspType::kPinch},
+      {"marker", sim::GraspType::kPinch},       {"card", sim::GraspType::kPinch},
+      {"banana", sim::GraspType::kPinch},       {"tennis_ball", sim::GraspType::kPinch},
+      {"apple", sim::GraspType::kPinch},        {"egg", sim::GraspType::kPinch},
+      {"plastic_cup", sim::GraspType::kPinch},  {"foam_brick", sim::GraspType::kPinch},
+      {"wine_glass", sim::GraspType::kPinch},
+  };
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  const sim::ObjectLibrary& library = sim::ShippedObjectLibrary();
+  ASSERT_EQ(library.objects().size(), expected.size()) << "a new object needs its expected grasp here";
+  for (const sim::LibraryObject& entry : library.objects()) {
+    SCOPED_TRACE(entry.name);
+    ASSERT_TRUE(expected.count(entry.name));
+    const sim::SceneConfig scene =
+        sim::LoadSceneConfig(common::YamlMap::LoadString("object: {name: " + entry.name + "}\n", "<test>"));
+    EXPECT_EQ(sim::ToString(scene.hand.grasp), std::string(sim::ToString(expected.at(entry.name))));
+    EXPECT_EQ(sim::DefaultGrasp(entry.object, sim::HandConfig{}), expected.at(entry.name));
+    EXPECT_NO_THROW(sim::PlaceHand(layout, scene));
+    EXPECT_NE(CompileScene(scene), nullptr);
+  }
+}
+
+TEST(ObjectGraspTest, TheScenariosOwnGraspWins) {
+  const auto load = [](const std::string& yaml) {
+    return sim::LoadSceneConfig(common::YamlMap::LoadString(yaml, "<test>")).hand.grasp;
+  };
+  EXPECT_EQ(load("object: {name: can}\nhand: {grasp: pinch}\n"), sim::GraspType::kPinch);
+  EXPECT_EQ(load("object: {name: bottle}\nhand: {grasp: pinch}\n"), sim::GraspType::kPinch);
+  // An aperture is a pinch's: stating one keeps the pinch.
+  EXPECT_EQ(load("object: {name: can}\nhand: {open_gap_m: 0.09}\n"), sim::GraspType::kPinch);
+  // The jaw fixture only pinches.
+  EXPECT_EQ(load("object: {name: can}\nhand: {model: jaw}\n"), sim::GraspType::kPinch);
+  // Overrides beside the name change the choice: a can made 30 mm across is pinched.
+  EXPECT_EQ(load("object: {name: can, size_m: [0.03, 0, 0.101]}\n"), sim::GraspType::kPinch);
+  // A primitive object without a name keeps the pinch the scene has always had.
+  EXPECT_EQ(load("object: {shape: cylinder, size_m: [0.066, 0, 0.101]}\n"), sim::GraspType::kPinch);
+}
+
+// The wrap's diameter range is one the hand can wrap: a can at either end of it builds (the
+// kinematics solve the wrap), and just outside it, or squatter than it is wide, it is pinched.
+TEST(ObjectGraspTest, TheWrapRangeIsOneTheHandWraps) {
+  const sensor::Layout layout = sensor::LoadLayout(sensor::DefaultLayoutPath());
+  const auto load = [](double diameter_m, double height_m) {
+    std::ostringstream yaml;
+    yaml << "object: {name: can, size_m: [" << diameter_m << ", 0, " << height_m << "]}\n";
+    return sim::LoadSceneConfig(common::YamlMap::LoadString(yaml.str(), "<test>"));
+  };
+  for (const double diameter : {sim::kMinDefaultWrapDiameterM, sim::kMaxDefaultWrapDiameterM}) {
+    SCOPED_TRACE(diameter);
+    const sim::SceneConfig scene = load(diameter, 0.12);
+    EXPECT_EQ(scene.hand.grasp, sim::GraspType::kWrap);
+    EXPECT_NO_THROW(sim::PlaceHand(layout, scene));
+  }
+  EXPECT_EQ(load(sim::kMinDefaultWrapDiameterM - 0.001, 0.12).hand.grasp, sim::GraspType::kPinch);
+  EXPECT_EQ(load(sim::kMaxDefaultWrapDiameterM + 0.001, 0.12).hand.grasp, sim::GraspType::kPinch);
+  EXPECT_EQ(load(0.066, 0.05).hand.grasp, sim::GraspType::kPinch) << "a squat tin";
+}
+
+// A run's config.yaml states the grasp the object got, so reading it back gives the same scene even
+// were the default to change.
+TEST(ObjectGraspTest, TheChosenGraspIsWrittenOutAndReadsBack) {
+  const sim::SceneConfig scene =
+      sim::LoadSceneConfig(common::YamlMap::LoadString("object: {name: bottle}\n", "<test>"));
+  ASSERT_EQ(scene.hand.grasp, sim::GraspType::kWrap);
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  sim::EmitSceneConfig(scene, out);
+  out << YAML::EndMap;
+  const std::string text = out.c_str();
+  EXPECT_THAT(text, HasSubstr("grasp: wrap"));
+  const sim::SceneConfig again = sim::LoadSceneConfig(common::YamlMap::LoadString(text, "<config.yaml>"));
+  EXPECT_EQ(again.hand.grasp, sim::GraspType::kWrap);
+  EXPECT_EQ(again.ObjectWidthM(), scene.ObjectWidthM());
+  EXPECT_DOUBLE_EQ(scene.ObjectWidthM(), 0.065) << "the bottle's body, not its 28 mm neck";
+}
+
+// The table `graspbed objects` prints reads a cylinder as diameter x height, not "66 x 0 x 101".
+TEST(ObjectGraspTest, TheTableReadsSizesAsTheShapeHasThem) {
+  const std::vector<sim::ObjectSummary> rows = sim::SummarizeObjects(sim::ShippedObjectLibrary());
+  const auto row = [&rows](const std::string& name) {
+    for (const sim::ObjectSummary& r : rows)
+      if (r.name == name) return r;
+    ADD_FAILURE() << name;
+    return sim::ObjectSummary{};
+  };
+  EXPECT_EQ(sim::SizeTextMm(row("can")), "dia 66 x 101");
+  EXPECT_EQ(sim::SizeTextMm(row("tennis_ball")), "dia 65");
+  EXPECT_EQ(sim::SizeTextMm(row("card")), "1 x 86 x 54");
+  EXPECT_EQ(sim::SizeTextMm(row("bottle")), "dia 65 x 220, neck 28");
+  const std::string markdown = sim::ObjectTableMarkdown(rows);
+  EXPECT_THAT(markdown, HasSubstr("| `can` | cylinder | dia 66 x 101 |"));
+  EXPECT_THAT(markdown, ::testing::Not(HasSubstr(" x 0 x ")));
+  EXPECT_THAT(markdown, HasSubstr("| wrap |"));
+}
+
+// `graspbed objects` through the real executable: --json gives each object's default grasp,
+// --markdown the table as docs/scenarios.md carries it.
+TEST(ObjectGraspTest, TheObjectsCommandListsEachObjectsGrasp) {
+  if (test_support::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
+  const test_support::CliResult json = test_support::RunCli("objects --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const nlohmann::json rows = nlohmann::json::parse(json.out);
+  ASSERT_EQ(rows.size(), sim::ShippedObjectLibrary().objects().size());
+  for (const nlohmann::json& row : rows) {
+    SCOPED_TRACE(row["name"].get<std::string>());
+    const sim::LibraryObject* entry = sim::ShippedObjectLibrary().Find(row["name"]);
+    ASSERT_NE(entry, nullptr);
+    EXPECT_EQ(row["default_grasp"], sim::ToString(sim::DefaultGrasp(entry->object, sim::HandConfig{})));
+  }
+  const test_support::CliResult markdown = test_support::RunCli("objects --markdown");
+  ASSERT_EQ(markdown.exit_code, 0) << markdown.err;
+  EXPECT_EQ(markdown.out, sim::ObjectTableMarkdown(sim::SummarizeObjects(sim::ShippedObjectLibrary())));
+}
+
 std::string EggScenario(double close_effort) {
   return "duration_s: 0.6\n"
          "object: {name: egg}\n"
