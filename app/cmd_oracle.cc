@@ -1,4 +1,4 @@
-// `graspbed oracle`: the lightest constant grip that holds a scenario (sim/scenario/oracle.h).
+// `graspbed oracle`: the lightest constant grip that holds a scenario (testbed/oracle.h).
 #include <iostream>
 #include <memory>
 #include <string>

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes fuzz/scenario.dict, the libFuzzer dictionary of fuzz/scenario_fuzz.cc, from the config
 reference (`graspbed config-reference`: every key of every scenario section and its allowed names)
-and the script's keys, actions and events (sim/scenario/scenario_config.cc; not in the reference).
+and the script's keys, actions and events (testbed/scenario_config.cc; not in the reference).
 
     fuzz/make_scenario_dict.py build/graspbed > fuzz/scenario.dict
     fuzz/make_scenario_dict.py build/graspbed --check fuzz/scenario.dict   # ctest scenario_fuzz_dict

@@ -1,7 +1,7 @@
 #pragma once
-/// Pieces every backend's run shares (RunScenario on the simulation, RunOnBench on the serial link
-/// and on a recording): the output directory and its atomic files, the columns of the control loop
-/// in signals.csv, and the plots drawn from them. Internal to graspbed_scenario.
+/// Pieces every backend's run shares (the run loop, RunScenario, and the backends of run_backend.h):
+/// the output directory, the columns of the control loop and of the units in signals.csv, and the
+/// plots drawn from them. Internal to graspbed_testbed_run.
 
 #include <cstdint>
 #include <optional>

@@ -1,7 +1,8 @@
 #pragma once
-/// Running one scenario on its backend (`backend: sim | serial | replay`; serial and replay in
-/// bench_runner.cc, docs/hardware.md). On the simulation: builds the rig (simulation, simulated
-/// sensor, control loop, controller, actuator), plays the script, scores the run and writes its outputs:
+/// Running one scenario on its backend (`backend: sim | serial | replay`): one run loop, the backends
+/// behind testbed/run_backend.h (sim_run.cc; serial and replay in bench_run.cc, docs/hardware.md).
+/// On the simulation: builds the rig (simulation, simulated sensor, control loop, controller,
+/// actuator), plays the script, scores the run and writes its outputs:
 ///   DIR/config.yaml   the fully resolved configuration (loads again to reproduce the run)
 ///   DIR/signals.csv   one row per control tick (docs/scenarios.md, "Outputs")
 ///   DIR/summary.json  metrics, every expectation with its outcome, and `passed`
@@ -33,7 +34,7 @@ struct SimRigConfig;
 
 namespace graspbed::testbed {
 
-/// When a run computes its scenario's oracle grip (sim/scenario/oracle.h) to score its grip against.
+/// When a run computes its scenario's oracle grip (testbed/oracle.h) to score its grip against.
 enum class OracleMode {
   kIfExpected,  ///< only when the scenario states max_grip_efficiency (`graspbed run` by default)
   kAlways,      ///< every simulated run (`run --oracle`, suites, the scorecard; cached per scenario)
