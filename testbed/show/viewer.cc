@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -68,7 +69,8 @@ class Window : public sim::GlContext {
     glfwSwapInterval(0);  // the viewer paces itself on the simulated clock
     glfwSetWindowUserPointer(window_, this);
     glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
-      if (action != GLFW_RELEASE) static_cast<Window*>(glfwGetWindowUserPointer(w))->OnKey(key, mods);
+      if (action != GLFW_RELEASE) static_cast<Window*>(glfwGetWindowUserPointer(w))->typed_.push_back(key);
+      (void)mods;
     });
     glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) {
       static_cast<Window*>(glfwGetWindowUserPointer(w))->OnCursor(x, y);
@@ -97,6 +99,17 @@ class Window : public sim::GlContext {
     return size;
   }
 
+  /// Takes the oldest key typed and not yet taken into the flags below; false when none is left.
+  /// One key per frame, in the order typed: keys typed ahead of a slow frame (a loaded machine,
+  /// a software renderer) are each acted on, not merged into one flag.
+  bool TakeKey() {
+    if (typed_.empty()) return false;
+    const int key = typed_.front();
+    typed_.pop_front();
+    ApplyKey(key);
+    return true;
+  }
+
   // Input since the last time the viewer took it.
   bool pause_toggle = false, step_forward = false, step_back = false, jump_forward = false, jump_back = false;
   bool restart = false, quit = false, fingertip = false, grasp = false;
@@ -105,7 +118,7 @@ class Window : public sim::GlContext {
   std::string description;
 
  private:
-  void OnKey(int key, int mods) {
+  void ApplyKey(int key) {
     switch (key) {
       case GLFW_KEY_SPACE:
         pause_toggle = true;
@@ -146,7 +159,6 @@ class Window : public sim::GlContext {
       default:
         break;
     }
-    (void)mods;
   }
   void OnCursor(double x, double y) {
     const double dx = x - last_x_;
@@ -174,6 +186,7 @@ class Window : public sim::GlContext {
   }
 
   GLFWwindow* window_ = nullptr;
+  std::deque<int> typed_;  ///< GLFW key codes typed, oldest first
   double last_x_ = 0.0;
   double last_y_ = 0.0;
 };
@@ -198,6 +211,7 @@ class ViewerCore {
   /// window() for the mode to act on. Returns true when the speed or pause changed (re-anchor the clock).
   bool Poll() {
     glfwPollEvents();
+    window_.TakeKey();
     bool changed = false;
     if (window_.pause_toggle) {
       paused_ = !paused_;
