@@ -10,6 +10,8 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "common/config_error.h"
 #include "common/signal_log.h"

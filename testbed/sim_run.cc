@@ -2,24 +2,19 @@
 // loop, controller, actuator) stepped between control ticks, the script played on it, and the ground
 // truth the other backends lack: metrics and expectations, the truth columns of signals.csv, the
 // oracle grip, states.csv and the plots of estimate against truth.
-#include <optional>
-#include <span>
-
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <limits>
 #include <memory>
-#include <sstream>
+#include <optional>
+#include <span>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
+#include "common/config_error.h"
 #include "common/plot.h"
 #include "common/signal_log.h"
-#include "common/yaml_map.h"
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
@@ -33,21 +28,13 @@
 namespace graspbed::testbed {
 namespace {
 
-namespace fs = std::filesystem;
-
 using internal::HorizontalLine;
-using internal::kIncompleteMarker;
 using internal::kLoopColumnCount;
 using internal::Line;
 using internal::MakeChart;
 using internal::PerUnitFnChart;
-using internal::PrepareOutputDir;
 using internal::ScriptMarkers;
-using common::WriteCsvAtomic;
 using internal::WriteTaxelMaps;
-
-// Simulated time between progress callbacks [s].
-constexpr double kProgressPeriodS = 0.1;
 
 /// True unit loads per control tick in a ring, to look up the truth at a frame's sample time.
 class TruthRing {
