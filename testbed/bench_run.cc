@@ -195,6 +195,7 @@ class BenchRun : public RunBackend {
   controller::GraspController& controller() override { return *grasp_; }
   const controller::ControlLoop& loop() const override { return *loop_; }
   controller::GraspIntent intent() const override { return intent_; }
+  const controller::ControllerTelemetry& telemetry() const override { return telemetry_; }
   void Start() override {
     if (config_.controller.grip_ceiling_n > 0.0) grasp_->SetGripCeiling(config_.controller.grip_ceiling_n);
     grasp_->SetIntent(intent_);
@@ -234,10 +235,10 @@ class BenchRun : public RunBackend {
   void Tick(double t) {
     loop_->Tick(t);
     end_s_ = t;
-    const controller::ControllerTelemetry telemetry = grasp_->telemetry();
-    if (last_phase_ == nullptr || std::string_view(last_phase_) != telemetry.phase) {
-      last_phase_ = telemetry.phase;
-      if (phases_.size() < phases_.capacity()) phases_.push_back({telemetry.phase, t});
+    telemetry_ = grasp_->telemetry();
+    if (last_phase_ == nullptr || std::string_view(last_phase_) != telemetry_.phase) {
+      last_phase_ = telemetry_.phase;
+      if (phases_.size() < phases_.capacity()) phases_.push_back({telemetry_.phase, t});
     }
     if (!loop_->state().stale) peak_total_fn_n_ = std::max(peak_total_fn_n_, loop_->state().total_fn_n);
   }
@@ -308,6 +309,7 @@ class BenchRun : public RunBackend {
 
  private:
   controller::GraspIntent intent_ = controller::GraspIntent::kIdle;
+  controller::ControllerTelemetry telemetry_;
   std::vector<ActionTiming> timings_;
   std::vector<PromptEntry> prompts_;
   std::vector<PhaseChange> phases_;

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/config_error.h"
 #include "common/signal_log.h"
 #include "controller/control_loop.h"
 #include "controller/grasp_controller.h"
@@ -46,6 +47,8 @@ class RunBackend {
   virtual const controller::ControlLoop& loop() const = 0;
   /// The intent the last tick ran with.
   virtual controller::GraspIntent intent() const = 0;
+  /// The controller's telemetry after the last tick, read once by NextTick().
+  virtual const controller::ControllerTelemetry& telemetry() const = 0;
 
   /// Called once, after the outputs are prepared and before the first tick.
   virtual void Start() {}
@@ -84,6 +87,9 @@ std::unique_ptr<RunBackend> MakeSerialRun(const ScenarioConfig& config, const Ru
 /// The recording `config.log` names, replayed tick by tick (bench_run.cc). Throws
 /// std::invalid_argument naming the file when it cannot be read.
 std::unique_ptr<RunBackend> MakeReplayRun(const ScenarioConfig& config, const RunOptions& options);
+
+/// `error`, something the run refused in `config`, as a ConfigError that names the scenario file.
+common::ConfigError RefusedIn(const ScenarioConfig& config, const std::exception& error);
 
 /// The controller `config.controller` names, or options.make_controller's. An invalid_argument
 /// becomes a common::ConfigError naming the scenario file.

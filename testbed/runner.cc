@@ -63,13 +63,17 @@ void WriteRunOutputs(const RunResult& result, const common::SignalLog& log, inte
 
 }  // namespace
 
+common::ConfigError internal::RefusedIn(const ScenarioConfig& config, const std::exception& error) {
+  return common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+}
+
 std::unique_ptr<controller::GraspController> internal::MakeRunController(const ScenarioConfig& config,
                                                                          const RunOptions& options) {
   try {
     return options.make_controller ? options.make_controller(config.controller)
                                    : controller::MakeController(config.controller.name, config.controller.params);
   } catch (const std::invalid_argument& error) {
-    throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+    throw internal::RefusedIn(config, error);
   }
 }
 
@@ -81,7 +85,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
   try {
     diagnostic_columns = internal::DiagnosticColumns(run->controller());
   } catch (const std::invalid_argument& error) {
-    throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+    throw internal::RefusedIn(config, error);
   }
   RunResult result;
   result.config = config;
@@ -115,7 +119,7 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
     const char** text = nullptr;
     double* row = log.AppendRow(&text);
     if (row != nullptr) {
-      const controller::ControllerTelemetry telemetry = run->controller().telemetry();
+      const controller::ControllerTelemetry& telemetry = run->telemetry();
       text[0] = controller::ToString(run->intent());
       text[1] = telemetry.phase;
       text[2] = telemetry.slip_cues;

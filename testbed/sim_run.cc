@@ -235,7 +235,7 @@ class SimRun final : public internal::RunBackend {
           layout_, sensor::NominalCalibration(config.sensor.strain_model.nominal, units_), rig_config,
           std::move(grasp));
     } catch (const std::invalid_argument& error) {
-      throw common::ConfigError((config.source_file.empty() ? "" : config.source_file + ": ") + error.what());
+      throw internal::RefusedIn(config, error);
     }
     states_ = std::make_unique<sim::StateRecorder>(rig_->simulation(),
                                                    options.out_dir.empty() ? 0.0 : config.duration_s);
@@ -251,6 +251,7 @@ class SimRun final : public internal::RunBackend {
   controller::GraspController& controller() override { return rig_->controller(); }
   const controller::ControlLoop& loop() const override { return rig_->loop(); }
   controller::GraspIntent intent() const override { return player_.intent(); }
+  const controller::ControllerTelemetry& telemetry() const override { return telemetry_; }
 
   void Start() override {
     player_.Start(*rig_);
@@ -371,17 +372,17 @@ class SimRun final : public internal::RunBackend {
     truth_ = simulation.truth();
     const sensor::TactileState& state = rig_->loop().state();
     true_loads_ = truth_ring_.Near(state.time_s);
-    const controller::ControllerTelemetry telemetry = rig_->controller().telemetry();
+    telemetry_ = rig_->controller().telemetry();
     TickSample sample;
     sample.time_s = t;
     sample.intent = player_.intent();
     sample.truth = &truth_;
     sample.state = &state;
     sample.true_loads = true_loads_;
-    sample.controller_slip = telemetry.slip_detected;
-    sample.controller_cues = telemetry.slip_cues;
+    sample.controller_slip = telemetry_.slip_detected;
+    sample.controller_cues = telemetry_.slip_cues;
     tracker_.Update(sample);
-    player_.Observe(t, state, telemetry.slip_detected);
+    player_.Observe(t, state, telemetry_.slip_detected);
   }
 
   const ScenarioConfig& config_;
@@ -395,6 +396,7 @@ class SimRun final : public internal::RunBackend {
   TruthRing truth_ring_;
   std::unique_ptr<sim::StateRecorder> states_;
   sim::GroundTruth truth_;
+  controller::ControllerTelemetry telemetry_;
   std::span<const sensor::UnitLoad> true_loads_;
   size_t next_frame_ = 0;
   size_t next_instant_ = 0;

@@ -68,9 +68,8 @@ class Window : public sim::GlContext {
     glfwMakeContextCurrent(window_);
     glfwSwapInterval(0);  // the viewer paces itself on the simulated clock
     glfwSetWindowUserPointer(window_, this);
-    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
+    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int) {
       if (action != GLFW_RELEASE) static_cast<Window*>(glfwGetWindowUserPointer(w))->typed_.push_back(key);
-      (void)mods;
     });
     glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) {
       static_cast<Window*>(glfwGetWindowUserPointer(w))->OnCursor(x, y);
