@@ -9,9 +9,11 @@
 #include <string>
 
 #include "app/command_registry.h"
+#include "common/plot.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
+#include "sensor/layout_drawing.h"
 #include "sensor/strain_model.h"
 
 namespace graspbed::app {
@@ -52,6 +54,7 @@ struct InvertOptions {
 struct LayoutOptions {
   std::string layout_path = sensor::DefaultLayoutPath();
   bool json = false;
+  std::string picture_path;  ///< "" or where to write the labelled picture (PNG)
 };
 
 struct CalibrateOptions {
@@ -138,6 +141,12 @@ void RunInvert(const InvertOptions& options) {
 
 void RunLayout(const LayoutOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(options.layout_path);
+  if (!options.picture_path.empty()) {
+    plot::WritePng(sensor::LayoutDrawing(layout), options.picture_path);
+    std::printf("wrote %s (layout %s, %d units)\n", options.picture_path.c_str(), layout.name.c_str(),
+                layout.unit_count());
+    return;
+  }
   if (options.json) {
     nlohmann::json units = nlohmann::json::array();
     for (const sensor::UnitPose& pose : layout.units) {
@@ -253,6 +262,9 @@ void AddSensorCommands(CLI::App& root) {
   layout_command->add_option("--layout", layout->layout_path,
                              "layout YAML (default sensor/layouts/default_20.yaml)");
   layout_command->add_flag("--json", layout->json, "print the poses as JSON");
+  layout_command->add_option("--picture", layout->picture_path,
+                             "write a labelled picture of the layout (PNG: the palmar surface unrolled, units "
+                             "numbered, beams and +Ft senses, rows and columns) instead of the table");
   layout_command->callback([layout] { RunLayout(*layout); });
 
   auto calibrate = std::make_shared<CalibrateOptions>();

@@ -89,6 +89,15 @@ void ShowText(cairo_t* cr, const std::string& text, double x, double y, double a
   cairo_show_text(cr, text.c_str());
 }
 
+// Shows `text` turned a quarter turn anticlockwise (reading upwards), centred on (x, y).
+void ShowUpwardText(cairo_t* cr, const std::string& text, double x, double y) {
+  cairo_save(cr);
+  cairo_translate(cr, x, y);
+  cairo_rotate(cr, -M_PI / 2);
+  ShowText(cr, text, 0.0, 0.0, 0.5, 0.5);
+  cairo_restore(cr);
+}
+
 // Adds `series` to the path as polylines in pixels (non-finite points break the line), keeping of
 // each run of consecutive points in one pixel column only the first, the lowest, the highest and the
 // last: the same pixels as a line through every point, for a fraction of the stroke's cost (a 20 s
@@ -233,11 +242,7 @@ void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double wid
   cairo_rectangle(cr, left, top, right - left, bottom - top);
   cairo_stroke(cr);
   ShowText(cr, chart.x_label, 0.5 * (left + right), y0 + height - 6, 0.5, 1.0);
-  cairo_save(cr);
-  cairo_translate(cr, x0 + 14, 0.5 * (top + bottom));
-  cairo_rotate(cr, -M_PI / 2);
-  ShowText(cr, chart.y_label, 0.0, 0.0, 0.5, 0.5);
-  cairo_restore(cr);
+  ShowUpwardText(cr, chart.y_label, x0 + 14, 0.5 * (top + bottom));
   cairo_set_font_size(cr, kTitleFontSize);
   ShowText(cr, chart.title, 0.5 * (left + right), y0 + 10, 0.5, 0.0);
   cairo_set_font_size(cr, kFontSize);
@@ -544,11 +549,7 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
              g.top + (row + 0.5) * g.row_height(), 1.0, 0.5);
   }
   cairo_set_font_size(cr, kFontSize);
-  cairo_save(cr);
-  cairo_translate(cr, 14, 0.5 * (g.top + g.bottom));
-  cairo_rotate(cr, -M_PI / 2);
-  ShowText(cr, heatmap.row_label, 0.0, 0.0, 0.5, 0.5);
-  cairo_restore(cr);
+  ShowUpwardText(cr, heatmap.row_label, 14, 0.5 * (g.top + g.bottom));
 
   // Markers: dashed lines over the cells, labels above them.
   for (const Marker& marker : heatmap.markers) {
@@ -589,11 +590,7 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
     cairo_stroke(cr);
     ShowText(cr, FormatTick(tick, value_step), bar_left + kColourBarWidth + 6, py, 0.0, 0.5);
   }
-  cairo_save(cr);
-  cairo_translate(cr, heatmap.width_px - 12, 0.5 * (g.top + g.bottom));
-  cairo_rotate(cr, -M_PI / 2);
-  ShowText(cr, heatmap.value_label, 0.0, 0.0, 0.5, 0.5);
-  cairo_restore(cr);
+  ShowUpwardText(cr, heatmap.value_label, heatmap.width_px - 12, 0.5 * (g.top + g.bottom));
 
   cairo_set_font_size(cr, kTitleFontSize);
   ShowText(cr, heatmap.title, 0.5 * heatmap.width_px, 8.0, 0.5, 0.0);
@@ -661,6 +658,151 @@ void WritePng(const Figure& figure, const std::string& path) {
                 figure.panel_width_px, figure.panel_height_px);
     }
   });
+}
+
+namespace {
+
+// ---- scale drawings -------------------------------------------------------------------------------
+
+constexpr double kDrawingMarginLeft = 80.0;
+constexpr double kDrawingMarginRight = 30.0;
+constexpr double kDrawingMarginTop = 48.0;
+constexpr double kDrawingMarginBottom = 55.0;
+constexpr double kDrawingNoteLinePx = 19.0;
+
+// Where a Drawing's data lands in its image: one scale for both axes, the narrower range centred.
+struct DrawingGeometry {
+  double left, right, top, bottom;  // plot area [px]
+  double x_lo, y_lo;                // data at the plot area's bottom-left corner
+  double scale;                     // px per data unit
+  bool x_reversed;
+  double ToPxX(double x) const { return x_reversed ? right - (x - x_lo) * scale : left + (x - x_lo) * scale; }
+  double ToPxY(double y) const { return bottom - (y - y_lo) * scale; }
+};
+
+DrawingGeometry GeometryOf(const Drawing& drawing) {
+  DrawingGeometry g;
+  g.left = kDrawingMarginLeft;
+  g.right = drawing.width_px - kDrawingMarginRight;
+  g.top = kDrawingMarginTop;
+  g.bottom = drawing.height_px - kDrawingMarginBottom - kDrawingNoteLinePx * drawing.notes.size();
+  g.x_reversed = drawing.x_reversed;
+  const double x_span = drawing.x_max - drawing.x_min;
+  const double y_span = drawing.y_max - drawing.y_min;
+  g.scale = std::min((g.right - g.left) / x_span, (g.bottom - g.top) / y_span);
+  g.x_lo = 0.5 * (drawing.x_min + drawing.x_max) - 0.5 * (g.right - g.left) / g.scale;
+  g.y_lo = 0.5 * (drawing.y_min + drawing.y_max) - 0.5 * (g.bottom - g.top) / g.scale;
+  return g;
+}
+
+void ValidateDrawing(const Drawing& drawing, const std::string& path) {
+  const auto bad = [&](const std::string& what) {
+    throw std::invalid_argument("plot: drawing for " + path + ": " + what);
+  };
+  if (!(drawing.x_min < drawing.x_max) || !(drawing.y_min < drawing.y_max)) bad("empty or inverted range");
+  if (drawing.width_px <= kDrawingMarginLeft + kDrawingMarginRight + 10) bad("width too small");
+  if (drawing.height_px <= kDrawingMarginTop + kDrawingMarginBottom + 10 + kDrawingNoteLinePx * drawing.notes.size())
+    bad("height too small for its notes");
+  for (const Shape& shape : drawing.shapes) {
+    if (shape.points.empty()) bad("a shape with no vertex");
+  }
+}
+
+void SetColour(cairo_t* cr, const Colour& colour) { cairo_set_source_rgb(cr, colour.r, colour.g, colour.b); }
+
+void DrawShape(cairo_t* cr, const DrawingGeometry& g, const Shape& shape) {
+  cairo_new_path(cr);
+  for (const auto& [x, y] : shape.points) cairo_line_to(cr, g.ToPxX(x), g.ToPxY(y));
+  if (shape.closed) cairo_close_path(cr);
+  if (shape.filled && shape.closed) {
+    SetColour(cr, shape.fill);
+    cairo_fill_preserve(cr);
+  }
+  if (shape.line_width_px > 0.0) {
+    SetColour(cr, shape.stroke);
+    cairo_set_line_width(cr, shape.line_width_px);
+    const double dash[] = {6.0, 4.0};
+    cairo_set_dash(cr, dash, shape.dashed ? 2 : 0, 0.0);
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0.0);
+  }
+  cairo_new_path(cr);
+  if (shape.arrow_head && !shape.closed && shape.points.size() >= 2) {
+    const auto& [x1, y1] = shape.points[shape.points.size() - 2];
+    const auto& [x2, y2] = shape.points.back();
+    const double tip_x = g.ToPxX(x2);
+    const double tip_y = g.ToPxY(y2);
+    const double angle = std::atan2(tip_y - g.ToPxY(y1), tip_x - g.ToPxX(x1));
+    const double length = 4.0 + 3.0 * shape.line_width_px;
+    SetColour(cr, shape.stroke);
+    cairo_move_to(cr, tip_x, tip_y);
+    cairo_line_to(cr, tip_x - length * std::cos(angle - 0.45), tip_y - length * std::sin(angle - 0.45));
+    cairo_line_to(cr, tip_x - length * std::cos(angle + 0.45), tip_y - length * std::sin(angle + 0.45));
+    cairo_close_path(cr);
+    cairo_fill(cr);
+  }
+}
+
+void DrawDrawing(cairo_t* cr, const Drawing& drawing) {
+  const DrawingGeometry g = GeometryOf(drawing);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, kFontSize);
+  // Frame and ticks of the whole plot area (the narrower range was widened to keep one scale).
+  const double x_hi = g.x_lo + (g.right - g.left) / g.scale;
+  const double y_hi = g.y_lo + (g.bottom - g.top) / g.scale;
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_set_line_width(cr, 1.0);
+  cairo_rectangle(cr, g.left, g.top, g.right - g.left, g.bottom - g.top);
+  cairo_stroke(cr);
+  const std::vector<double> x_ticks = NiceTicks(g.x_lo, x_hi, 10);
+  const std::vector<double> y_ticks = NiceTicks(g.y_lo, y_hi, 8);
+  const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0;
+  const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : 1.0;
+  for (double tick : x_ticks) {
+    cairo_move_to(cr, g.ToPxX(tick), g.bottom);
+    cairo_line_to(cr, g.ToPxX(tick), g.bottom + 5);
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, x_step), g.ToPxX(tick), g.bottom + 8, 0.5, 0.0);
+  }
+  for (double tick : y_ticks) {
+    cairo_move_to(cr, g.left - 5, g.ToPxY(tick));
+    cairo_line_to(cr, g.left, g.ToPxY(tick));
+    cairo_stroke(cr);
+    ShowText(cr, FormatTick(tick, y_step), g.left - 8, g.ToPxY(tick), 1.0, 0.5);
+  }
+  ShowText(cr, drawing.x_label, 0.5 * (g.left + g.right), g.bottom + 28, 0.5, 0.0);
+  ShowUpwardText(cr, drawing.y_label, 18, 0.5 * (g.top + g.bottom));
+  for (size_t i = 0; i < drawing.notes.size(); ++i) {
+    ShowText(cr, drawing.notes[i], g.left, g.bottom + 52 + kDrawingNoteLinePx * i, 0.0, 0.0);
+  }
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+  cairo_set_font_size(cr, kTitleFontSize);
+  ShowText(cr, drawing.title, 0.5 * drawing.width_px, 12.0, 0.5, 0.0);
+
+  cairo_save(cr);
+  cairo_rectangle(cr, g.left, g.top, g.right - g.left, g.bottom - g.top);
+  cairo_clip(cr);
+  for (const Shape& shape : drawing.shapes) DrawShape(cr, g, shape);
+  for (const Text& text : drawing.texts) {
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                           text.bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(cr, text.size_px);
+    SetColour(cr, text.colour);
+    ShowText(cr, text.text, g.ToPxX(text.x), g.ToPxY(text.y), text.align_x, text.align_y);
+  }
+  cairo_restore(cr);
+}
+
+}  // namespace
+
+void WritePng(const Drawing& drawing, const std::string& path) {
+  ValidateDrawing(drawing, path);
+  Render(drawing.width_px, drawing.height_px, path, [&](cairo_t* cr) { DrawDrawing(cr, drawing); });
+}
+
+std::pair<double, double> DrawingPointPx(const Drawing& drawing, double x, double y) {
+  const DrawingGeometry g = GeometryOf(drawing);
+  return {g.ToPxX(x), g.ToPxY(y)};
 }
 
 }  // namespace graspbed::plot

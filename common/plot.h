@@ -1,7 +1,8 @@
 #pragma once
 /// Small PNG line-chart writer (cairo): named series, axes with ticks and labels, a title, a legend,
 /// optional vertical markers and shaded x-bands; several charts can share one image as panels. Also
-/// heat maps (rows x time colour maps with a colour bar).
+/// heat maps (rows x time colour maps with a colour bar) and scale drawings (polygons, arrows and texts in
+/// data units, e.g. a sensor layout in millimetres).
 /// Files are written atomically (temporary file + rename), so a reader never sees half a PNG.
 
 #include <string>
@@ -88,6 +89,64 @@ void WritePng(const Chart& chart, const std::string& path, int width_px = 800, i
 
 /// Writes a multi-panel figure as one PNG at `path` (temp file + rename); same errors as above.
 void WritePng(const Figure& figure, const std::string& path);
+
+/// A colour, each channel 0..1.
+struct Colour {
+  double r = 0.0;
+  double g = 0.0;
+  double b = 0.0;
+};
+
+/// A polygon or polyline of a Drawing, in its data units.
+struct Shape {
+  std::vector<std::pair<double, double>> points;  ///< vertices (x, y) [data units]
+  bool closed = true;                             ///< join the last vertex to the first
+  bool filled = false;                            ///< fill with `fill` (closed shapes only)
+  Colour fill;                                    ///< fill colour
+  Colour stroke;                                  ///< outline colour
+  double line_width_px = 1.0;                     ///< outline width [px]; 0: no outline
+  bool dashed = false;                            ///< dashed outline
+  bool arrow_head = false;                        ///< an arrow head at the last vertex (open shapes)
+};
+
+/// A text of a Drawing, anchored at a point in data units.
+struct Text {
+  double x = 0.0;  ///< anchor [data units]
+  double y = 0.0;  ///< anchor [data units]
+  std::string text;
+  double size_px = 13.0;  ///< font size [px]
+  bool bold = false;
+  Colour colour;
+  double align_x = 0.5;  ///< 0: anchor at the text's left, 0.5 centre, 1 right
+  double align_y = 0.5;  ///< 0: anchor at the text's top, 0.5 middle, 1 bottom
+};
+
+/// A scale drawing: shapes and texts in data units (e.g. mm) with one scale on both axes, framed by
+/// axes with ticks, under a title and optional notes (one line each, below the plot area).
+struct Drawing {
+  std::string title;
+  std::vector<std::string> notes;  ///< lines of text under the drawing
+  std::string x_label;             ///< with its unit
+  std::string y_label;             ///< with its unit
+  double x_min = 0.0;              ///< the data range shown [data units]; the wider of the two
+  double x_max = 1.0;              ///< ranges decides the scale, the other is centred
+  double y_min = 0.0;
+  double y_max = 1.0;
+  bool x_reversed = false;    ///< x grows to the left (e.g. to show a surface as seen from its other side)
+  std::vector<Shape> shapes;  ///< drawn in order, under the texts
+  std::vector<Text> texts;
+  int width_px = 1000;  ///< image size [px]
+  int height_px = 700;
+};
+
+/// Writes `drawing` as a PNG at `path` (temp file + rename). Throws std::invalid_argument for an
+/// empty or inverted range, a shape with no vertex or a non-positive size; std::runtime_error when
+/// the file cannot be written (naming the path).
+void WritePng(const Drawing& drawing, const std::string& path);
+
+/// The pixel (column from the left, row from the top) where WritePng(drawing) puts the data point
+/// (x, y). For tests that read the image back.
+std::pair<double, double> DrawingPointPx(const Drawing& drawing, double x, double y);
 
 /// "Nice" tick positions (steps of 1, 2 or 5 times a power of ten) covering [lo, hi], about
 /// `target_count` of them. Exposed for tests.
