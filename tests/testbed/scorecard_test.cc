@@ -36,6 +36,9 @@ constexpr int kExitOk = 0;
 constexpr int kExitBadInput = 2;
 
 const std::string kShippedSet = std::string(GRASPBED_SOURCE_DIR) + "/scenarios/scorecard/set.yaml";
+/// The shipped set's runs of its boxes, cylinders and disturbances (the bases of version 3), which
+/// come first; the everyday objects' bases follow them.
+constexpr int kBoxAndDisturbanceRuns = 41;
 const std::string kScenarios = std::string(GRASPBED_SOURCE_DIR) + "/scenarios";
 
 RunResult FinishedRun(int events, int missed, std::vector<double> latencies_ms, int false_flags,
@@ -137,12 +140,17 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
   EXPECT_FALSE(set.name.empty());
   EXPECT_GE(set.version, 1);
   const std::vector<ScorecardRun> runs = ExpandScorecardSet(set);
-  // 30-48 runs per controller keeps the full scorecard within seconds on 2 cores (41: about 6 s).
-  EXPECT_GE(runs.size(), 30u);
-  EXPECT_LE(runs.size(), 48u);
-  // Both grasps are scored: the wrap base is in the set.
-  EXPECT_TRUE(std::any_of(runs.begin(), runs.end(),
-                          [](const ScorecardRun& run) { return run.name.starts_with("wrap_cylinder."); }));
+  // The boxes, cylinders and disturbances first (the ctest below scores them), then the everyday
+  // objects: 60 runs per controller.
+  ASSERT_EQ(runs.size(), 60u);
+  EXPECT_EQ(runs[kBoxAndDisturbanceRuns - 1].name, "wrap_cylinder.v3");
+  // Both grasps are scored (the wrap base is in the set), and each everyday task of the objects'
+  // shipped scenarios.
+  for (const char* base : {"wrap_cylinder.v0", "lift_can.v0", "lift_mug.v0", "pick_marker.v0", "pick_card.v0",
+                           "carry_egg.v0", "lift_plastic_cup.v0", "hold_foam_brick.v0", "pour_bottle.v0"}) {
+    EXPECT_TRUE(std::any_of(runs.begin(), runs.end(), [&](const ScorecardRun& run) { return run.name == base; }))
+        << base;
+  }
   const std::vector<ScorecardRun> again = ExpandScorecardSet(LoadScorecardSet(kShippedSet));
   ASSERT_EQ(again.size(), runs.size());
   std::set<std::string> names;
@@ -156,15 +164,17 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
     if (runs[i].name.ends_with(".v0")) {
       EXPECT_TRUE(runs[i].overrides.empty()) << runs[i].name;
     }
-    // The last value of a key is the one that applies; the set's mass and friction ranges hold.
+    // The last value of a key is the one that applies; the mass and friction ranges hold.
     double mass = -1.0, friction = -1.0;
     for (const Override& each : runs[i].overrides) {
       if (each.key == "object.mass_kg") mass = std::stod(each.value);
       if (each.key == "object.friction") friction = std::stod(each.value);
     }
+    // The objects' bases draw their masses round the object's own (a 3 g cup, a 490 g bottle).
+    const bool object_base = static_cast<int>(i) >= kBoxAndDisturbanceRuns;
     if (!runs[i].name.ends_with(".v0")) {
-      EXPECT_GE(mass, 0.05) << runs[i].name;
-      EXPECT_LE(mass, 0.4) << runs[i].name;
+      EXPECT_GE(mass, object_base ? 0.002 : 0.05) << runs[i].name;
+      EXPECT_LE(mass, object_base ? 0.5 : 0.4) << runs[i].name;
       EXPECT_GE(friction, 0.3) << runs[i].name;
       EXPECT_LE(friction, 1.0) << runs[i].name;
     }
@@ -322,20 +332,26 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   }
 }
 
-// The reference controller over the whole shipped set, against what it meets today: nothing
-// dropped or crushed, every run finished without a physics fault, every run scored against an
-// oracle grip. Its grip efficiency and gross-slip figures are printed; their targets are the
-// reference controller's next issue (docs/controller.md, "Scorecard").
-TEST(ScorecardTest, ReferenceOnTheShippedSetDropsAndCrushesNothingAndEveryRunHasAnOracle) {
+// The reference controller over the shipped set's boxes, cylinders and disturbances, against what it
+// meets today: nothing dropped or crushed, every run finished without a physics fault, every run
+// scored against an oracle grip. Its grip efficiency and gross-slip figures are printed; their
+// targets are the reference controller's issue (docs/controller.md, "Scorecard"). The everyday
+// objects' bases are left to `graspbed score` (8.6 min with their oracle searches on 2 cores): the
+// reference drops the foam brick and crushes the plastic cup and one egg variation there, each a
+// failure tests/controller/reference_suite_test.cc lists for the object's shipped scenario.
+TEST(ScorecardTest, ReferenceOnTheBoxesAndDisturbancesDropsAndCrushesNothingAndEveryRunHasAnOracle) {
   ScorecardOptions options;
   options.controllers = {"grip_slip"};
   options.jobs = 2;
+  options.limit = kBoxAndDisturbanceRuns;
   const Scorecard scorecard = RunScorecard(LoadScorecardSet(kShippedSet), options);
   ASSERT_TRUE(scorecard.completed);
+  ASSERT_EQ(scorecard.rows.size(), static_cast<size_t>(kBoxAndDisturbanceRuns));
+  EXPECT_EQ(scorecard.rows.back().run, "wrap_cylinder.v3") << "the limit ends with the last box base";
   ASSERT_EQ(scorecard.scores.size(), 1u);
   const ControllerScore& score = scorecard.scores[0];
   std::printf(
-      "[ measure ] shipped set, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
+      "[ measure ] shipped set, boxes and disturbances, grip_slip: %d runs, %d passed, %d/%d slip events flagged, p95 %.1f ms, "
       "%.2f false flags/min held, gross %d/%d flagged, grip efficiency median %.2f p95 %.2f\n",
       score.runs, score.passed, score.slip_detected, score.slip_events, score.latency_p95_ms.value_or(-1.0),
       score.false_per_min.value_or(-1.0), score.gross_slip_detected, score.gross_slip_events,
@@ -387,10 +403,10 @@ TEST(ScorecardCliTest, SeedAndVariationsScaleDrawAHeldOutSetFromTheSameRanges) {
                              "/scenarios/scorecard --limit 5 --controller open_loop ";
   CliResult result = RunCli(common + "--out " + dir.Path("shipped"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v3 seed 2026 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(" v4 seed 2026 ("), std::string::npos) << result.out;
   result = RunCli(common + "--seed 11 --variations-scale 2 --out " + dir.Path("held_out"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v3 seed 11 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(" v4 seed 11 ("), std::string::npos) << result.out;
   const nlohmann::json shipped = nlohmann::json::parse(ReadText(dir.Path("shipped") + "/scorecard.json"));
   const nlohmann::json held_out = nlohmann::json::parse(ReadText(dir.Path("held_out") + "/scorecard.json"));
   EXPECT_EQ(held_out.at("set").at("seed"), 11);
