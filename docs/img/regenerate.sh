@@ -32,7 +32,7 @@ still() {
     esac
   done
   "$graspbed" render "$scenario" --at "$at" "${size[@]}" "${sets[@]}" "${render_only[@]}" \
-    --out "docs/img/$dir" > /dev/null
+    --out "docs/img/$dir" > "$runs/render.log" 2>&1 || { cat "$runs/render.log" >&2; exit 1; }
   # The run's exit is 1 where an expectation fails (an object the scenario was not written for).
   local status=0
   "$graspbed" run "$scenario" "${sets[@]}" --no-plots --out "$runs/run" > "$runs/run.log" 2>&1 || status=$?
@@ -41,8 +41,10 @@ still() {
   name=$(sed -n 's/^scenario \([^,]*\),.*/\1/p' "$runs/run.log" | head -1)
   picture="$dir/$(printf '%s_t%.3fs.png' "$name" "$at")"
   [ -f "docs/img/$picture" ] || { echo "regenerate: $picture was not written" >&2; exit 1; }
-  local command="graspbed render $scenario --at $at"
-  (($# + ${#sets[@]} + ${#render_only[@]})) && command+=$(printf ' %q' "${sets[@]}" "${render_only[@]}")
+  local command="graspbed render $scenario --at $at" word
+  for word in "${sets[@]}" "${render_only[@]}"; do
+    if [[ $word =~ ^[A-Za-z0-9_./=:,+-]+$ ]]; then command+=" $word"; else command+=" '$word'"; fi
+  done
   python3 docs/img/caption_figures.py "$picture" "$runs/run/signals.csv" "$at" "$command" >> "$captions"
   rm -rf "$runs/run"
 }
