@@ -6,7 +6,8 @@
 //                     1 kHz, readout + inversion + grip_slip controller (holding 9.5 N) + actuator at 1 kHz.
 // After the Google Benchmark runs, main() times both again, interleaved in rounds of one simulated
 // second so machine load hits both alike, and prints the ratio (design budget <= 1.15) and the force
-// coverage (sensed share of the finger's contact force) for a 10 N pinch of each object shape.
+// coverage (sensed share of the finger's contact force) for a 10 N pinch of each object shape, and the
+// real-time factor of each everyday object's shipped scenario.
 // Run: build/bench/sim_bench   (docs/simulation.md)
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -358,6 +359,32 @@ void PrintScenarioSpeeds(const std::string& cli) {
       with_plots.ok ? "" : " (FAILED)");
 }
 
+// The real-time factor of each shipped scenario of an everyday object (a library object by name:
+// meshes, compound bodies, soft contacts), run in this process with nothing written, the median of 3.
+// Their target is 10x real time.
+void PrintObjectScenarioSpeeds() {
+  constexpr int kRounds = 3;
+  std::printf("\nEveryday objects' scenarios (in process, nothing written, median of %d; target >= 10x):\n",
+              kRounds);
+  std::printf("  %-18s %-12s %9s %12s %12s\n", "scenario", "object", "sim [s]", "x real time", "x CPU time");
+  for (const std::string& file : testbed::ListScenarioFiles(common::DataPath("scenarios"))) {
+    const testbed::ScenarioConfig config = testbed::LoadScenario(file);
+    if (config.scene.object.name.empty()) continue;
+    std::vector<double> walls, cpus;
+    for (int round = 0; round < kRounds; ++round) {
+      const auto start = std::chrono::steady_clock::now();
+      const double cpu_start = common::ThreadCpuSeconds();
+      testbed::RunScenario(config, testbed::RunOptions{});
+      cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
+      walls.push_back(WallSeconds(start));
+    }
+    std::sort(walls.begin(), walls.end());
+    std::sort(cpus.begin(), cpus.end());
+    std::printf("  %-18s %-12s %9.2f %12.1f %12.1f\n", config.name.c_str(), config.scene.object.name.c_str(),
+                config.duration_s, config.duration_s / walls[kRounds / 2], config.duration_s / cpus[kRounds / 2]);
+  }
+}
+
 }  // namespace
 }  // namespace graspbed::sim
 
@@ -415,6 +442,7 @@ int main(int argc, char** argv) {
   jaw.hand.open_gap_m = 0.065;
   graspbed::sim::PrintRatio("jaw fixture (the previous default hand)", jaw);
   graspbed::sim::PrintCoverage();
+  graspbed::sim::PrintObjectScenarioSpeeds();
 #ifdef GRASPBED_CLI
   graspbed::sim::PrintScenarioSpeeds(GRASPBED_CLI);
 #else
