@@ -673,7 +673,7 @@ constexpr double kDrawingNoteLinePx = 19.0;
 // Where a Drawing's data lands in its image: one scale for both axes, the narrower range centred.
 struct DrawingGeometry {
   double left, right, top, bottom;  // plot area [px]
-  double x_lo, y_lo;                // data at the plot area's bottom-left corner
+  double x_lo, y_lo;                // data at the bottom-left corner (bottom-right when x is reversed)
   double scale;                     // px per data unit
   bool x_reversed;
   double ToPxX(double x) const { return x_reversed ? right - (x - x_lo) * scale : left + (x - x_lo) * scale; }
