@@ -74,14 +74,16 @@ def blank_code_spans(line):
     return re.sub(r"(`+)(.+?)\1", lambda m: " " * len(m.group(0)), line)
 
 
+def plain(markdown):
+    """`markdown` as read: a link's or image's text kept, HTML tags and code ticks dropped."""
+    text = re.sub(r"!?\[([^\]]*)\]\([^)]*\)", r"\1", markdown)
+    return re.sub(r"<[^>]+>", "", text).replace("`", "")
+
+
 def github_slug(heading):
-    """The anchor GitHub gives a heading: markup dropped, lower case, punctuation other than - and _
-    removed, spaces to hyphens."""
-    text = re.sub(r"!?\[([^\]]*)\]\([^)]*\)", r"\1", heading)  # a link keeps its text
-    text = re.sub(r"<[^>]+>", "", text)
-    text = text.replace("`", "").lower()
-    text = re.sub(r"[^\w\- ]", "", text, flags=re.UNICODE)
-    return text.replace(" ", "-")
+    """The anchor GitHub gives a heading: its plain text in lower case, punctuation other than - and
+    _ removed, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", plain(heading).lower(), flags=re.UNICODE).replace(" ", "-")
 
 
 def headings(path):
@@ -91,12 +93,12 @@ def headings(path):
     for _, line in prose_lines(path.read_text()):
         bold = BOLD_LEAD.match(line)
         if bold:
-            texts.append(bold.group(1).replace("`", ""))
+            texts.append(plain(bold.group(1)))
         match = HEADING.match(line)
         if not match:
             continue
         text = match.group(2)
-        texts.append(re.sub(r"!?\[([^\]]*)\]\([^)]*\)", r"\1", text).replace("`", "").replace("*", ""))
+        texts.append(plain(text).replace("*", ""))
         slug = github_slug(text)
         count = seen.get(slug, 0)
         seen[slug] = count + 1
