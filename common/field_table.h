@@ -67,7 +67,7 @@ class FieldTable {
     NumberRule rule;  ///< kNumber, kInteger, and each entry of a kNumberArray
     std::string unit;
     std::string doc;
-    std::string note;                ///< appended to the reference's "allowed" (cross-field rules)
+    std::string note;  ///< appended to the reference's "allowed" (cross-field rules); all of it for "any"
     bool nan_is_auto = false;        ///< NaN (an entry of) means "derived at run time"
     std::vector<std::string> names;  ///< kText: the allowed names (empty: any text)
     std::string custom_default;      ///< kCustom: the default as docs write it
@@ -83,8 +83,8 @@ class FieldTable {
     std::function<void(const YamlMap&, Struct*)> load_section;
     std::function<void(const Struct&)> validate_section;  ///< throws ConfigError, keys relative
     std::function<void(const Struct&, YAML::Emitter&)> emit_section;
-    /// The section's rows with its defaults taken from the parent's default-constructed member (a
-    /// parent may default its sections apart from their own defaults: gauge.r1 is -0.75 .. 0.75 mm).
+    /// The section's rows, its defaults those of the parent's member in `parent` (a parent may
+    /// default its sections apart from their own defaults: FeaConfig's gauge.r1 is 0 .. 0.75 mm).
     std::function<std::vector<FieldReference>(const Struct&)> reference_section;
 
     /// NaN (in any entry) stands for "derived at run time": not checked, not written out, and
@@ -344,10 +344,10 @@ class FieldTable {
     return std::string(out.c_str()) + "\n";
   }
 
-  /// The reference rows of every field (defaults from a default-constructed Struct), sections'
-  /// rows under "section.key".
-  /// The reference rows with the defaults of `defaults_of` (a default-constructed Struct unless a parent
-  /// section gives its own).
+  /// The reference rows of every field, sections' rows under "section.key". Defaults are those of
+  /// `defaults_of`: a default-constructed Struct at the top, and for a section the member as its
+  /// parent's defaults leave it (a parent may default a section apart from the section's own
+  /// defaults: FeaConfig's gauge.r1 spans 0 .. 0.75 mm where a ResistorExtent{} spans 0 .. 0).
   std::vector<FieldReference> Reference(const Struct& defaults_of = Struct{}) const {
     Struct defaults = defaults_of;
     std::vector<FieldReference> rows;
@@ -408,7 +408,8 @@ class FieldTable {
           break;
         }
       }
-      if (!field.note.empty()) row.allowed += "; " + field.note;
+      // A field whose rule is the table's cross-check alone shows that rule, not "any".
+      if (!field.note.empty()) row.allowed = row.allowed == "any" ? field.note : row.allowed + "; " + field.note;
       rows.push_back(std::move(row));
     }
     return rows;

@@ -110,12 +110,17 @@ const Table<MeshConfig>& MeshFields() {
 
 const Table<ResistorExtent>& ResistorFields() {
   using C = ResistorExtent;
+  // The span rule is CrossCheck's (it depends on the geometry); the reference states it at the
+  // default geometry.
+  const double half_span = 0.5 * GeometryConfig{}.SpanMm();
+  const std::string span = "within the free span under the beam, " + common::DocNumber(-half_span) +
+                           " .. " + common::DocNumber(half_span) + " at the default geometry";
   static const Table<C> table(
       "resistor", {
                       Table<C>::Number("start_mm", &C::start_mm, {}, "mm", "x from the beam centre")
-                          .Note("within the free span under the beam (-1 .. 1 mm at the default geometry)"),
+                          .Note(span),
                       Table<C>::Number("end_mm", &C::end_mm, {}, "mm", "x from the beam centre")
-                          .Note("> `start_mm`, within the free span under the beam"),
+                          .Note("> `start_mm`, " + span),
                   });
   return table;
 }

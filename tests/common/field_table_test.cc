@@ -213,6 +213,40 @@ TEST(FieldTableTest, TheReferenceListsEveryFieldWithDefaultRuleAndUnit) {
   EXPECT_THAT(ReferenceMarkdown(rows), HasSubstr("| `inner.width_m` | m | 0.01 | > 0, <= 0.1 | a width |\n"));
 }
 
+// Three levels, each defaulting the level below apart from that level's own defaults: the
+// reference shows the value a default-constructed top level holds, not a default-constructed
+// member's.
+struct Middle {
+  Inner inner{0.02};
+  double span_m = 1.0;
+};
+struct Outer {
+  Middle middle{Inner{0.03}, 2.0};
+};
+
+TEST(FieldTableTest, ASectionsDefaultsAreTheOnesItsParentGivesIt) {
+  using MiddleTable = FieldTable<Middle>;
+  static const MiddleTable middle("middle", {MiddleTable::Section("inner", &Middle::inner, InnerFields()),
+                                             MiddleTable::Number("span_m", &Middle::span_m, {}, "m", "")});
+  using OuterTable = FieldTable<Outer>;
+  const OuterTable outer("outer", {OuterTable::Section("middle", &Outer::middle, middle)});
+  const std::vector<FieldReference> rows = outer.Reference();
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].key, "middle.inner.width_m");
+  EXPECT_EQ(rows[0].default_value, "0.03");
+  EXPECT_EQ(rows[1].key, "middle.span_m");
+  EXPECT_EQ(rows[1].default_value, "2");
+  EXPECT_EQ(rows[1].allowed, "any");
+  EXPECT_EQ(middle.Reference()[0].default_value, "0.02");
+  EXPECT_EQ(InnerFields().Reference()[0].default_value, "0.01");
+}
+
+TEST(FieldTableTest, ARuleLeftToTheCrossCheckIsStatedByItsNoteAlone) {
+  using Table = FieldTable<Middle>;
+  const Table table("middle", {Table::Number("span_m", &Middle::span_m, {}, "m", "").Note("> 0 and < 3")});
+  EXPECT_EQ(table.Reference()[0].allowed, "> 0 and < 3");
+}
+
 struct Checks {
   std::optional<double> max_slip_mm;
   std::optional<bool> not_dropped;

@@ -56,12 +56,18 @@ TEST(ConfigReferenceTest, DocsCarryEveryFieldTableAsItIs) {
 }
 
 // A section's defaults are its parent's (the gauge's resistors span 0 .. 0.75 mm and -0.75 .. 0 mm),
-// not those of a default-constructed section (0 .. 0), and the span rule the loader applies is named.
+// not those of a default-constructed section (0 .. 0), and the span rule the loader applies is
+// stated with its range, as `graspbed config-reference fea` prints it.
 TEST(ConfigReferenceTest, ASectionsDefaultsAreItsParentsAndItsRulesAreNamed) {
-  const std::string fea = ConfigReferenceMarkdown("fea");
-  EXPECT_THAT(fea, HasSubstr("| `gauge.r1.end_mm` | mm | 0.75 |"));
-  EXPECT_THAT(fea, HasSubstr("| `gauge.r2.start_mm` | mm | -0.75 |"));
-  EXPECT_THAT(fea, HasSubstr("within the free span under the beam"));
+  if (test_support::CliBinary().empty()) GTEST_FAIL() << "GRASPBED_BINARY not set (run through ctest)";
+  const test_support::CliResult fea = test_support::RunCli("config-reference fea");
+  ASSERT_EQ(fea.exit_code, 0) << fea.err;
+  const std::string span = "within the free span under the beam, -1 .. 1 at the default geometry";
+  EXPECT_THAT(fea.out, HasSubstr("| `gauge.r1.start_mm` | mm | 0 | " + span + " |"));
+  EXPECT_THAT(fea.out, HasSubstr("| `gauge.r1.end_mm` | mm | 0.75 | > `start_mm`, " + span + " |"));
+  EXPECT_THAT(fea.out, HasSubstr("| `gauge.r2.start_mm` | mm | -0.75 | " + span + " |"));
+  EXPECT_THAT(fea.out, HasSubstr("| `gauge.r2.end_mm` | mm | 0 | > `start_mm`, " + span + " |"));
+  EXPECT_EQ(fea.out, ConfigReferenceMarkdown("fea"));
 }
 
 TEST(ConfigReferenceTest, EveryRowHasADefaultAndARule) {
