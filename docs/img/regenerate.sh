@@ -7,6 +7,7 @@
 #   docs/img/objects/     each object of the library in the grasp it gets (docs/scenarios.md)
 #   docs/img/layout/      the labelled layouts (graspbed sensor layout --picture; docs/sensor.md)
 #   docs/img/default_video_strip.png   6 frames of `graspbed run --video` of the default scenario
+#   docs/img/getting-started/  the seven plots of the default run (docs/getting-started.md)
 #   docs/img/captions.md  for each still: the tick, phase, grip, squeeze, height and loaded units, read
 #                         from the signals.csv of a run with the same scenario and overrides
 # Needs a build (build/graspbed, or $GRASPBED), python3 and ffmpeg; no display. Takes a few minutes.
@@ -94,6 +95,10 @@ done
 
 "$graspbed" run scenarios/default.yaml --no-plots --out "$runs/video" --video > /dev/null
 cp "$runs/video/video_strip.png" docs/img/default_video_strip.png
+rm -rf docs/img/getting-started
+mkdir -p docs/img/getting-started
+"$graspbed" run scenarios/default.yaml --out "$runs/plots" > /dev/null
+cp "$runs"/plots/*.png docs/img/getting-started/
 
 {
   echo "# Caption figures (generated)"
@@ -108,4 +113,4 @@ cp "$runs/video/video_strip.png" docs/img/default_video_strip.png
   echo "|---|---|---|---|---|---|---|---|"
   cat "$captions"
 } > docs/img/captions.md
-echo "regenerate: $(wc -l < "$captions") stills, 2 layouts, the video strip and docs/img/captions.md written"
+echo "regenerate: $(wc -l < "$captions") stills, 2 layouts, the video strip, the default run's plots and docs/img/captions.md written"
