@@ -378,10 +378,8 @@ void PrintObjectScenarioSpeeds() {
       cpus.push_back(common::ThreadCpuSeconds() - cpu_start);
       walls.push_back(WallSeconds(start));
     }
-    std::sort(walls.begin(), walls.end());
-    std::sort(cpus.begin(), cpus.end());
     std::printf("  %-18s %-12s %9.2f %12.1f %12.1f\n", config.name.c_str(), config.scene.object.name.c_str(),
-                config.duration_s, config.duration_s / walls[kRounds / 2], config.duration_s / cpus[kRounds / 2]);
+                config.duration_s, config.duration_s / Median(walls), config.duration_s / Median(cpus));
   }
 }
 
