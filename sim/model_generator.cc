@@ -414,7 +414,7 @@ void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<st
     return "\" friction=\"" + w.Num(slide) + " " + w.Num(slide) + " " + w.Num(spin) + " " + roll + " " +
            roll + "\"";
   };
-  const std::string with_object = " condim=\"" + std::to_string(scene.physics.condim) +
+  const std::string with_object = " condim=\"" + std::to_string(object.ContactCondim(scene.physics.condim)) +
                                   friction(object.friction, object.torsional_friction) + compliance;
   const std::string table_hand =
       " condim=\"3" + friction(scene.hand.friction, kHandSpinFriction) + compliance;
@@ -627,8 +627,10 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   // once were 21 contacts, 65 constraint rows and 1.7k stack doubles (mjData.maxuse_*). MuJoCo 2.x
   // allocates and clears njmax^2 doubles for the solver when a run starts: njmax 1000 and nstack 1e6
   // cost 2.9 ms of the 4.8 ms a Simulation took to build (bench/sim_bench BM_BuildSimulation). A
-  // scene that outgrows them gets MuJoCo's buffer-full warning, which ends the run as a fault.
-  o << "  <size nconmax=\"100\" njmax=\"300\" nstack=\"100000\"/>\n";
+  // scene that outgrows them gets MuJoCo's buffer-full warning, which ends the run as a fault. A
+  // contact takes condim rows: a soft object at condim 6, deep in the pad, takes over 300 of them.
+  const int condim = scene.object.ContactCondim(physics.condim);
+  o << "  <size nconmax=\"100\" njmax=\"" << 100 * condim << "\" nstack=\"100000\"/>\n";
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
   const std::string hand_friction =
@@ -728,7 +730,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
           o << "type=\"mesh\" mesh=\"object_mesh_" << k << "\"";
           break;
       }
-      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim << "\" friction=\""
+      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << object.ContactCondim(physics.condim) << "\" friction=\""
         << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " " << w.Num(kRollingFriction)
         << "\"";
       if (part.collides) {
@@ -754,7 +756,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     default:
       break;
   }
-  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << physics.condim
+  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << object.ContactCondim(physics.condim)
     << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " "
     << w.Num(kRollingFriction) << "\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   }

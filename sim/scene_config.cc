@@ -142,7 +142,11 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
                         "Coulomb coefficient of every contact with the object"),
           Table::Number("torsional_friction", &C::torsional_friction,
                         NumberRule::Between(0.0, kMaxTorsionalFrictionM), "m",
-                        "only with `physics.condim` >= 4"),
+                        "only with `physics.condim` or `condim` >= 4"),
+          Table::Integer("condim", &C::condim, 0, 6, "",
+                         "contact dimensionality of this object's contacts; 0 = `physics.condim`; 6 adds "
+                         "rolling friction (0.1 mm), which a soft object the pad sinks into needs")
+              .Note("0, 3, 4 or 6"),
           Table::Number("solref_timeconst_s", &C::solref_timeconst_s, {0.0, kMaxSolrefTimeconstS, true}, "s",
                         "contact compliance (MuJoCo solref); larger = softer (e.g. a compliant cup: 0.006)")
               .Note(">= 2 x `physics.timestep_s`"),
@@ -175,6 +179,8 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
                                 "`solimp` from it and the mass (docs/scenarios.md, \"Object compliance\")"),
       },
       [](const C& o) {
+        if (o.condim != 0 && o.condim != 3 && o.condim != 4 && o.condim != 6)
+          Bad("condim", o.condim, "must be 0 (physics.condim), 3, 4 or 6");
         const auto require_size = [&o](int i) {
           RequireIn("size_m[" + std::to_string(i) + "]", o.size_m[i], kMinObjectSizeM, kMaxObjectSizeM);
         };

@@ -100,6 +100,10 @@ struct ObjectConfig {
   /// priority, so its friction and compliance govern its contacts with the fingers and the table).
   double friction = 0.8;
   double torsional_friction = 0.0;  ///< MuJoCo torsional friction [m] (only with condim >= 4)
+  /// Contact dimensionality of this object's contacts (3, 4 or 6); 0 = physics.condim. A soft object
+  /// the pad sinks into takes 6: its rolling friction stands for the wide patch that keeps it from
+  /// rolling about the point contacts (docs/scenarios.md, "Object compliance").
+  int condim = 0;
   /// Contact compliance (MuJoCo solref, standard form): time constant [s] and damping ratio [-].
   /// The time constant must be >= 2 x timestep. Smaller = stiffer object.
   double solref_timeconst_s = 0.002;
@@ -115,6 +119,8 @@ struct ObjectConfig {
 
   /// Height of the object's centre above its lowest point when standing upright [m].
   double RestHalfHeightM() const;
+  /// The contact dimensionality the object's contacts get: condim, or `physics_condim` when 0.
+  int ContactCondim(int physics_condim) const { return condim != 0 ? condim : physics_condim; }
 };
 
 /// Which hand the scene carries.

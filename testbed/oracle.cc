@@ -65,6 +65,9 @@ OracleStep RunStep(const ScenarioConfig& config, double setpoint_n, const std::a
   return step;
 }
 
+/// Lightest setpoint the search halves down to when nothing above the first guess holds [N].
+constexpr double kLowestSetpointN = 0.1;
+
 /// Bisection between a setpoint that does not hold and one that does.
 OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) {
   OracleSearch search;
@@ -89,11 +92,36 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
     if (high_n >= search.stall_pinch_n) break;
     high_n = std::min(2.0 * high_n, search.stall_pinch_n);
   }
+  // Nothing from the first guess up held. An object a firmer squeeze pushes out of the pinch (a
+  // soft one the pads sink into) may still be held lighter: halve down from the first guess, and
+  // once one holds keep halving to the lightest that still does, so the bisection below brackets it.
+  if (!best && !stopped()) {
+    const OracleStep at_stall = search.steps.back();
+    low_n = 0.0;
+    for (double setpoint_n = 0.5 * options.first_guess_n; setpoint_n >= kLowestSetpointN && !stopped();
+         setpoint_n *= 0.5) {
+      const OracleStep step = run(setpoint_n);
+      if (step.held) {
+        best = step;
+        high_n = setpoint_n;
+      } else if (best) {
+        low_n = setpoint_n;
+        break;
+      }
+    }
+    if (!best) {
+      search.completed = !stopped();
+      search.grip.reason = !search.completed ? "interrupted"
+                                             : "not held at the motor's stall pinch of " +
+                                                   Number(search.stall_pinch_n) + " N (" + at_stall.outcome +
+                                                   ") nor at any grip halved down to " +
+                                                   Number(kLowestSetpointN) + " N";
+      return search;
+    }
+  }
   if (!best) {
-    search.completed = !stopped();
-    search.grip.reason = !search.completed ? "interrupted"
-                                           : "not held at the motor's stall pinch of " +
-                                                 Number(search.stall_pinch_n) + " N: " + search.steps.back().outcome;
+    search.completed = false;
+    search.grip.reason = "interrupted";
     return search;
   }
   while (!stopped() &&
@@ -222,7 +250,7 @@ OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& o
     throw std::invalid_argument("oracle: first_guess_n must be > 0 and one resolution > 0");
   }
   // The hash covers everything the search runs (the step config at a placeholder setpoint) and how.
-  const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle graspbed " +
+  const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle search 2 graspbed " +
                                GRASPBED_VERSION + " " +
                                Number(options.relative_resolution, "%.17g") + " " +
                                Number(options.absolute_resolution_n, "%.17g") + " " +

@@ -34,7 +34,7 @@ namespace graspbed::testbed {
 struct OracleOptions {
   double relative_resolution = 0.02;  ///< stop when the bracket is narrower than this x its top [-]
   double absolute_resolution_n = 0.02;  ///< ... or narrower than this [N]
-  double first_guess_n = 2.0;          ///< first setpoint tried; doubled until one holds [N]
+  double first_guess_n = 2.0;          ///< first setpoint tried; doubled until one holds, else halved [N]
   const std::atomic<bool>* stop = nullptr;  ///< set: the search ends early (result incomplete)
 };
 

@@ -49,6 +49,8 @@ TEST(SceneConfigTest, BadValuesNameFileLineKeyAndValue) {
   EXPECT_NE(timeconst.find("timestep"), std::string::npos) << timeconst;
   const std::string condim = ErrorOf("physics:\n  condim: 5\n");
   EXPECT_NE(condim.find("physics.condim = 5"), std::string::npos) << condim;
+  const std::string object_condim = ErrorOf("object:\n  condim: 5\n");
+  EXPECT_NE(object_condim.find("object.condim = 5"), std::string::npos) << object_condim;
 }
 
 // Cross-field rules are the scene's field table's: loading places them at the blamed key's line

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -123,8 +124,38 @@ TEST(OracleTest, AnObjectTheStallPinchCannotHoldHasNoOracleAndSaysWhy) {
   EXPECT_FALSE(search.setpoint_n.has_value());
   EXPECT_NE(search.grip.reason.find("not held at the motor's stall pinch of 20 N"), std::string::npos)
       << search.grip.reason;
-  ASSERT_FALSE(search.steps.empty());
-  EXPECT_DOUBLE_EQ(search.steps.back().setpoint_n, 20.0);
+  EXPECT_NE(search.grip.reason.find("nor at any grip halved down to 0.1 N"), std::string::npos) << search.grip.reason;
+  // Doubled from the first guess to the stall pinch, then halved from it down to the lowest setpoint:
+  // 2, 4, 8, 16, 20, then 1, 0.5, 0.25, 0.125 N, none held.
+  std::vector<double> setpoints;
+  for (const OracleStep& step : search.steps) {
+    EXPECT_FALSE(step.held) << step.setpoint_n << " N";
+    setpoints.push_back(step.setpoint_n);
+  }
+  EXPECT_EQ(setpoints, (std::vector<double>{2.0, 4.0, 8.0, 16.0, 20.0, 1.0, 0.5, 0.25, 0.125}));
+}
+
+TEST(OracleTest, AnObjectAFirmSqueezePushesOutHasTheLightestGripThatHoldsItAsItsOracle) {
+  // The 28 g foam brick (500 N/m, mu 1): from 2 N up the pads sink so deep that it slides and is
+  // squeezed out; a fraction of a newton holds it. Its weight needs m g / (2 mu) = 0.14 N.
+  const ScenarioConfig config = LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/hold_foam_brick.yaml");
+  const OracleSearch search = FindOracleGrip(config);
+  ASSERT_TRUE(search.grip.grip_n.has_value()) << search.grip.reason;
+  std::printf("[ measure ] hold_foam_brick: oracle grip %.3f N (setpoint %.3f N) in %zu runs\n", *search.grip.grip_n,
+              *search.setpoint_n, search.steps.size());
+  const double load_bound_n = 0.028 * 9.81 / 2.0;
+  EXPECT_GT(*search.grip.grip_n, load_bound_n);
+  EXPECT_LT(*search.grip.grip_n, 1.0);
+  bool first_guess_failed = false;
+  double failed_below_n = 0.0;
+  for (const OracleStep& step : search.steps) {
+    if (step.setpoint_n == 2.0) first_guess_failed = !step.held;
+    if (!step.held && step.setpoint_n < *search.setpoint_n) failed_below_n = std::max(failed_below_n, step.setpoint_n);
+  }
+  EXPECT_TRUE(first_guess_failed);
+  // Bracketed from below within the resolution, as a search upwards would be.
+  EXPECT_GT(failed_below_n, 0.0);
+  EXPECT_LE(*search.setpoint_n - failed_below_n, std::max(0.02, kResolution * 2.0 * *search.setpoint_n));
 }
 
 TEST(OracleTest, UntilTheFirstDisturbanceCutsTheScriptAndTheDuration) {
