@@ -500,13 +500,18 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     }
     // The pinch centre of the hand frame (x = 0) over the object; each digit's contact angle for
     // this width, and the height at which their contacts meet the object.
+    // With pinch_square_pad the pad's nominal posture fixes its face and the object's centre lies
+    // half its width beyond it; otherwise the centre is the hand's (x = 0).
     const double half_width = 0.5 * place.object_width_m;
-    place.contact_joint = {kin.McpForPadX(-half_width), kin.ThumbForTipX(half_width)};
-    place.preshape_joint = {kin.McpForPadX(-0.5 * place.open_gap_m),
-                            kin.ThumbForTipX(0.5 * place.open_gap_m)};
+    const double centre_x =
+        hand.pinch_square_pad ? kin.IndexPad(kin.SquarePadMcpRad()).point_xz.x() + half_width : 0.0;
+    const double half_gap = 0.5 * place.open_gap_m;
+    place.contact_joint = {kin.McpForPadX(centre_x - half_width), kin.ThumbForTipX(centre_x + half_width)};
+    place.preshape_joint = {kin.McpForPadX(centre_x - half_gap), kin.ThumbForTipX(centre_x + half_gap)};
     const double contact_z = 0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() +
                                     kin.ThumbTip(place.contact_joint[1]).point_xz.y());
-    wrist = {object.initial_position_m[0], object.initial_position_m[1], PinchHeightM(object) - contact_z};
+    wrist = {object.initial_position_m[0] - centre_x, object.initial_position_m[1],
+             PinchHeightM(object) - contact_z};
     // Motors sized so that at stall each digit presses stall_pinch_force_n on the object in this
     // grasp's contact posture: torque = force x lever arm there.
     place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),

@@ -80,7 +80,8 @@ double SceneConfig::ObjectWidthM() const {
 
 GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand) {
   if (hand.model != HandModel::kProsthetic) return GraspType::kPinch;
-  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle)
+  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle &&
+      object.shape != ObjectShape::kMug)
     return GraspType::kPinch;
   const double diameter = object.size_m[0];
   const double height = object.size_m[2];
@@ -347,11 +348,11 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
           Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}, {GraspType::kWrap, "wrap"}},
                         "the grasp the pre-shape prepares. `pinch`: index fingertip pad against the thumb "
                         "tip, near the object's top (a box or cylinder 13 mm below its top, a sphere at its "
-                        "equator). `wrap` (prosthetic hand, upright cylinder or a bottle's body): the palm "
+                        "equator). `wrap` (prosthetic hand, upright cylinder, a bottle's or a mug's body): the palm "
                         "faces the cylinder from the side at its mid-height, the index curls round it until "
                         "its pad presses it against the palm, the thumb closes round its other side "
                         "(docs/simulation.md, \"The wrap\"). Unset with a library object (`object: {name: "
-                        "...}`): chosen from its shape and size, wrap for a can or a bottle 40 to 90 mm "
+                        "...}`): chosen from its shape and size, wrap for a can, a bottle or a mug 40 to 90 mm "
                         "across, pinch for the rest (`graspbed objects` lists each one's)"),
           Table::Number("open_gap_m", &C::open_gap_m, NumberRule::Between(kMinOpenGapM, kMaxOpenGapM), "m",
                         "pre-shape aperture between the pad's mesa tops and the thumb's contact point. "
@@ -361,6 +362,10 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
                         "than the prosthetic hand opens (186.84 mm) is refused")
               .NanIsAuto()
               .Note("wider than the object across the pinch"),
+          Table::Bool("pinch_square_pad", &C::pinch_square_pad,
+                      "pinch: the pad meets the object square (its posture in the nominal 50 mm pinch) and "
+                      "the thumb closes the rest of the way; false: both digits meet it equally far from "
+                      "the hand's centre, the pad tilted for any other width"),
           Table::Number("preshape_clearance_m", &C::preshape_clearance_m, NumberRule::Between(0.0, 0.05), "m",
                         "clearance on each side of the object in the automatic pre-shape"),
           Table::Number("palm_mass_kg", &C::palm_mass_kg, NumberRule::Between(kMinPalmMassKg, kMaxPalmMassKg),
@@ -443,9 +448,10 @@ const common::FieldTable<SceneConfig>& SceneConfigFields() {
           };
           if (scene.hand.model != HandModel::kProsthetic)
             refuse("hand.grasp", "wrap", "needs hand.model prosthetic (the jaw fixture only pinches)");
-          if (scene.object.shape != ObjectShape::kCylinder && scene.object.shape != ObjectShape::kBottle)
+          if (scene.object.shape != ObjectShape::kCylinder && scene.object.shape != ObjectShape::kBottle &&
+              scene.object.shape != ObjectShape::kMug)
             refuse("hand.grasp", "wrap",
-                   std::string("needs an upright cylinder or a bottle (by its body), not object.shape ") +
+                   std::string("needs an upright cylinder, a bottle or a mug (by its body), not object.shape ") +
                        ToString(scene.object.shape));
           if (!std::isnan(scene.hand.open_gap_m))
             Bad("hand.open_gap_m", scene.hand.open_gap_m,

@@ -222,6 +222,11 @@ struct HandConfig {
   double open_gap_m = std::numeric_limits<double>::quiet_NaN();
   /// Clearance on each side of the object in the automatic pre-shape [m]; in a wrap, of every link.
   double preshape_clearance_m = 0.0075;
+  /// Pinch: the index's pad meets the object square (the nominal pinch's posture) and the thumb
+  /// closes the rest of the way, so an object narrower or wider than the nominal 50 mm sits off the
+  /// hand's centre; false: both digits meet it at the same distance from the centre, the pad tilted
+  /// (17 deg for an 18 mm marker, which then tips against it).
+  bool pinch_square_pad = false;
   /// Mass of the palm (with the wrist carriage) [kg], of each digit [kg].
   double palm_mass_kg = 0.3;
   double digit_mass_kg = 0.03;
@@ -245,11 +250,11 @@ struct HandConfig {
 };
 
 /// The grasp a library object (`object: {name: ...}`) gets when the scenario does not name one
-/// (no hand.grasp, no hand.open_gap_m): `wrap` for the prosthetic hand and an upright cylinder or
-/// bottle whose body is kMinDefaultWrapDiameterM .. kMaxDefaultWrapDiameterM across and at least as
-/// tall as it is wide (a can, a bottle by its body); `pinch` for everything else: the small and
-/// thin (a marker, a card, an egg), the round (balls, fruit), the shapes the wrap does not take (a
-/// mug, a cup, a glass, a banana, a box, a mesh) and every grasp of the jaw fixture.
+/// (no hand.grasp, no hand.open_gap_m): `wrap` for the prosthetic hand and an upright cylinder, a
+/// bottle or a mug whose body is kMinDefaultWrapDiameterM .. kMaxDefaultWrapDiameterM across and at
+/// least as tall as it is wide (a can, a bottle or a mug by its body); `pinch` for everything else:
+/// the small and thin (a marker, a card, an egg), the round (balls, fruit), the shapes the wrap does
+/// not take (a cup, a glass, a banana, a box, a mesh) and every grasp of the jaw fixture.
 /// Docs: docs/scenarios.md, "Object library".
 GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand);
 

@@ -44,15 +44,12 @@ const std::map<std::string, std::string> kNotYetPassed = {
      "max_slip_mm: the wrapped 349 g can (mu 0.5) slides 4.5 mm at lift-off: the grip target stays at "
      "its 1.5 N contact level until slip is flagged at 0.88 s, then reaches its 10 N ceiling; pinched "
      "(hand.grasp: pinch) it slides 1.1 mm and passes"},
-    {"lift_mug",
-     "max_peak_grip_n: the handle's torque about the pinch axis shears the pad without slip (0.0005 mm), "
-     "slip is flagged falsely (85/min) and the grip rises to the 10 N target ceiling, 15.8 N peak on "
-     "the 118 g mug"},
     {"pick_marker",
-     "max_slip_mm: 3.8 mm of slip while the hand closes, before any load: the 15.8 g marker is pushed "
-     "from the index's side from 0.237 s, 16 ms before the thumb touches it and 24 ms before a unit "
-     "senses it, and ends 13.6 mm towards the thumb (open_loop at 0.3 effort: 3.3 mm); the hand's "
-     "acquisition, not the hold; held and lifted after"},
+     "max_peak_grip_n: held with 0.62 mm of slip, but squeezed to 11.9 N against the light marker's "
+     "10 N (its oracle 0.42 N): micro-slips in the lift (flagged by the vibration cue, not false) each "
+     "raise the grip, and half the squeeze lands off the units (5.8 N sensed of 11.6 N); pinched "
+     "centred instead of square (hand.pinch_square_pad: false) the pad meets it tilted 17 degrees and "
+     "tips it, 3.8 mm of slip under every controller"},
     {"pour_bottle",
      "max_slip_mm: the wrapped full bottle (470 g, mu 0.45) slides 3.7 mm, from the close (0.8 mm) "
      "through the lift (to 3.7 mm at 1.6 s), before the pour; nothing more while 300 g pours out"},

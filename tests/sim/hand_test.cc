@@ -146,6 +146,34 @@ TEST_F(HandTest, TheGeneratedModelStandsInThePreShapeTheKinematicsComputed) {
   EXPECT_NEAR(place.open_gap_m, 0.04 + 2.0 * scene.hand.preshape_clearance_m, 1e-12) << "follows the object";
 }
 
+// hand.pinch_square_pad: the pad stays in the nominal pinch's square posture and the thumb closes the
+// rest of the way, the object placed half its width beyond the pad. The marker (18 mm) then meets a
+// vertical pad instead of one tilted 17 degrees, against which it tips (pick_marker).
+TEST_F(HandTest, ASquarePadPinchMeetsANarrowObjectWithThePadUprightAndTheObjectOffCentre) {
+  SceneConfig scene;
+  scene.object.shape = ObjectShape::kCylinder;
+  scene.object.size_m = {0.018, 0.018, 0.121};
+  const ProstheticKinematics kin = DefaultKinematics(scene);
+  const HandPlacement centred = PlaceHand(DefaultLayout(), scene);
+  EXPECT_GT(kin.IndexPad(centred.contact_joint[0]).normal_angle_rad, 0.25) << "centred: the pad tilts ~17 deg";
+  scene.hand.pinch_square_pad = true;
+  const HandPlacement square = PlaceHand(DefaultLayout(), scene);
+  const DigitContact pad = kin.IndexPad(square.contact_joint[0]);
+  EXPECT_NEAR(pad.normal_angle_rad, 0.0, 1e-6) << "square: the pad upright";
+  // The thumb's tip meets the object's far face, 18 mm beyond the pad; the wrist is moved so that
+  // the object stays where the scene put it (x = 0): its centre is at H x = pad + 9 mm.
+  EXPECT_NEAR(kin.ThumbTip(square.contact_joint[1]).point_xz.x() - pad.point_xz.x(), 0.018, 1e-6);
+  EXPECT_NEAR(square.wrist_position_m[0], -(pad.point_xz.x() + 0.009), 1e-9);
+  // At the nominal width both placements are the same pinch.
+  scene.object.size_m = {ProstheticKinematics::kNominalWidthM, 0.05, 0.08};
+  scene.object.shape = ObjectShape::kBox;
+  const HandPlacement nominal_square = PlaceHand(DefaultLayout(), scene);
+  scene.hand.pinch_square_pad = false;
+  const HandPlacement nominal_centred = PlaceHand(DefaultLayout(), scene);
+  EXPECT_NEAR(nominal_square.contact_joint[0], nominal_centred.contact_joint[0], 1e-9);
+  EXPECT_NEAR(nominal_square.wrist_position_m[0], nominal_centred.wrist_position_m[0], 1e-9);
+}
+
 TEST_F(HandTest, ATenNewtonPinchOfEachShippedShapeIsSensedByTheMesas) {
   const std::array<std::pair<ObjectShape, std::array<double, 3>>, 3> objects = {{
       {ObjectShape::kBox, {0.05, 0.05, 0.08}},

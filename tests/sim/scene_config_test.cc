@@ -67,7 +67,7 @@ TEST(SceneConfigTest, CrossFieldRulesNameTheLineOfTheKeyTheyBlame) {
       0u);
   // A wrap is built for the prosthetic hand around an upright cylinder, and opens by its clearance.
   EXPECT_EQ(ErrorOf("hand:\n  grasp: wrap\n"),
-            "scene.yaml:2: hand.grasp = wrap: needs an upright cylinder or a bottle (by its body), not "
+            "scene.yaml:2: hand.grasp = wrap: needs an upright cylinder, a bottle or a mug (by its body), not "
             "object.shape box");
   EXPECT_EQ(ErrorOf("object:\n  shape: cylinder\nhand:\n  model: jaw\n  grasp: wrap\n"),
             "scene.yaml:5: hand.grasp = wrap: needs hand.model prosthetic (the jaw fixture only pinches)");

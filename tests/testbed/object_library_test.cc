@@ -3,7 +3,8 @@
 // gravity torque a hand computation gives; the compliance mapping holds; a user's mesh loads and a
 // broken one is refused by name; each object gets the grasp its size and shape call for; an egg
 // squeezed past its crush force is reported crushed; a soft object loads more units than a rigid one
-// of the same size, and the foam brick's condim 6 keeps it from rolling about the point contacts.
+// of the same size, the foam brick's condim 6 keeps it from rolling about the point contacts, and
+// the marker tips against a tilted pad, not against an upright one.
 #include <mujoco/mujoco.h>
 
 #include <gmock/gmock.h>
@@ -276,13 +277,13 @@ TEST(ObjectMeshModelTest, ABrokenOrMissingFileIsRefusedByName) {
 // The egg between the prosthetic hand's digits, squeezed by the open-loop controller with motors
 // strong enough to pass its 30 N crush force.
 // The grasp a scenario gets when it names a library object and no grasp: the prosthetic hand wraps
-// the can and the bottles by their 65-66 mm bodies and pinches everything else (the marker and the
-// card are small and thin, the balls and fruit round, the mug, cup, glass and banana shapes the wrap
-// does not take). Each default builds a hand that meets the object (PlaceHand does not refuse it).
+// the can, the bottles and the mug by their 65-80 mm bodies and pinches everything else (the marker
+// and the card are small and thin, the balls and fruit round, the cup, glass and banana shapes the
+// wrap does not take). Each default builds a hand that meets the object (PlaceHand does not refuse it).
 TEST(ObjectGraspTest, EachLibraryObjectGetsTheGraspItsSizeAndShapeCallFor) {
   const std::map<std::string, sim::GraspType> expected = {
       {"can", sim::GraspType::kWrap},           {"bottle", sim::GraspType::kWrap},
-      {"bottle_half", sim::GraspType::kWrap},   {"mug", sim::GraspType::kPinch},
+      {"bottle_half", sim::GraspType::kWrap},   {"mug", sim::GraspType::kWrap},
       {"marker", sim::GraspType::kPinch},       {"card", sim::GraspType::kPinch},
       {"banana", sim::GraspType::kPinch},       {"tennis_ball", sim::GraspType::kPinch},
       {"apple", sim::GraspType::kPinch},        {"egg", sim::GraspType::kPinch},
@@ -471,6 +472,33 @@ TEST(ObjectScenarioTest, TheFoamBricksCondimSixKeepsItFromRollingAboutThePointCo
   EXPECT_FALSE(patch.result.metrics.physics_fault);
   EXPECT_LT(patch.result.metrics.max_slip_mm, 0.5);   // micro-slip at most
   EXPECT_GT(point.result.metrics.max_slip_mm, 3.0);   // the scenario's own limit
+}
+
+// The marker (18 mm, 15.8 g, standing) pinched at a constant 1 N and lifted: met by a pad tilted 17
+// degrees (the centred pinch) it tips against the pad as the hand closes and slides mm; met by the
+// upright pad (hand.pinch_square_pad, as pick_marker has it) it does not.
+std::string MarkerScenario(bool square_pad) {
+  return std::string("duration_s: 1.6\n"
+                     "object: {name: marker}\n"
+                     "hand: {pinch_square_pad: ") +
+         (square_pad ? "true" : "false") +
+         "}\n"
+         "sensor: {profile: ideal}\n"
+         "controller: {name: constant_grip, params: {grip_n: 1.0}}\n"
+         "script:\n"
+         "  - {at_s: 0.15, action: close}\n"
+         "  - {at_s: 0.8, action: lift, height_m: 0.06, duration_s: 0.8}\n";
+}
+
+TEST(ObjectScenarioTest, TheMarkerTipsAgainstATiltedPadAndNotAgainstAnUprightOne) {
+  test_support::TempDir dir;
+  const auto tilted = testbed::test_support::RunScenarioText(dir, "centred", MarkerScenario(false));
+  const auto upright = testbed::test_support::RunScenarioText(dir, "square", MarkerScenario(true));
+  std::printf("[ measure ] marker at 1 N: slip %.2f mm centred (pad tilted), %.2f mm square pad\n",
+              tilted.result.metrics.max_slip_mm, upright.result.metrics.max_slip_mm);
+  EXPECT_FALSE(upright.result.metrics.dropped);
+  EXPECT_LT(upright.result.metrics.max_slip_mm, 1.0);
+  EXPECT_GT(tilted.result.metrics.max_slip_mm, 2.0);  // pick_marker's limit
 }
 
 }  // namespace
