@@ -498,10 +498,9 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
               << " mm is wider than the prosthetic hand opens (" << max_aperture * 1e3 << " mm)";
       throw std::invalid_argument(message.str());
     }
-    // The pinch centre of the hand frame (x = 0) over the object; each digit's contact angle for
-    // this width, and the height at which their contacts meet the object.
-    // With pinch_square_pad the pad's nominal posture fixes its face and the object's centre lies
-    // half its width beyond it; otherwise the centre is the hand's (x = 0).
+    // The object's centre at H x = centre_x: the hand's pinch centre (x = 0), or with
+    // pinch_square_pad half its width beyond the pad in its nominal square posture. Each digit's
+    // contact angle for this width, and the height at which their contacts meet the object.
     const double half_width = 0.5 * place.object_width_m;
     const double centre_x =
         hand.pinch_square_pad ? kin.IndexPad(kin.SquarePadMcpRad()).point_xz.x() + half_width : 0.0;
@@ -634,8 +633,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   // cost 2.9 ms of the 4.8 ms a Simulation took to build (bench/sim_bench BM_BuildSimulation). A
   // scene that outgrows them gets MuJoCo's buffer-full warning, which ends the run as a fault. A
   // contact takes condim rows: a soft object at condim 6, deep in the pad, takes over 300 of them.
-  const int condim = scene.object.ContactCondim(physics.condim);
-  o << "  <size nconmax=\"100\" njmax=\"" << 100 * condim << "\" nstack=\"100000\"/>\n";
+  const int object_condim = object.ContactCondim(physics.condim);
+  o << "  <size nconmax=\"100\" njmax=\"" << 100 * object_condim << "\" nstack=\"100000\"/>\n";
   o << "  <visual><map znear=\"0.001\"/><global offwidth=\"1280\" offheight=\"960\"/></visual>\n";
   o << "  <default>\n";
   const std::string hand_friction =
@@ -735,7 +734,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
           o << "type=\"mesh\" mesh=\"object_mesh_" << k << "\"";
           break;
       }
-      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << object.ContactCondim(physics.condim) << "\" friction=\""
+      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << object_condim << "\" friction=\""
         << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " " << w.Num(kRollingFriction)
         << "\"";
       if (part.collides) {
@@ -761,7 +760,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
     default:
       break;
   }
-  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << object.ContactCondim(physics.condim)
+  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << object_condim
     << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " "
     << w.Num(kRollingFriction) << "\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
   }

@@ -78,11 +78,17 @@ double SceneConfig::ObjectWidthM() const {
          std::abs(std::sin(object.initial_yaw_rad)) * object.size_m[1];
 }
 
+namespace {
+
+/// Whether the wrap takes an object of this shape (by its upright cylindrical body).
+bool WrapTakesShape(ObjectShape shape) {
+  return shape == ObjectShape::kCylinder || shape == ObjectShape::kBottle || shape == ObjectShape::kMug;
+}
+
+}  // namespace
+
 GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand) {
-  if (hand.model != HandModel::kProsthetic) return GraspType::kPinch;
-  if (object.shape != ObjectShape::kCylinder && object.shape != ObjectShape::kBottle &&
-      object.shape != ObjectShape::kMug)
-    return GraspType::kPinch;
+  if (hand.model != HandModel::kProsthetic || !WrapTakesShape(object.shape)) return GraspType::kPinch;
   const double diameter = object.size_m[0];
   const double height = object.size_m[2];
   const bool wrappable =
@@ -448,8 +454,7 @@ const common::FieldTable<SceneConfig>& SceneConfigFields() {
           };
           if (scene.hand.model != HandModel::kProsthetic)
             refuse("hand.grasp", "wrap", "needs hand.model prosthetic (the jaw fixture only pinches)");
-          if (scene.object.shape != ObjectShape::kCylinder && scene.object.shape != ObjectShape::kBottle &&
-              scene.object.shape != ObjectShape::kMug)
+          if (!WrapTakesShape(scene.object.shape))
             refuse("hand.grasp", "wrap",
                    std::string("needs an upright cylinder, a bottle or a mug (by its body), not object.shape ") +
                        ToString(scene.object.shape));

@@ -92,11 +92,11 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
     if (high_n >= search.stall_pinch_n) break;
     high_n = std::min(2.0 * high_n, search.stall_pinch_n);
   }
+  const std::string stall_outcome = search.steps.back().outcome;
   // Nothing from the first guess up held. An object a firmer squeeze pushes out of the pinch (a
   // soft one the pads sink into) may still be held lighter: halve down from the first guess, and
   // once one holds keep halving to the lightest that still does, so the bisection below brackets it.
   if (!best && !stopped()) {
-    const OracleStep at_stall = search.steps.back();
     low_n = 0.0;
     for (double setpoint_n = 0.5 * options.first_guess_n; setpoint_n >= kLowestSetpointN && !stopped();
          setpoint_n *= 0.5) {
@@ -109,19 +109,14 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
         break;
       }
     }
-    if (!best) {
-      search.completed = !stopped();
-      search.grip.reason = !search.completed ? "interrupted"
-                                             : "not held at the motor's stall pinch of " +
-                                                   Number(search.stall_pinch_n) + " N (" + at_stall.outcome +
-                                                   ") nor at any grip halved down to " +
-                                                   Number(kLowestSetpointN) + " N";
-      return search;
-    }
   }
   if (!best) {
-    search.completed = false;
-    search.grip.reason = "interrupted";
+    search.completed = !stopped();
+    search.grip.reason = !search.completed ? "interrupted"
+                                           : "not held at the motor's stall pinch of " +
+                                                 Number(search.stall_pinch_n) + " N (" + stall_outcome +
+                                                 ") nor at any grip halved down to " +
+                                                 Number(kLowestSetpointN) + " N";
     return search;
   }
   while (!stopped() &&
