@@ -279,7 +279,7 @@ class BenchRun : public RunBackend {
     bench["prompts"] = prompt_list;
     // Every expectation of the scenario needs the ground truth (the object's motion, the squeeze, true
     // loads, true slip): listed, not scored.
-    for (ExpectationOutcome& outcome : EvaluateExpectations(config_.expectations, Metrics{})) {
+    for (ExpectationOutcome& outcome : EvaluateExpectations(config_.expectations, Metrics{}, config_.metrics)) {
       if (outcome.name == "no_physics_fault") continue;
       outcome.passed = true;
       outcome.value = std::nullopt;

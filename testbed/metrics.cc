@@ -21,6 +21,33 @@ ExpectationOutcome Outcome(const std::string& name, const std::string& limit) {
   return outcome;
 }
 
+// grasped_on_sensor: a held object the units did not feel makes every other verdict of the run
+// about the grasp, not the controller.
+ExpectationOutcome GraspedOnSensor(const Metrics& m, const MetricsConfig& config) {
+  ExpectationOutcome o = Outcome("grasped_on_sensor", "true");
+  if (m.held_s <= 0.0) {
+    o.value_text = "never held";
+    o.passed = true;
+    o.note = "nothing was held to sense (not_dropped speaks for that)";
+    return o;
+  }
+  const double share = m.sensed_grip_share.value_or(0.0);
+  o.value = share;
+  o.value_text = "sensed share " + Format(share, "") + ", unsensed " + Format(m.unsensed_held_s, "s") + " of " +
+                 Format(m.held_s, "s") + " held";
+  const bool unsensed = m.unsensed_held_s > config.max_unsensed_held_s;
+  const bool light = share < config.min_sensed_grip_share;
+  o.passed = !unsensed && !light;
+  if (unsensed) {
+    o.note = "held for " + Format(m.unsensed_held_s, "s") + " with no unit loaded (limit " +
+             Format(config.max_unsensed_held_s, "s") + "): the object is not on the sensorised pad";
+  } else if (light) {
+    o.note = "the units carried " + Format(share, "") + " of the finger's squeeze (floor " +
+             Format(config.min_sensed_grip_share, "") + "): the squeeze goes through the finger beside the pad";
+  }
+  return o;
+}
+
 }  // namespace
 
 MetricsTracker::MetricsTracker(const MetricsConfig& config, double crush_limit_n, double contact_threshold_n)
@@ -135,30 +162,28 @@ void MetricsTracker::Update(const TickSample& sample) {
 void MetricsTracker::UpdateGrasp(const TickSample& sample, double dt) {
   const sim::GroundTruth& truth = *sample.truth;
   const double t = sample.time_s;
-  // Grasp state: established by contact on both digits and enough finger force after a close;
-  // lost (for scoring) when the intent changes.
+  // Grasp state: acquired from the digits' first touch until established (UpdateAcquisition) after a
+  // close; lost (for scoring) when the intent changes.
   const bool closing = sample.intent == controller::GraspIntent::kClose;
   if (closing_ && !closing && !grasped_) ++ungrasped_closes_;
+  if (closing && !closing_) {
+    for (int k = 0; k < 3; ++k) close_offset_m_[k] = truth.object_position_m[k] - truth.wrist_position_m[k];
+  }
   closing_ = closing;
   if (!closing) {
     if (holding_ && event_open_) CloseEvent();
     grasped_ = false;
     holding_ = false;
-  } else if (!grasped_ && truth.finger_contacts > 0 && truth.thumb_contacts > 0 &&
-             truth.finger_normal_force_n >= config_.grasp_force_n) {
-    grasped_ = true;
-    grasp_start_s_ = t;
-    if (!grasped_ever_) grasp_time_s_ = t;
-    grasped_ever_ = true;
-    for (int k = 0; k < 3; ++k) {
-      reference_offset_m_[k] = truth.object_position_m[k] - truth.wrist_position_m[k];
-    }
+    touching_ = false;
+  } else if (!grasped_ && !dropped_) {
+    UpdateAcquisition(sample);
   }
   const bool was_holding = holding_;
   holding_ = closing && grasped_ && !dropped_;
   if (was_holding) held_s_ += dt;
 
   if (was_holding) held_grip_integral_n_s_ += truth.object_squeeze_n * dt;
+  if (was_holding) UpdateSensorContact(sample, dt);
   if (holding_) {
     peak_load_bound_grip_n_ = std::max(peak_load_bound_grip_n_, truth.load_bound_grip_n);
     double squared = 0.0;
@@ -178,6 +203,74 @@ void MetricsTracker::UpdateGrasp(const TickSample& sample, double dt) {
       if (own_event) CloseEvent();
     }
   }
+}
+
+namespace {
+
+double Distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+}  // namespace
+
+void MetricsTracker::UpdateAcquisition(const TickSample& sample) {
+  const sim::GroundTruth& truth = *sample.truth;
+  const double t = sample.time_s;
+  std::array<double, 3> offset{};
+  for (int k = 0; k < 3; ++k) offset[k] = truth.object_position_m[k] - truth.wrist_position_m[k];
+  if (!touching_) {
+    if (truth.finger_contacts == 0 || truth.thumb_contacts == 0 ||
+        truth.finger_normal_force_n < config_.grasp_force_n)
+      return;
+    touching_ = true;
+    if (contact_time_s_ < 0.0) contact_time_s_ = t;
+    contact_start_s_ = t;
+    touch_offset_m_ = offset;
+    touch_wrist_m_ = truth.wrist_position_m;
+    settle_offset_m_ = offset;
+    settle_start_s_ = t;
+  }
+  const double shift_m = Distance(offset, touch_offset_m_);
+  acquisition_shift_m_ = std::max(acquisition_shift_m_, shift_m);
+  if (Distance(offset, close_offset_m_) > config_.drop_distance_m) {
+    // Pushed out, knocked over, or left behind by a wrist that moved on before the digits closed:
+    // a failed grasp, and a drop of the run.
+    pushed_out_ = true;
+    dropped_ = true;
+    drop_time_s_ = t;
+    return;
+  }
+  if (Distance(offset, settle_offset_m_) > config_.acquisition_settle_m) {
+    settle_offset_m_ = offset;
+    settle_start_s_ = t;
+  }
+  // Established once the hand carries the object's weight, the digits have seated on it, the wrist
+  // loads the grasp or the time is up: whatever the object did before (pushed along the table,
+  // turned onto a pad) is acquisition.
+  const bool lifted = truth.object_height_above_table_m >= config_.acquisition_lift_m;
+  const bool settled = t - settle_start_s_ >= config_.acquisition_settle_s;
+  const bool wrist_moved = Distance(truth.wrist_position_m, touch_wrist_m_) >= config_.acquisition_wrist_m;
+  const bool time_up = t - contact_start_s_ >= config_.acquisition_max_s;
+  if (!lifted && !settled && !wrist_moved && !time_up) return;
+  grasped_ = true;
+  grasp_start_s_ = t;
+  if (!grasped_ever_) grasp_time_s_ = t;
+  grasped_ever_ = true;
+  reference_offset_m_ = offset;
+}
+
+void MetricsTracker::UpdateSensorContact(const TickSample& sample, double dt) {
+  const sim::GroundTruth& truth = *sample.truth;
+  sensed_integral_n_s_ += truth.sensed_normal_force_n * dt;
+  finger_integral_n_s_ += truth.finger_normal_force_n * dt;
+  bool loaded = false;
+  const size_t units = std::min(sample.true_loads.size(), unit_integral_n_s_.size());
+  for (size_t u = 0; u < units; ++u) {
+    const double fn = sample.true_loads[u].fn_n;
+    loaded = loaded || fn >= contact_threshold_n_;
+    unit_integral_n_s_[u] += std::max(fn, 0.0) * dt;
+  }
+  if (!loaded) unsensed_held_s_ += dt;
 }
 
 void MetricsTracker::UpdateSlip(const TickSample& sample, double dt) {
@@ -313,7 +406,14 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   Metrics m;
   m.grasped = copy.grasped_ever_;
   m.grasp_time_s = copy.grasp_time_s_;
+  m.contact_time_s = copy.contact_time_s_;
+  m.acquisition_shift_mm = copy.acquisition_shift_m_ * 1e3;
+  m.pushed_out = copy.pushed_out_;
   m.dropped = copy.dropped_ || (first_close_time_s >= 0.0 && !copy.grasped_ever_);
+  if (copy.finger_integral_n_s_ > 0.0) m.sensed_grip_share = copy.sensed_integral_n_s_ / copy.finger_integral_n_s_;
+  m.unsensed_held_s = copy.unsensed_held_s_;
+  const auto heaviest = std::max_element(copy.unit_integral_n_s_.begin(), copy.unit_integral_n_s_.end());
+  if (*heaviest > 0.0) m.contact_unit = static_cast<int>(heaviest - copy.unit_integral_n_s_.begin());
   m.ungrasped_closes = copy.ungrasped_closes_ + (copy.closing_ && !copy.grasped_ ? 1 : 0);
   m.drop_time_s = copy.drop_time_s_;
   m.max_slip_mm = copy.slip_distance_m_ * 1e3;
@@ -361,16 +461,23 @@ Metrics MetricsTracker::Finish(double sim_s, double wall_s, double first_close_t
   return m;
 }
 
-std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, const Metrics& m) {
+std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, const Metrics& m,
+                                                     const MetricsConfig& config) {
   std::vector<ExpectationOutcome> outcomes;
   if (e.not_dropped) {
     ExpectationOutcome o = Outcome("not_dropped", *e.not_dropped ? "true" : "false");
     o.value = m.dropped ? 1.0 : 0.0;
-    o.value_text = !m.grasped  ? "never grasped"
-                   : m.dropped ? "dropped at " + Format(m.drop_time_s, "s")
-                               : "held";
+    o.value_text = m.pushed_out ? "pushed out at " + Format(m.drop_time_s, "s")
+                   : !m.grasped ? "never grasped"
+                   : m.dropped  ? "dropped at " + Format(m.drop_time_s, "s")
+                                : "held";
     o.passed = *e.not_dropped ? !m.dropped : m.dropped;
-    if (!m.grasped) o.note = "the object was never grasped";
+    if (m.pushed_out) {
+      o.note = "the object moved more than the drop distance relative to the wrist between the close and an "
+               "established grasp (pushed out, knocked over, or left behind)";
+    } else if (!m.grasped) {
+      o.note = "the object was never grasped";
+    }
     outcomes.push_back(o);
   }
   if (e.max_slip_mm) {
@@ -462,6 +569,7 @@ std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& e, cons
     o.passed = m.false_slip_per_min <= *e.max_false_slip_per_min;
     outcomes.push_back(o);
   }
+  if (e.grasped_on_sensor.value_or(true)) outcomes.push_back(GraspedOnSensor(m, config));
   ExpectationOutcome physics = Outcome("no_physics_fault", "true");
   physics.value = m.physics_fault ? 1.0 : 0.0;
   physics.value_text = m.physics_fault ? m.physics_fault_cause : "ok";

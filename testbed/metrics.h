@@ -63,9 +63,21 @@ struct OracleGrip {
 
 /// The metrics of one run.
 struct Metrics {
-  bool grasped = false;        ///< the object was grasped at some point after a close
-  double grasp_time_s = -1.0;  ///< when it first was [s]; < 0 never
-  bool dropped = false;        ///< left the hand while held (or was never grasped)
+  /// The grasp was established at some point after a close: both digits in contact, then the object
+  /// lifted off the table, still in the hand, the wrist moving or time up (MetricsConfig's
+  /// acquisition_*; docs/scenarios.md, "Acquisition and holding").
+  bool grasped = false;
+  double grasp_time_s = -1.0;    ///< when it first was [s]; < 0 never
+  double contact_time_s = -1.0;  ///< when both digits first touched the object [s]; < 0 never
+  /// Largest displacement of the object relative to the wrist from the digits' first touch to the
+  /// established grasp, over the run's grasps: the object moving while the digits close and seat
+  /// (acquisition, not slip) [mm].
+  double acquisition_shift_mm = 0.0;
+  /// The object moved more than MetricsConfig::drop_distance_m relative to the wrist between a close
+  /// command and the established grasp (pushed out, knocked over, or left behind by a wrist that
+  /// moved on before the digits met it); such a run is also `dropped`.
+  bool pushed_out = false;
+  bool dropped = false;        ///< left the hand while held (or was never grasped, or pushed out)
   /// Close commands (intent close, until it changes or the run ends) during which the object was
   /// never grasped: a regrasp that missed, a grip too light to count (the first close's miss is
   /// also `dropped`).
@@ -82,6 +94,15 @@ struct Metrics {
   /// Largest squeeze-independent lower bound of the grip while held (GroundTruth::load_bound_grip_n:
   /// the hand's load over 2 mu) [N].
   double peak_load_bound_grip_n = 0.0;
+  /// Where the grasp meets the sensor, over the held time. sensed_grip_share: the normal force the
+  /// mesas carry over the index finger's whole normal force (holder, tip cap, phalanges), both
+  /// integrated over the held time [-]; nullopt when never held or the finger carried nothing.
+  std::optional<double> sensed_grip_share;
+  /// Time held with no unit's true normal force at or above the contact threshold [s].
+  double unsensed_held_s = 0.0;
+  /// The unit (layout order) whose true normal force integrated over the held time is largest: where
+  /// the contact sits on the fingertip; -1 when no unit was loaded while held.
+  int contact_unit = -1;
   /// The oracle grip of the scenario, when the run asked for it (RunOptions::oracle).
   std::optional<OracleGrip> oracle;
   /// mean_held_grip_n / the oracle grip: how many times the lightest grip that holds the hand held
@@ -170,6 +191,10 @@ class MetricsTracker {
   // Update's parts, in this order: the grasp (established, held, dropped), slip events and the
   // controller's flags while held, the estimate's error, the first stable stretch of squeeze [N].
   void UpdateGrasp(const TickSample& sample, double dt);
+  /// From the digits' first touch to the established grasp (or a push-out) during a close.
+  void UpdateAcquisition(const TickSample& sample);
+  /// While held: how much of the finger's squeeze lands on the units, and which unit carries it.
+  void UpdateSensorContact(const TickSample& sample, double dt);
   void UpdateSlip(const TickSample& sample, double dt);
   void UpdateEstimationError(const TickSample& sample);
   void UpdateStableGrasp(double squeeze_n, double time_s);
@@ -202,6 +227,24 @@ class MetricsTracker {
 
   bool grasped_ever_ = false;
   double grasp_time_s_ = -1.0;
+  // Acquisition: both digits touching since the latest close (touching_), where the object was then
+  // and where its current still stretch began, relative to the wrist [m], and that stretch's start [s].
+  bool touching_ = false;
+  double contact_time_s_ = -1.0;   ///< the run's first touch [s]
+  double contact_start_s_ = -1.0;  ///< this close's first touch [s]
+  std::array<double, 3> close_offset_m_{};  ///< object - wrist at the latest close command [m]
+  std::array<double, 3> touch_offset_m_{};
+  std::array<double, 3> settle_offset_m_{};
+  std::array<double, 3> touch_wrist_m_{};
+  double settle_start_s_ = -1.0;
+  double acquisition_shift_m_ = 0.0;
+  bool pushed_out_ = false;
+  // Sensor contact while held: mesa and finger normal force integrated [N s], time with no unit
+  // loaded [s], each unit's normal force integrated [N s].
+  double sensed_integral_n_s_ = 0.0;
+  double finger_integral_n_s_ = 0.0;
+  double unsensed_held_s_ = 0.0;
+  std::array<double, sensor::kMaxUnits> unit_integral_n_s_{};
   double grasp_start_s_ = -1.0;  ///< when the current grasp was established [s]
   bool grasped_ = false;         ///< grasped since the latest close
   bool closing_ = false;         ///< the intent is close (a close episode is open)
@@ -270,9 +313,10 @@ struct ExpectationOutcome {
 };
 
 /// Checks `metrics` against every configured expectation (in a fixed order), plus the implicit
-/// "no_physics_fault" that every run must meet.
-std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations,
-                                                     const Metrics& metrics);
+/// "no_physics_fault" that every run must meet and "grasped_on_sensor" unless set false (its limits
+/// from `config`).
+std::vector<ExpectationOutcome> EvaluateExpectations(const Expectations& expectations, const Metrics& metrics,
+                                                     const MetricsConfig& config);
 
 /// Fills metrics.oracle, grip_efficiency and peak_grip_ratio from the scenario's oracle grip.
 void ApplyOracle(const OracleGrip& oracle, Metrics& metrics);

@@ -408,6 +408,11 @@ const common::FieldTable<Expectations>& ExpectationsFields() {
           Table::OptionalNumber("max_false_slip_per_min", &C::max_false_slip_per_min,
                                 NumberRule::NonNegative(), "1/min",
                                 "passes when `false_slip_per_min` <= limit"),
+          Table::OptionalBool("grasped_on_sensor", &C::grasped_on_sensor,
+                              "checked in every run unless `false`: passes when the held object was on the "
+                              "sensorised pad (`unsensed_held_s` <= `metrics.max_unsensed_held_s` and "
+                              "`sensed_grip_share` >= `metrics.min_sensed_grip_share`); a run never held "
+                              "passes it (not_dropped speaks for that)"),
       });
   return table;
 }
@@ -446,7 +451,27 @@ const common::FieldTable<MetricsConfig>& MetricsConfigFields() {
                         "event, flags are not false"),
           Table::Number("drop_distance_m", &C::drop_distance_m, {0.0, sim::kMaxPositionM, true}, "m",
                         "object displacement relative to the wrist, from where it was grasped, that counts "
-                        "as dropped"),
+                        "as dropped; from where it was at the close command, before the grasp is "
+                        "established, as pushed out"),
+          Table::Number("acquisition_lift_m", &C::acquisition_lift_m, NumberRule::Between(0.0, 0.1), "m",
+                        "the grasp is established (both digits touching) once the object's lowest point is "
+                        "this far above the table, the hand carrying its weight ..."),
+          Table::Number("acquisition_settle_s", &C::acquisition_settle_s, kDuration, "s",
+                        "... or once the object has stayed within `acquisition_settle_m` of one place "
+                        "relative to the wrist this long ...; before it, its motion is acquisition_shift_mm"),
+          Table::Number("acquisition_settle_m", &C::acquisition_settle_m, NumberRule::Between(0.0, 0.01), "m",
+                        "the band of `acquisition_settle_s`"),
+          Table::Number("acquisition_wrist_m", &C::acquisition_wrist_m, NumberRule::Between(0.0, 0.1), "m",
+                        "... or once the wrist has moved this far since the first touch (an action loads the "
+                        "grasp) ..."),
+          Table::Number("acquisition_max_s", &C::acquisition_max_s, kDuration, "s",
+                        "... or this long after the first touch, whatever the object does"),
+          Table::Number("max_unsensed_held_s", &C::max_unsensed_held_s, kDuration, "s",
+                        "grasped_on_sensor: the longest time held with no unit loaded at or above the "
+                        "contact threshold"),
+          Table::Number("min_sensed_grip_share", &C::min_sensed_grip_share, {0.0, 1.0, true}, "-",
+                        "grasped_on_sensor: the least share of the finger's normal force the mesas carry "
+                        "over the held time"),
           Table::Number("stable_window_s", &C::stable_window_s, kPositiveDuration, "s",
                         "stable grasp: no slip event and the squeeze within the band over this window"),
           Table::Number("stable_force_band", &C::stable_force_band, {0.0, 1.0, true}, "-",

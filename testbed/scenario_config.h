@@ -75,7 +75,7 @@ inline constexpr double kEventConfirmS = 0.02;
 /// kSignalBoundFixedColumns before and after the per-unit ones (the loop's, the truth and scoring,
 /// a replay's recorded command), kSignalBoundColumnsPerUnit per unit, and
 /// controller::kMaxDiagnosticChannels. Each backend asserts at compile time that its columns fit.
-inline constexpr size_t kSignalBoundFixedColumns = 48;
+inline constexpr size_t kSignalBoundFixedColumns = 50;
 inline constexpr size_t kSignalBoundColumnsPerUnit = 7;
 
 /// Name of an event in scenario files ("grasped", "stable", "slip_flagged", "released"; "" for kNone).
@@ -142,6 +142,10 @@ struct Expectations {
   std::optional<double> max_estimation_error_n;   ///< fn_rmse_n and ft_rmse_n <= [N]
   std::optional<double> stable_within_s;          ///< time_to_stable_s <= [s] after the first close
   std::optional<double> max_false_slip_per_min;   ///< false slip alarms per minute held <= [1/min]
+  /// The held object sits on the sensorised pad: unsensed_held_s <= MetricsConfig::max_unsensed_held_s
+  /// and sensed_grip_share >= MetricsConfig::min_sensed_grip_share. Checked in every run unless set
+  /// false (a scene meant to be held off the pad); not counted by empty().
+  std::optional<bool> grasped_on_sensor;
 
   /// True when no check is configured.
   bool empty() const;
@@ -188,8 +192,25 @@ struct MetricsConfig {
   /// counts in max_slip_mm but opens no slip event, and controller flags then are not false [s].
   double seating_s = 0.05;
   /// Object displacement relative to the wrist, from where it was when grasped, that counts as
-  /// dropped [m].
+  /// dropped [m]; from where it was at the close command, before the grasp is established, it
+  /// counts as pushed out (a failed grasp).
   double drop_distance_m = 0.02;
+  /// Acquisition ends and the grasp is established, both digits touching, at the first of: the
+  /// object's lowest point this far above the table (the hand carries its weight) [m] ...
+  double acquisition_lift_m = 1e-3;
+  /// ... the object within acquisition_settle_m of one place relative to the wrist for
+  /// acquisition_settle_s (the digits have seated on it) [s], [m] ...
+  double acquisition_settle_s = 0.15;
+  double acquisition_settle_m = 0.2e-3;
+  /// ... the wrist moved this far from where it was at the first touch (an action loads the grasp)
+  /// [m] ... or acquisition_max_s after the first touch [s].
+  double acquisition_wrist_m = 1e-3;
+  double acquisition_max_s = 0.3;
+  /// grasped_on_sensor: the longest time the object may be held with no unit loaded at or above the
+  /// contact threshold [s], and the least share of the finger's normal force the mesas must carry
+  /// over the held time [-] (docs/scenarios.md, "On the sensor").
+  double max_unsensed_held_s = 0.1;
+  double min_sensed_grip_share = 0.25;
   /// Stable grasp: no slip event and the squeeze within +-stable_force_band of its mean over a
   /// window this long [s].
   double stable_window_s = 0.2;

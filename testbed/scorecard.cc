@@ -212,6 +212,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
   std::vector<double> gross_latencies_ms;
   std::vector<double> efficiencies;
   std::vector<double> peak_ratios;
+  std::vector<double> sensed_shares;
   double fn_square_sum = 0.0;
   int64_t fn_samples = 0;
   for (const RunResult* result : finished) {
@@ -241,6 +242,9 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     if (metrics.grip_efficiency) efficiencies.push_back(*metrics.grip_efficiency);
     if (metrics.peak_grip_ratio) peak_ratios.push_back(*metrics.peak_grip_ratio);
     if (metrics.oracle && !metrics.oracle->grip_n) ++score.no_oracle;
+    for (const ExpectationOutcome& outcome : result->outcomes)
+      if (outcome.name == "grasped_on_sensor" && !outcome.passed) ++score.off_sensor;
+    if (metrics.sensed_grip_share) sensed_shares.push_back(*metrics.sensed_grip_share);
     if (metrics.fn_rmse_n && metrics.estimation_samples > 0) {
       fn_square_sum +=
           *metrics.fn_rmse_n * *metrics.fn_rmse_n * static_cast<double>(metrics.estimation_samples);
@@ -266,6 +270,8 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
   score.grip_efficiency_p95 = Percentile(efficiencies, 95.0);
   score.peak_grip_ratio_median = Percentile(peak_ratios, 50.0);
   score.peak_grip_ratio_p95 = Percentile(peak_ratios, 95.0);
+  score.sensed_share_median = Percentile(sensed_shares, 50.0);
+  score.sensed_share_min = Percentile(sensed_shares, 0.0);
   if (fn_samples > 0) score.fn_rmse_n = std::sqrt(fn_square_sum / static_cast<double>(fn_samples));
   return score;
 }
@@ -462,6 +468,13 @@ const std::vector<Figure>& Figures() {
        [](const ControllerScore& s) { return OptionalJson(s.peak_grip_ratio_p95); }},
       {"runs without oracle grip", "no_oracle", [](const ControllerScore& s) { return Int(s.no_oracle); },
        [](const ControllerScore& s) { return nlohmann::json(s.no_oracle); }},
+      {"runs held off the sensor", "off_sensor", [](const ControllerScore& s) { return Int(s.off_sensor); },
+       [](const ControllerScore& s) { return nlohmann::json(s.off_sensor); }},
+      {"sensed share median / min", "sensed_share_median",
+       [](const ControllerScore& s) {
+         return OptionalText(s.sensed_share_median, "%.2f") + " / " + OptionalText(s.sensed_share_min, "%.2f");
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.sensed_share_median); }},
       {"Fn estimation RMSE", "fn_rmse_n",
        [](const ControllerScore& s) { return OptionalText(s.fn_rmse_n, "%.3f N"); },
        [](const ControllerScore& s) { return OptionalJson(s.fn_rmse_n); }},
@@ -518,6 +531,23 @@ std::string ScorecardTable(const Scorecard& scorecard) {
     for (size_t i = 0; i < by_cue.size(); ++i)
       out << (i ? ", " : " ") << by_cue[i].first << " " << by_cue[i].second;
     out << "\n";
+  }
+  // Which runs have no oracle grip or were held off the sensor, and why: a count alone says nothing
+  // a user can act on. An oracle belongs to the run, not the controller: listed once.
+  std::vector<std::string> listed;
+  for (const ScorecardRow& row : scorecard.rows) {
+    const Metrics& m = row.result.metrics;
+    if (row.error.empty() && m.oracle && !m.oracle->grip_n &&
+        std::find(listed.begin(), listed.end(), row.run) == listed.end()) {
+      listed.push_back(row.run);
+      out << "  no oracle grip: " << row.run << ": " << m.oracle->reason << "\n";
+    }
+  }
+  for (const ScorecardRow& row : scorecard.rows) {
+    for (const ExpectationOutcome& o : row.result.outcomes) {
+      if (o.name == "grasped_on_sensor" && !o.passed)
+        out << "  held off the sensor: " << row.run << "@" << row.controller << ": " << o.note << "\n";
+    }
   }
   return out.str();
 }

@@ -108,6 +108,12 @@ struct ControllerScore {
   std::optional<double> peak_grip_ratio_median;
   std::optional<double> peak_grip_ratio_p95;
   int no_oracle = 0;  ///< runs whose oracle grip was not found (not holdable at the stall pinch)
+  /// Runs that failed grasped_on_sensor: held off the sensorised pad, so their verdicts are about
+  /// the grasp, not the controller.
+  int off_sensor = 0;
+  /// sensed_grip_share over the runs that held the object: median and lowest [-].
+  std::optional<double> sensed_share_median;
+  std::optional<double> sensed_share_min;
   std::optional<double> fn_rmse_n;  ///< sample-weighted RMS of the runs' Fn RMSEs [N]
   int physics_faults = 0;
 };

@@ -136,9 +136,9 @@ nlohmann::json SuiteJson(const SuiteResult& result) {
 std::string SuiteTable(const SuiteResult& result) {
   std::ostringstream out;
   char line[512];
-  std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7s %7s %7s %8s %8s %6s %7s  %s\n", "scenario", "controller",
-                "result", "slip_mm", "gross", "micro", "peak_N", "oracle_N", "effic", "wall_s",
-                "failed expectations");
+  std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7s %6s %7s %7s %8s %8s %6s %6s %7s  %s\n", "scenario",
+                "controller", "result", "slip_mm", "acq_mm", "gross", "micro", "peak_N", "oracle_N", "effic", "sensed",
+                "wall_s", "failed expectations");
   out << line;
   for (const SuiteRun& run : result.runs) {
     const RunResult& r = run.result;
@@ -157,14 +157,17 @@ std::string SuiteTable(const SuiteResult& result) {
       return std::to_string(c.detected) + "/" + std::to_string(c.events);
     };
     const std::string oracle_text = m.oracle ? internal::OptionalText(m.oracle->grip_n, "%.2f") : "-";
-    std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7.2f %7s %7s %8.2f %8s %6s %7.2f  %s\n",
+    if (m.oracle && !m.oracle->grip_n && failures.empty()) failures = "(no oracle grip: " + m.oracle->reason + ")";
+    std::snprintf(line, sizeof(line), "%-22s %-13s %-6s %7.2f %6.2f %7s %7s %8.2f %8s %6s %6s %7.2f  %s\n",
                   r.config.name.c_str(), r.config.controller.name.c_str(), verdict.c_str(), m.max_slip_mm,
-                  counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n, oracle_text.c_str(),
-                  internal::OptionalText(m.grip_efficiency, "%.2f").c_str(), m.wall_s, failures.c_str());
+                  m.acquisition_shift_mm, counts(m.gross).c_str(), counts(m.micro).c_str(), m.peak_grip_n,
+                  oracle_text.c_str(), internal::OptionalText(m.grip_efficiency, "%.2f").c_str(),
+                  internal::OptionalText(m.sensed_grip_share, "%.2f").c_str(), m.wall_s, failures.c_str());
     out << line;
   }
-  out << "  (gross, micro: slip events flagged / all; oracle_N: the lightest constant grip that holds; effic: mean "
-         "grip held / oracle)\n";
+  out << "  (acq_mm: the object's shift while the digits closed, before the grasp was established; gross, micro: "
+         "slip events flagged / all; oracle_N: the lightest constant grip that holds; effic: mean grip held / "
+         "oracle; sensed: share of the finger's squeeze on the units)\n";
   std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenarios in %.2f s with %d jobs%s\n",
                 result.passed, result.failed, result.runs.size(), result.wall_s, result.jobs,
                 result.completed ? "" : " (INTERRUPTED)");

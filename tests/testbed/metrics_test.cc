@@ -36,7 +36,7 @@ ExpectationOutcome Find(const std::vector<ExpectationOutcome>& outcomes, const s
 }
 
 bool Passes(const Expectations& e, const Metrics& m, const std::string& name) {
-  return Find(EvaluateExpectations(e, m), name).passed;
+  return Find(EvaluateExpectations(e, m, MetricsConfig{}), name).passed;
 }
 
 // A held, clean run's metrics.
@@ -60,12 +60,12 @@ TEST(ExpectationsTest, NotDroppedPassesWhenHeldAndFailsWhenDroppedOrNeverGrasped
   EXPECT_TRUE(Passes(e, m, "not_dropped"));
   m.dropped = true;
   m.drop_time_s = 1.25;
-  const ExpectationOutcome dropped = Find(EvaluateExpectations(e, m), "not_dropped");
+  const ExpectationOutcome dropped = Find(EvaluateExpectations(e, m, MetricsConfig{}), "not_dropped");
   EXPECT_FALSE(dropped.passed);
   EXPECT_EQ(dropped.value_text, "dropped at 1.25 s");
   Metrics never;
   never.dropped = true;
-  const ExpectationOutcome missed = Find(EvaluateExpectations(e, never), "not_dropped");
+  const ExpectationOutcome missed = Find(EvaluateExpectations(e, never, MetricsConfig{}), "not_dropped");
   EXPECT_FALSE(missed.passed);
   EXPECT_EQ(missed.value_text, "never grasped");
   // not_dropped: false asks for a drop.
@@ -92,14 +92,14 @@ TEST(ExpectationsTest, LimitsPassAtAndBelowAndFailAbove) {
   for (const char* name : {"max_slip_mm", "max_peak_grip_n", "stable_within_s", "max_false_slip_per_min"}) {
     EXPECT_FALSE(Passes(e, m, name)) << name << " above its limit";
   }
-  const ExpectationOutcome slip = Find(EvaluateExpectations(e, m), "max_slip_mm");
+  const ExpectationOutcome slip = Find(EvaluateExpectations(e, m, MetricsConfig{}), "max_slip_mm");
   EXPECT_EQ(slip.limit, "<= 1.5 mm");
   EXPECT_EQ(slip.value_text, "1.6 mm");
   ASSERT_TRUE(slip.value.has_value());
   EXPECT_DOUBLE_EQ(*slip.value, 1.6);
   // Never stable fails and says so.
   m.time_to_stable_s.reset();
-  const ExpectationOutcome never = Find(EvaluateExpectations(e, m), "stable_within_s");
+  const ExpectationOutcome never = Find(EvaluateExpectations(e, m, MetricsConfig{}), "stable_within_s");
   EXPECT_FALSE(never.passed);
   EXPECT_EQ(never.value_text, "never");
 }
@@ -118,7 +118,7 @@ TEST(ExpectationsTest, SlipDetectionJudgesGrossSlipsAndTheMicroExpectationTheRes
   e.slip_detected_within_ms = 30.0;
   Metrics m = HeldMetrics();
   // No slip at all: nothing to detect, passes with a note.
-  const ExpectationOutcome none = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
+  const ExpectationOutcome none = Find(EvaluateExpectations(e, m, MetricsConfig{}), "slip_detected_within_ms");
   EXPECT_TRUE(none.passed);
   EXPECT_EQ(none.value_text, "no gross slip");
   // Micro-slips missed do not fail it; only micro_slip_detected_within_ms asks for them.
@@ -127,7 +127,7 @@ TEST(ExpectationsTest, SlipDetectionJudgesGrossSlipsAndTheMicroExpectationTheRes
   m.micro = {3, 0, std::nullopt};
   EXPECT_TRUE(Passes(e, m, "slip_detected_within_ms"));
   e.micro_slip_detected_within_ms = 30.0;
-  const ExpectationOutcome micro = Find(EvaluateExpectations(e, m), "micro_slip_detected_within_ms");
+  const ExpectationOutcome micro = Find(EvaluateExpectations(e, m, MetricsConfig{}), "micro_slip_detected_within_ms");
   EXPECT_FALSE(micro.passed);
   EXPECT_EQ(micro.value_text, "3 of 3 missed");
   e.micro_slip_detected_within_ms.reset();
@@ -136,7 +136,7 @@ TEST(ExpectationsTest, SlipDetectionJudgesGrossSlipsAndTheMicroExpectationTheRes
   m.gross.worst_latency_ms = 31.0;
   EXPECT_FALSE(Passes(e, m, "slip_detected_within_ms"));
   m.gross = {2, 1, 5.0};
-  const ExpectationOutcome missed = Find(EvaluateExpectations(e, m), "slip_detected_within_ms");
+  const ExpectationOutcome missed = Find(EvaluateExpectations(e, m, MetricsConfig{}), "slip_detected_within_ms");
   EXPECT_FALSE(missed.passed);
   EXPECT_EQ(missed.value_text, "1 of 2 missed");
 }
@@ -146,7 +146,7 @@ TEST(ExpectationsTest, GripEfficiencyIsJudgedAgainstTheOracleAndFailsWithoutOne)
   e.max_grip_efficiency = 2.0;
   Metrics m = HeldMetrics();
   m.mean_held_grip_n = 3.0;
-  const ExpectationOutcome unasked = Find(EvaluateExpectations(e, m), "max_grip_efficiency");
+  const ExpectationOutcome unasked = Find(EvaluateExpectations(e, m, MetricsConfig{}), "max_grip_efficiency");
   EXPECT_FALSE(unasked.passed);
   EXPECT_EQ(unasked.note, "the run computed no oracle grip");
   ApplyOracle(OracleGrip{1.5, ""}, m);
@@ -160,7 +160,7 @@ TEST(ExpectationsTest, GripEfficiencyIsJudgedAgainstTheOracleAndFailsWithoutOne)
   ApplyOracle(OracleGrip{std::nullopt, "not held at the motor's stall pinch of 20 N: dropped at 1.7 s"}, m);
   EXPECT_FALSE(m.grip_efficiency.has_value());
   EXPECT_FALSE(m.peak_grip_ratio.has_value());
-  const ExpectationOutcome unholdable = Find(EvaluateExpectations(e, m), "max_grip_efficiency");
+  const ExpectationOutcome unholdable = Find(EvaluateExpectations(e, m, MetricsConfig{}), "max_grip_efficiency");
   EXPECT_FALSE(unholdable.passed);
   EXPECT_NE(unholdable.note.find("stall pinch"), std::string::npos) << unholdable.note;
 }
@@ -177,21 +177,21 @@ TEST(ExpectationsTest, EstimationErrorTakesTheWorseOfFnAndFtAndFailsWithoutConta
   EXPECT_FALSE(Passes(e, m, "max_estimation_error_n"));
   m.fn_rmse_n.reset();
   m.ft_rmse_n.reset();
-  const ExpectationOutcome unscored = Find(EvaluateExpectations(e, m), "max_estimation_error_n");
+  const ExpectationOutcome unscored = Find(EvaluateExpectations(e, m, MetricsConfig{}), "max_estimation_error_n");
   EXPECT_FALSE(unscored.passed);
   EXPECT_EQ(unscored.value_text, "no contact");
 }
 
 TEST(ExpectationsTest, PhysicsFaultIsAlwaysCheckedAndOnlyConfiguredOnesAppear) {
   Metrics m = HeldMetrics();
-  std::vector<ExpectationOutcome> outcomes = EvaluateExpectations(Expectations{}, m);
+  std::vector<ExpectationOutcome> outcomes = EvaluateExpectations(Expectations{}, m, MetricsConfig{});
   ASSERT_EQ(outcomes.size(), 1u);
   EXPECT_EQ(outcomes[0].name, "no_physics_fault");
   EXPECT_TRUE(outcomes[0].passed);
   m.physics_fault = true;
   m.physics_fault_cause = "NaN in qacc";
   m.physics_fault_time_s = 0.75;
-  outcomes = EvaluateExpectations(Expectations{}, m);
+  outcomes = EvaluateExpectations(Expectations{}, m, MetricsConfig{});
   EXPECT_FALSE(outcomes[0].passed);
   EXPECT_EQ(outcomes[0].value_text, "NaN in qacc");
   EXPECT_EQ(outcomes[0].note, "at t = 0.75 s");
