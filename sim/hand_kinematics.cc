@@ -1,5 +1,7 @@
 #include "sim/hand_kinematics.h"
 
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -75,9 +77,13 @@ double FirstRoot(const std::function<double(double)>& f, double from, double to,
 constexpr double kMinWrapPadNormalRad = std::numbers::pi / 6.0;
 // Angular step of the scans above [rad]: finer than any link's travel across a clearance of 1 mm.
 constexpr double kScanStepRad = 0.005;
-// The proximal and middle phalanges must clear the cylinder by this much when the pad touches it,
-// so the pad meets it first [m].
-constexpr double kMinLinkClearanceM = 1e-3;
+// When the pad touches the cylinder the proximal and middle phalanges are at most kWrapLinkContactM
+// from it if the pad's contact can move that far towards the DIP (kWrapMaxAlongPadM, the first mesa
+// row, in kWrapAlongStepM steps), and never closer than kMinLinkClearanceM (overlapping it) [m].
+constexpr double kWrapLinkContactM = 0.5e-3;
+constexpr double kWrapMaxAlongPadM = 0.010;
+constexpr double kWrapAlongStepM = 0.0005;
+constexpr double kMinLinkClearanceM = -0.5e-3;
 
 }  // namespace
 
@@ -132,6 +138,68 @@ DigitContact ProstheticKinematics::IndexPad(double mcp_rad) const {
       Dip(mcp_rad) + 0.5 * holder_length_m_ * IndexDirection(distal) + pad_depth_m_ * IndexPalmar(distal);
   contact.normal_angle_rad = distal - 0.5 * std::numbers::pi;
   return contact;
+}
+
+DigitContact ProstheticKinematics::IndexPadAt(double mcp_rad, double along_m) const {
+  DigitContact contact = IndexPad(mcp_rad);
+  contact.point_xz += along_m * IndexDirection(DistalAngle(mcp_rad));
+  return contact;
+}
+
+RoundPinchPose ProstheticKinematics::RoundPinch(double radius_m, double along_m) const {
+  // The thumb tip's centre must sit on the pad's normal through the section's centre, the tip's
+  // radius beyond the section: residual(mcp, thumb) = 0, two equations in two angles.
+  const auto residual = [&](double mcp, double thumb) {
+    const DigitContact pad = IndexPadAt(mcp, along_m);
+    const Eigen::Vector2d normal(std::cos(pad.normal_angle_rad), std::sin(pad.normal_angle_rad));
+    return Eigen::Vector2d(ThumbTipCentre(thumb) - pad.point_xz - (2.0 * radius_m + thumb_.tip_radius_m) * normal);
+  };
+  double mcp = SquarePadMcpRad();
+  double thumb = ThumbForTipX(IndexPadAt(mcp, along_m).point_xz.x() + 2.0 * radius_m);
+  constexpr double kStep = 1e-7;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const Eigen::Vector2d r = residual(mcp, thumb);
+    if (r.norm() < 1e-9) break;
+    Eigen::Matrix2d jacobian;
+    jacobian.col(0) = (residual(mcp + kStep, thumb) - residual(mcp - kStep, thumb)) / (2.0 * kStep);
+    jacobian.col(1) = (residual(mcp, thumb + kStep) - residual(mcp, thumb - kStep)) / (2.0 * kStep);
+    const Eigen::Vector2d delta = jacobian.partialPivLu().solve(-r);
+    // Damped: no step beyond 0.1 rad, so the iteration stays on the branch it starts on.
+    const double scale = std::min(1.0, 0.1 / std::max(std::abs(delta.x()), std::abs(delta.y())));
+    mcp += scale * delta.x();
+    thumb += scale * delta.y();
+  }
+  std::ostringstream why;
+  if (residual(mcp, thumb).norm() > 1e-6 || !std::isfinite(mcp) || !std::isfinite(thumb)) {
+    why << "no posture puts the pad and the thumb on one line through its centre";
+  } else if (mcp < kMcpMinRad || mcp > kMcpMaxRad || thumb < kThumbMinRad || thumb > kThumbMaxRad) {
+    why << "the pinch through its centre needs MCP " << mcp * 180.0 / std::numbers::pi << " deg and thumb "
+        << thumb * 180.0 / std::numbers::pi << " deg, beyond the joints' ranges";
+  }
+  if (!why.str().empty()) {
+    std::ostringstream message;
+    message << "a pinch of a " << 2e3 * radius_m << " mm round section: " << why.str();
+    throw std::invalid_argument(message.str());
+  }
+  RoundPinchPose pose;
+  pose.mcp_rad = mcp;
+  pose.thumb_rad = thumb;
+  const DigitContact pad = IndexPadAt(mcp, along_m);
+  const Eigen::Vector2d normal(std::cos(pad.normal_angle_rad), std::sin(pad.normal_angle_rad));
+  pose.pad_contact_xz = pad.point_xz;
+  pose.centre_xz = pad.point_xz + radius_m * normal;
+  pose.thumb_contact_xz = pose.centre_xz + radius_m * normal;
+  pose.line_angle_rad = pad.normal_angle_rad;
+  // The holder's side in the x-z plane reaches pad_depth either side of its axis; its rounded tip is
+  // half an ellipse (semi-axes the cap's length along the axis, pad_depth across) beyond its end.
+  const Eigen::Vector2d along = IndexDirection(DistalAngle(mcp));
+  const Eigen::Vector2d across = IndexPalmar(DistalAngle(mcp));
+  const Eigen::Vector2d holder_end = Dip(mcp) + holder_length_m_ * along;
+  const double side = pad_depth_m_ * std::abs(across.y());
+  const double cap = std::hypot(kTipCapLengthM * along.y(), pad_depth_m_ * across.y());
+  pose.lowest_z_m = std::min({Dip(mcp).y() - side, holder_end.y() - side, holder_end.y() - cap,
+                              ThumbTipCentre(thumb).y() - thumb_.tip_radius_m});
+  return pose;
 }
 
 Eigen::Vector2d ProstheticKinematics::ThumbIp(double flexion_rad) const {
@@ -202,32 +270,49 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
     message << "a wrap of a " << 2e3 * radius_m << " mm cylinder: " << why;
     throw std::invalid_argument(message.str());
   };
-  // Where the cylinder sits when the pad's centre touches it at MCP q: on the pad's normal.
-  const auto centre_for = [this, radius_m](double q) {
-    const DigitContact pad = IndexPad(q);
-    const double distal = DistalAngle(q);
-    return Eigen::Vector2d(pad.point_xz + radius_m * IndexPalmar(distal));
+  // Where the cylinder sits when the pad touches it `along` from the pad's centre (towards the tip
+  // positive) at MCP q: on the pad's normal there.
+  const auto centre_for = [this, radius_m](double q, double along) {
+    const DigitContact pad = IndexPadAt(q, along);
+    return Eigen::Vector2d(pad.point_xz + radius_m * IndexPalmar(DistalAngle(q)));
   };
-  const auto palm_gap = [&](double q) { return -kPalmDepthM - (centre_for(q).y() + radius_m); };
+  const auto palm_gap = [&](double q, double along) {
+    return -kPalmDepthM - (centre_for(q, along).y() + radius_m);
+  };
   // From the square pinch to full flexion the pad curls under the palm and the gap closes.
   const double mcp_square = SquarePadMcpRad();
-  if (palm_gap(kMcpMaxRad) > palm_gap_m) fail("too small: the pad cannot press it against the palm");
-  if (palm_gap(mcp_square) < palm_gap_m) fail("too large: it reaches the palm before the pad curls under it");
+  if (palm_gap(kMcpMaxRad, 0.0) > palm_gap_m) fail("too small: the pad cannot press it against the palm");
+  if (palm_gap(mcp_square, 0.0) < palm_gap_m) fail("too large: it reaches the palm before the pad curls under it");
+  // Where along the pad it touches: as near the pad's centre as lets the middle phalanx meet the
+  // cylinder too (within kWrapLinkContactM), at most at the pad's first mesa row, so that finger,
+  // pad and palm close round it together as a hand's wrap does.
   WrapPose pose;
-  pose.index_contact_rad = Bisect(palm_gap, palm_gap_m, mcp_square, kMcpMaxRad, -1.0);
-  pose.centre_xz = centre_for(pose.index_contact_rad);
+  for (double along = 0.0; along >= -kWrapMaxAlongPadM - 1e-12; along -= kWrapAlongStepM) {
+    pose.index_contact_rad = Bisect([&](double q) { return palm_gap(q, along); }, palm_gap_m, mcp_square,
+                                    kMcpMaxRad, -1.0);
+    pose.centre_xz = centre_for(pose.index_contact_rad, along);
+    pose.pad_contact_along_m = along;
+    pose.index_link_clearance_m = IndexClearanceM(pose.index_contact_rad, pose.centre_xz, radius_m, true);
+    if (pose.index_link_clearance_m <= kWrapLinkContactM) break;
+  }
   if (IndexPad(pose.index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) {
     fail("too large: the pad would meet it from the side, not press it against the palm");
   }
-  pose.index_link_clearance_m = IndexClearanceM(pose.index_contact_rad, pose.centre_xz, radius_m, true);
   if (pose.index_link_clearance_m < kMinLinkClearanceM) {
     fail("too large: the proximal or middle phalanx would meet it before the pad (" +
          std::to_string(pose.index_link_clearance_m * 1e3) + " mm clear)");
   }
   // Open each digit from its contact until every link clears the cylinder by the clearance.
-  pose.index_preshape_rad =
-      FirstRoot([&](double q) { return clearance_m - IndexClearanceM(q, pose.centre_xz, radius_m); },
-                pose.index_contact_rad, kMcpMinRad, kScanStepRad);
+  // The cylinder sits in the palm's hook beside the proximal phalanx's root, which no opening moves
+  // away: the index opens until its middle phalanx and holder, which sweep round the cylinder,
+  // clear it by the clearance (the proximal phalanx is clear of it from the contact on).
+  const auto sweep_clearance = [&](double q) {
+    const Eigen::Vector2d tip = Dip(q) + (holder_length_m_ + kTipCapLengthM) * IndexDirection(DistalAngle(q));
+    return std::min(CapsuleClearance(pose.centre_xz, radius_m, Pip(q), Dip(q), kMiddleRadiusM),
+                    CapsuleClearance(pose.centre_xz, radius_m, Dip(q), tip, pad_depth_m_));
+  };
+  pose.index_preshape_rad = FirstRoot([&](double q) { return clearance_m - sweep_clearance(q); },
+                                      pose.index_contact_rad, kMcpMinRad, kScanStepRad);
   if (std::isnan(pose.index_preshape_rad)) fail("the index cannot open clear of it");
   const auto thumb_gap = [&](double q) { return ThumbClearanceM(q, pose.centre_xz, radius_m); };
   if (thumb_gap(kThumbMinRad) < clearance_m) fail("the thumb cannot open clear of it");
@@ -239,9 +324,10 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
   // turns about the thumb's base, pushing towards the axis with the arm of its perpendicular.
   constexpr double kStep = 1e-6;
   const double q = pose.index_contact_rad;
-  pose.pad_lever_arm_m =
-      (IndexPad(q + kStep).point_xz - IndexPad(q - kStep).point_xz).dot(IndexPalmar(DistalAngle(q))) /
-      (2.0 * kStep);
+  const double along = pose.pad_contact_along_m;
+  pose.pad_lever_arm_m = (IndexPadAt(q + kStep, along).point_xz - IndexPadAt(q - kStep, along).point_xz)
+                             .dot(IndexPalmar(DistalAngle(q))) /
+                         (2.0 * kStep);
   const double t = pose.thumb_contact_rad;
   const Eigen::Vector2d ip = ThumbIp(t);
   const Eigen::Vector2d on_proximal = ClosestOnSegment(pose.centre_xz, thumb_base_, ip);

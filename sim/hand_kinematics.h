@@ -32,14 +32,34 @@ struct WrapPose {
   double thumb_contact_rad = 0.0;       ///< thumb flexion at which the thumb first touches it [rad]
   double index_preshape_rad = 0.0;      ///< MCP opened until the whole index clears it by the clearance
   double thumb_preshape_rad = 0.0;      ///< thumb flexion opened likewise [rad]
-  /// Clearance of the proximal and middle phalanges when the pad touches [m]: the pad meets the
-  /// cylinder first, so the sensorised phalanx is the one that presses it against the palm.
+  /// Where along the pad it touches, from the pad's centre towards the tip [m] (<= 0: towards the
+  /// DIP, so that the middle phalanx meets the cylinder too).
+  double pad_contact_along_m = 0.0;
+  /// Clearance of the proximal and middle phalanges when the pad touches [m]: within half a
+  /// millimetre (the links close on the cylinder with the pad) where the pad's contact can move far
+  /// enough towards the DIP; more for a small cylinder.
   double index_link_clearance_m = 0.0;
   /// Forces [N] per motor torque [N m] turned into the cylinder at contact: the pad's travel along
   /// its own normal per radian of MCP (the PIP follows through the linkage), and the thumb's
   /// contact point's travel towards the cylinder's axis per radian of flexion [m/rad].
   double pad_lever_arm_m = 0.0;
   double thumb_lever_arm_m = 0.0;
+};
+
+/// A pinch of a round section (a ball, an egg at its equator, a banana across its middle) through
+/// its centre: the pad's normal and the thumb tip's centre on one line through the section's centre,
+/// so the two contact forces are collinear and squeeze nothing out of the grasp.
+struct RoundPinchPose {
+  double mcp_rad = 0.0;                 ///< index MCP at contact [rad]
+  double thumb_rad = 0.0;               ///< thumb flexion at contact [rad]
+  Eigen::Vector2d centre_xz{0.0, 0.0};  ///< the section's centre [m], (x, z) in H
+  /// The pad's contact point, `along_pad_m` from the pad's centre towards the tip, and the thumb's [m].
+  Eigen::Vector2d pad_contact_xz{0.0, 0.0};
+  Eigen::Vector2d thumb_contact_xz{0.0, 0.0};
+  /// The line's angle from H +x, towards +z positive [rad]: 0 is a level pinch.
+  double line_angle_rad = 0.0;
+  /// Lowest point of the holder's rounded tip and of the thumb's tip, H z [m].
+  double lowest_z_m = 0.0;
 };
 
 /// The hand's fixed design and the kinematics derived from it. Immutable after construction.
@@ -81,6 +101,12 @@ class ProstheticKinematics {
   double DistalAngle(double mcp_rad) const;
   /// Pad centre (holder axial centre, on the palmar mesa tops) and its normal.
   DigitContact IndexPad(double mcp_rad) const;
+  /// The pad's palmar mesa tops `along_m` from its centre towards the tip, and its normal.
+  DigitContact IndexPadAt(double mcp_rad, double along_m) const;
+  /// The pinch of a round section of `radius_m` through its centre, the pad touching it `along_m`
+  /// from its centre towards the tip (Newton's method from the square pad). Throws
+  /// std::invalid_argument when no posture in the joints' ranges does it.
+  RoundPinchPose RoundPinch(double radius_m, double along_m) const;
   /// Thumb: the tip's contact point towards the index (tip centre offset by the tip radius along
   /// the pinch direction) for flexion `flexion_rad`.
   DigitContact ThumbTip(double flexion_rad) const;

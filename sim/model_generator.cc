@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sensor/raw_frame.h"
+#include "sim/grasp_placement.h"
 #include "sim/hand_kinematics.h"
 #include "sim/object_shapes.h"
 
@@ -43,11 +44,6 @@ constexpr double kMiddleRadiusM = ProstheticKinematics::kMiddleRadiusM;
 constexpr double kThumbProximalRadiusM = ProstheticKinematics::kThumbProximalRadiusM;
 constexpr double kPalmMarginM = 0.012;     // palm box beyond the MCP and the thumb base
 constexpr double kPalmHalfWidthM = 0.012;  // palm box along H y
-// Pinch height: a box or upright cylinder is pinched this far below its top, so the middle
-// phalanx passes over the object; the pad never comes closer to the table than kMinPadHeightM
-// (holder half length + tip cap + 3 mm).
-constexpr double kPinchBelowTopM = 0.013;
-constexpr double kMinPadHeightM = 0.023;
 // Wrap: the hand's plane (H y = 0) at the cylinder's mid-height, the palm's edge never closer to the
 // table than 4 mm; the pad meets the cylinder when it stands this far from the palmar face, so the
 // pad's squeeze brings it against the palm.
@@ -55,6 +51,8 @@ constexpr double kMinWrapPlaneHeightM = kPalmHalfWidthM + 0.004;
 constexpr double kWrapPalmGapM = 0.001;
 // Palm-sideways (wrap): H turned +90 deg about world x, H (x, y, z) -> world (x, -z, y); MJCF quat.
 constexpr const char* kWrapPalmQuat = "0.70710678 0.70710678 0 0";
+// The wrap's coupling spring lets the PIP flex this far past the linkage at the motor's stall [rad].
+constexpr double kWrapPipGiveRad = 0.8;
 
 // Fixed-format numbers so the text (and the checked-in model) is reproducible.
 class Writer {
@@ -113,24 +111,103 @@ ProstheticKinematics MakeKinematics(const sensor::Layout& layout, const SceneCon
                               0.5 * layout.holder.minor_axis_m, layout.unit.mesa_height_m);
 }
 
-// World height of the object's lowest point above its centre when resting [m] and of the pinch.
-double ObjectCentreZ(const ObjectConfig& object) {
-  return object.initial_position_m[2] < 0.0 ? object.RestHalfHeightM() : object.initial_position_m[2];
-}
 
 double WrapPlaneHeightM(const ObjectConfig& object) {
-  return std::max(ObjectCentreZ(object), kMinWrapPlaneHeightM);
+  return std::max(object.StartCentreZM(), kMinWrapPlaneHeightM);
 }
 
-double PinchHeightM(const ObjectConfig& object) {
-  const double centre = ObjectCentreZ(object);
-  // A ball is pinched at its equator (above it the squeeze would push it out of the grasp), and so
-  // are an egg and a banana lying on the table.
-  if (object.shape == ObjectShape::kSphere || object.shape == ObjectShape::kEgg ||
-      object.shape == ObjectShape::kBanana)
-    return std::max(centre, kMinPadHeightM);
-  const double top = centre + object.RestHalfHeightM();
-  return std::max(top - kPinchBelowTopM, std::min(centre, kMinPadHeightM));
+
+// The box, cylinder and sphere are one geom sized from object.size_m, as the model always had them;
+// the library's shapes and the user's mesh are their parts (ObjectParts).
+bool IsPrimitive(const ObjectConfig& object) {
+  return object.shape == ObjectShape::kBox || object.shape == ObjectShape::kCylinder ||
+         object.shape == ObjectShape::kSphere;
+}
+
+std::vector<ObjectPart> ObjectPartsToWrite(const ObjectConfig& object) {
+  return IsPrimitive(object) ? std::vector<ObjectPart>{} : ObjectParts(object);
+}
+
+void WriteObjectMeshAssets(Writer& w, const std::vector<ObjectPart>& parts) {
+  std::ostringstream& o = w.out();
+  for (size_t k = 0; k < parts.size(); ++k) {
+    if (parts[k].type != ObjectPart::Type::kMesh) continue;
+    o << "    <mesh name=\"object_mesh_" << k << "\" vertex=\"";
+    for (size_t v = 0; v < parts[k].vertices_m.size(); ++v)
+      o << (v == 0 ? "" : "  ") << w.Vec(parts[k].vertices_m[v]);
+    o << "\"/>\n";
+  }
+}
+
+// The object: a free body at its start pose whose geoms have contact priority, so its friction and
+// compliance govern. Returns the names of the geoms that collide.
+std::vector<std::string> WriteObjectBody(Writer& w, const SceneConfig& scene, const std::vector<ObjectPart>& parts,
+                                         const std::string& indent) {
+  const ObjectConfig& object = scene.object;
+  std::ostringstream& o = w.out();
+  const double yaw = object.initial_yaw_rad;
+  o << indent << "<body name=\"object\" pos=\""
+    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], object.StartCentreZM())
+    << "\" quat=\"" << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
+  o << indent << "  <freejoint name=\"object_free\"/>\n";
+  const std::string contact = "priority=\"1\" condim=\"" +
+                              std::to_string(object.ContactCondim(scene.physics.condim)) + "\" friction=\"" +
+                              w.Num(object.friction) + " " + w.Num(scene.TorsionalFrictionM(object.friction)) +
+                              " " + w.Num(kRollingFriction) + "\"";
+  if (IsPrimitive(object)) {
+    o << indent << "  <geom name=\"object_geom\" ";
+    switch (object.shape) {
+      case ObjectShape::kBox:
+        o << "type=\"box\" size=\""
+          << w.Vec(0.5 * object.size_m[0], 0.5 * object.size_m[1], 0.5 * object.size_m[2]) << "\"";
+        break;
+      case ObjectShape::kCylinder:
+        o << "type=\"cylinder\" size=\"" << w.Num(0.5 * object.size_m[0]) << " "
+          << w.Num(0.5 * object.size_m[2]) << "\"";
+        break;
+      default:
+        o << "type=\"sphere\" size=\"" << w.Num(0.5 * object.size_m[0]) << "\"";
+        break;
+    }
+    o << " mass=\"" << w.Num(object.mass_kg) << "\" " << contact
+      << " contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+    o << indent << "</body>\n";
+    return {"object_geom"};
+  }
+  std::vector<std::string> object_geoms;
+  for (size_t k = 0; k < parts.size(); ++k) {
+    const ObjectPart& part = parts[k];
+    const std::string name = k == 0 ? "object_geom" : "object_geom_" + std::to_string(k);
+    if (part.collides) object_geoms.push_back(name);
+    o << indent << "  <geom name=\"" << name << "\" ";
+    const Eigen::Vector3d half = part.size_m[1] * part.axis;
+    switch (part.type) {
+      case ObjectPart::Type::kBox:
+        o << "type=\"box\" size=\"" << w.Vec(part.size_m[0], part.size_m[1], part.size_m[2]) << "\" pos=\""
+          << w.Vec(part.position_m) << "\"";
+        break;
+      case ObjectPart::Type::kCylinder:
+      case ObjectPart::Type::kCapsule:
+        o << "type=\"" << (part.type == ObjectPart::Type::kCylinder ? "cylinder" : "capsule") << "\" size=\""
+          << w.Num(part.size_m[0]) << "\" fromto=\"" << w.Vec(part.position_m - half) << " "
+          << w.Vec(part.position_m + half) << "\"";
+        break;
+      case ObjectPart::Type::kSphere:
+        o << "type=\"sphere\" size=\"" << w.Num(part.size_m[0]) << "\" pos=\"" << w.Vec(part.position_m) << "\"";
+        break;
+      case ObjectPart::Type::kMesh:
+        o << "type=\"mesh\" mesh=\"object_mesh_" << k << "\"";
+        break;
+    }
+    o << " mass=\"" << w.Num(part.mass_kg) << "\" " << contact;
+    if (part.collides) {
+      o << " contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
+    } else {
+      o << " contype=\"0\" conaffinity=\"0\" rgba=\"0.3 0.5 0.9 0.6\"/>\n";
+    }
+  }
+  o << indent << "</body>\n";
+  return object_geoms;
 }
 
 // The holder: shell mesh, optional rounded tip, one mesa per unit and the pad site, holder frame
@@ -279,7 +356,15 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   const double proximal_mass = 0.5 * hand.digit_mass_kg;
   const double middle_mass = 0.25 * hand.digit_mass_kg;
   const double distal_mass = 0.25 * hand.digit_mass_kg;
-  const double index_damping = motor.damping_n_m_s + place.stall_effort[0] / place.no_load_speed[0];
+  // In a wrap the index is driven by a flexor tendon across MCP and PIP (WriteProstheticTransmission)
+  // and its motor's back-EMF split over both joints so that the free finger closes as fast and along
+  // the same path as the linkage's; in a pinch the MCP carries it all.
+  const bool adaptive = hand.grasp == GraspType::kWrap;
+  const double back_emf = place.stall_effort[0] / place.no_load_speed[0];
+  const double flexor_pip_coef = 1.0 / finger.pip_mcp_ratio;
+  const double index_damping = motor.damping_n_m_s + (adaptive ? 0.5 * back_emf : back_emf);
+  const double pip_damping =
+      motor.damping_n_m_s + (adaptive ? 0.5 * back_emf * flexor_pip_coef * flexor_pip_coef : 0.0);
   const double thumb_damping = motor.damping_n_m_s + place.stall_effort[1] / place.no_load_speed[1];
   const double pip0 = finger.pip_mcp_ratio * mcp0;
   o << "        <body name=\"finger\" pos=\"" << w.Vec(kin.mcp_xz().x(), 0, kin.mcp_xz().y())
@@ -294,7 +379,9 @@ void WriteProstheticHand(Writer& w, const sensor::Layout& layout, const SceneCon
   o << "          <body name=\"finger_middle\" pos=\"" << w.Vec(finger.proximal_length_m, 0, 0)
     << "\" quat=\"" << w.AxisAngle(0, 1, 0, pip0) << "\">\n";
   o << "            <joint name=\"index_pip\" type=\"hinge\" axis=\"0 1 0\" ref=\"" << w.Num(pip0)
-    << "\" damping=\"" << w.Num(motor.damping_n_m_s) << "\"/>\n";
+    << "\" damping=\"" << w.Num(pip_damping) << "\"";
+  if (adaptive) o << " armature=\"" << w.Num(motor.armature_kg_m2 * flexor_pip_coef * flexor_pip_coef) << "\"";
+  o << "/>\n";
   o << "            <geom name=\"finger_middle\" type=\"capsule\" fromto=\"0 0 0 "
     << w.Num(finger.middle_length_m) << " 0 0\" size=\"" << w.Num(kMiddleRadiusM) << "\" mass=\""
     << w.Num(middle_mass) << "\" rgba=\"0.75 0.72 0.65 1\"/>\n";
@@ -347,13 +434,39 @@ void WriteProstheticTransmission(Writer& w, const SceneConfig& scene, const Hand
   const FingerConfig& finger = scene.hand.finger;
   // The linkage: PIP - PIP0 = ratio (MCP - MCP0), stiff as a rigid linkage is. The opposition is
   // held where the pre-shape put it. Brakes hold the driven joints where they are when engaged.
+  const bool adaptive = scene.hand.grasp == GraspType::kWrap;
+  const double flexor_pip_coef = 1.0 / finger.pip_mcp_ratio;
+  if (adaptive) {
+    // The wrap's adaptive finger: one flexor tendon pulls MCP and PIP (PIP at 1/ratio the MCP's arm,
+    // so the free finger keeps PIP = ratio x MCP), and a coupling spring holds PIP to ratio x MCP
+    // against a blocked link: when the proximal phalanx meets the object the MCP stops and the PIP
+    // flexes on until the middle phalanx meets it too, as a tendon-driven finger wraps link by link.
+    // The spring lets the PIP flex kWrapPipGiveRad past the linkage at the motor's stall.
+    const double stall_tension = place.stall_effort[0] / 2.0;
+    const double spring = flexor_pip_coef * stall_tension / kWrapPipGiveRad;
+    o << "  <tendon>\n";
+    o << "    <fixed name=\"index_flexor\">\n      <joint joint=\"index_mcp\" coef=\"1\"/>\n"
+      << "      <joint joint=\"index_pip\" coef=\"" << w.Num(flexor_pip_coef) << "\"/>\n    </fixed>\n";
+    o << "    <fixed name=\"index_coupling_spring\" stiffness=\"" << w.Num(spring) << "\" springlength=\"0\">\n"
+      << "      <joint joint=\"index_pip\" coef=\"1\"/>\n      <joint joint=\"index_mcp\" coef=\""
+      << w.Num(-finger.pip_mcp_ratio) << "\"/>\n    </fixed>\n";
+    o << "  </tendon>\n";
+  }
   o << "  <equality>\n";
-  o << "    <joint name=\"pip_coupling\" joint1=\"index_pip\" joint2=\"index_mcp\" polycoef=\"0 "
-    << w.Num(finger.pip_mcp_ratio) << " 0 0 0\" solref=\"0.002 1\"/>\n";
+  if (!adaptive) {
+    o << "    <joint name=\"pip_coupling\" joint1=\"index_pip\" joint2=\"index_mcp\" polycoef=\"0 "
+      << w.Num(finger.pip_mcp_ratio) << " 0 0 0\" solref=\"0.002 1\"/>\n";
+  }
   o << "    <joint name=\"thumb_opposition_lock\" joint1=\"thumb_opposition\" polycoef=\"0 0 0 0 0\""
     << " solref=\"0.002 1\"/>\n";
-  o << "    <joint name=\"index_brake\" joint1=\"index_mcp\" polycoef=\"0 0 0 0 0\" active=\"false\""
-    << " solref=\"0.002 1\"/>\n";
+  // The index's brake locks its motor: the MCP, or in a wrap the flexor tendon.
+  if (adaptive) {
+    o << "    <tendon name=\"index_brake\" tendon1=\"index_flexor\" polycoef=\"0 0 0 0 0\" active=\"false\""
+      << " solref=\"0.002 1\"/>\n";
+  } else {
+    o << "    <joint name=\"index_brake\" joint1=\"index_mcp\" polycoef=\"0 0 0 0 0\" active=\"false\""
+      << " solref=\"0.002 1\"/>\n";
+  }
   o << "    <joint name=\"thumb_brake\" joint1=\"thumb_flexion\" polycoef=\"0 0 0 0 0\" active=\"false\""
     << " solref=\"0.002 1\"/>\n";
   o << "  </equality>\n";
@@ -362,8 +475,11 @@ void WriteProstheticTransmission(Writer& w, const SceneConfig& scene, const Hand
   const char* names[2] = {"index_motor", "thumb_motor"};
   const char* joints[2] = {"index_mcp", "thumb_flexion"};
   for (int k = 0; k < 2; ++k) {
-    const double stall = place.stall_effort[k];
-    o << "    <general name=\"" << names[k] << "\" joint=\"" << joints[k]
+    // The flexor tendon moves 1 + ratio x 1/ratio = 2 rad per radian of the free finger's MCP: half
+    // the linkage's torque at the MCP makes the same pad force.
+    const bool tendon = adaptive && k == 0;
+    const double stall = tendon ? 0.5 * place.stall_effort[k] : place.stall_effort[k];
+    o << "    <general name=\"" << names[k] << "\" " << (tendon ? "tendon=\"index_flexor" : "joint=\"" + std::string(joints[k]))
       << "\" ctrllimited=\"true\" ctrlrange=\"-1 1\" gainprm=\"" << w.Num(stall)
       << "\" forcelimited=\"true\" forcerange=\"" << w.Num(-stall) << " " << w.Num(stall) << "\"/>\n";
   }
@@ -415,7 +531,8 @@ void WriteContactPairs(Writer& w, const SceneConfig& scene, const std::vector<st
            roll + "\"";
   };
   const std::string with_object = " condim=\"" + std::to_string(object.ContactCondim(scene.physics.condim)) +
-                                  friction(object.friction, object.torsional_friction) + compliance;
+                                  friction(object.friction, scene.TorsionalFrictionM(object.friction)) +
+                                  compliance;
   const std::string table_hand =
       " condim=\"3" + friction(scene.hand.friction, kHandSpinFriction) + compliance;
   o << "  <contact>\n";
@@ -456,7 +573,7 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
     const JawGeometry g = ComputeJawGeometry(layout, place.open_gap_m);
     // Holder centre level with the object centre, digits straddling it.
     wrist = {object.initial_position_m[0], object.initial_position_m[1],
-             ObjectCentreZ(object) + g.holder_center_below_wrist_m};
+             object.StartCentreZM() + g.holder_center_below_wrist_m};
     place.stall_effort = {hand.motor.stall_force_n, hand.motor.stall_force_n};
     place.no_load_speed = {hand.motor.no_load_speed_m_s, hand.motor.no_load_speed_m_s};
     place.contact_joint = {0.5 * (place.open_gap_m - place.object_width_m),
@@ -491,6 +608,10 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
                                      ProstheticKinematics::kThumbMinRad)};
   } else {
     const ProstheticKinematics kin = MakeKinematics(layout, scene);
+    place.pinch = PlacePinch(scene, kin);
+    const PinchPlacement& pinch = *place.pinch;
+    place.object_width_m = pinch.width_m;
+    if (std::isnan(hand.open_gap_m)) place.open_gap_m = pinch.width_m + 2.0 * hand.preshape_clearance_m;
     const double max_aperture = kin.MaxApertureM();
     if (place.open_gap_m > max_aperture) {
       std::ostringstream message;
@@ -498,19 +619,28 @@ HandPlacement PlaceHand(const sensor::Layout& layout, const SceneConfig& scene) 
               << " mm is wider than the prosthetic hand opens (" << max_aperture * 1e3 << " mm)";
       throw std::invalid_argument(message.str());
     }
-    // The object's centre at H x = centre_x: the hand's pinch centre (x = 0), or with
-    // pinch_square_pad half its width beyond the pad in its nominal square posture. Each digit's
-    // contact angle for this width, and the height at which their contacts meet the object.
-    const double half_width = 0.5 * place.object_width_m;
-    const double centre_x =
-        hand.pinch_square_pad ? kin.IndexPad(kin.SquarePadMcpRad()).point_xz.x() + half_width : 0.0;
-    const double half_gap = 0.5 * place.open_gap_m;
-    place.contact_joint = {kin.McpForPadX(centre_x - half_width), kin.ThumbForTipX(centre_x + half_width)};
-    place.preshape_joint = {kin.McpForPadX(centre_x - half_gap), kin.ThumbForTipX(centre_x + half_gap)};
-    const double contact_z = 0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() +
-                                    kin.ThumbTip(place.contact_joint[1]).point_xz.y());
-    wrist = {object.initial_position_m[0] - centre_x, object.initial_position_m[1],
-             PinchHeightM(object) - contact_z};
+    double centre_x = 0.0;  // the middle between the contacts, H x
+    double contact_z = 0.0;
+    if (pinch.kind == PinchKind::kRound) {
+      // The section's centre on the line through both contacts; each digit opens by the clearance.
+      const RoundPinchPose& round = pinch.round;
+      centre_x = round.centre_xz.x();
+      contact_z = round.centre_xz.y();
+      place.contact_joint = {round.mcp_rad, round.thumb_rad};
+      const double clearance = 0.5 * (place.open_gap_m - pinch.width_m);
+      place.preshape_joint = {kin.McpForPadX(kin.IndexPad(round.mcp_rad).point_xz.x() - clearance),
+                              kin.ThumbForTipX(kin.ThumbTip(round.thumb_rad).point_xz.x() + clearance)};
+    } else {
+      // Each digit's contact angle for this width, and the height at which their contacts meet it.
+      const double half_width = 0.5 * pinch.width_m;
+      const double half_gap = 0.5 * place.open_gap_m;
+      centre_x = PinchCentreX(scene, kin, pinch.width_m);
+      place.contact_joint = {kin.McpForPadX(centre_x - half_width), kin.ThumbForTipX(centre_x + half_width)};
+      place.preshape_joint = {kin.McpForPadX(centre_x - half_gap), kin.ThumbForTipX(centre_x + half_gap)};
+      contact_z = 0.5 * (kin.IndexPad(place.contact_joint[0]).point_xz.y() +
+                         kin.ThumbTip(place.contact_joint[1]).point_xz.y());
+    }
+    wrist = {pinch.centre_x_m - centre_x, pinch.line_y_m, pinch.height_m - contact_z};
     // Motors sized so that at stall each digit presses stall_pinch_force_n on the object in this
     // grasp's contact posture: torque = force x lever arm there.
     place.lever_arm_m = {std::abs(kin.PadLeverArmM(place.contact_joint[0])),
@@ -595,8 +725,24 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
   o << "motors: stall " << place.stall_effort[0] << " N m (index MCP), " << place.stall_effort[1]
     << " N m (thumb) = " << scene.hand.digit_motor.stall_pinch_force_n << " N pinch; no-load "
     << place.no_load_speed[0] << " rad/s (index), " << place.no_load_speed[1] << " rad/s (thumb)\n";
-  o << "pinch height: pad centre " << mm(PinchHeightM(scene.object)) << " mm above the table\n";
+  const PinchPlacement& pinch = *place.pinch;
+  o << "placement: " << ToString(pinch.kind) << " pinch " << pinch.reason << "\n";
+  o << "pinch line: y " << mm(pinch.line_y_m) << " mm, " << mm(pinch.height_m) << " mm above the table; contacts "
+    << mm(pinch.width_m) << " mm apart about x " << mm(pinch.centre_x_m) << " mm\n";
   o << "largest aperture: " << mm(kin.MaxApertureM()) << " mm\n";
+  return o.str();
+}
+
+std::string ObjectOnlyMjcf(const SceneConfig& scene) {
+  Writer w;
+  std::ostringstream& o = w.out();
+  const std::vector<ObjectPart> parts = ObjectPartsToWrite(scene.object);
+  o << "<mujoco model=\"graspbed_object\">\n  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n"
+    << "  <option gravity=\"0 0 0\"/>\n  <asset>\n";
+  WriteObjectMeshAssets(w, parts);
+  o << "  </asset>\n  <worldbody>\n";
+  WriteObjectBody(w, scene, parts, "    ");
+  o << "  </worldbody>\n</mujoco>\n";
   return o.str();
 }
 
@@ -657,17 +803,8 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   }
   o << "\"/>\n";
   // The library's shapes and the user's mesh: the object's parts (one geom each, object frame).
-  const bool primitive = object.shape == ObjectShape::kBox || object.shape == ObjectShape::kCylinder ||
-                         object.shape == ObjectShape::kSphere;
-  std::vector<ObjectPart> parts;
-  if (!primitive) parts = ObjectParts(object);
-  for (size_t k = 0; k < parts.size(); ++k) {
-    if (parts[k].type != ObjectPart::Type::kMesh) continue;
-    o << "    <mesh name=\"object_mesh_" << k << "\" vertex=\"";
-    for (size_t v = 0; v < parts[k].vertices_m.size(); ++v)
-      o << (v == 0 ? "" : "  ") << w.Vec(parts[k].vertices_m[v]);
-    o << "\"/>\n";
-  }
+  const std::vector<ObjectPart> parts = ObjectPartsToWrite(object);
+  WriteObjectMeshAssets(w, parts);
   o << "  </asset>\n";
 
   o << "  <worldbody>\n";
@@ -701,70 +838,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   const std::vector<std::string> hand_geoms = GeomNames(o.str().substr(static_cast<size_t>(hand_start)));
   o << "    </body>\n";
 
-  // The object: a free body whose geom has contact priority, so its friction and compliance govern.
-  const double yaw = object.initial_yaw_rad;
-  o << "    <body name=\"object\" pos=\""
-    << w.Vec(object.initial_position_m[0], object.initial_position_m[1], ObjectCentreZ(object))
-    << "\" quat=\"" << w.Num(std::cos(0.5 * yaw)) << " 0 0 " << w.Num(std::sin(0.5 * yaw)) << "\">\n";
-  o << "      <freejoint name=\"object_free\"/>\n";
-  std::vector<std::string> object_geoms = {"object_geom"};
-  if (!primitive) {
-    object_geoms.clear();
-    for (size_t k = 0; k < parts.size(); ++k) {
-      const ObjectPart& part = parts[k];
-      const std::string name = k == 0 ? "object_geom" : "object_geom_" + std::to_string(k);
-      if (part.collides) object_geoms.push_back(name);
-      o << "      <geom name=\"" << name << "\" ";
-      const Eigen::Vector3d half = part.size_m[1] * part.axis;
-      switch (part.type) {
-        case ObjectPart::Type::kBox:
-          o << "type=\"box\" size=\"" << w.Vec(part.size_m[0], part.size_m[1], part.size_m[2]) << "\" pos=\""
-            << w.Vec(part.position_m) << "\"";
-          break;
-        case ObjectPart::Type::kCylinder:
-        case ObjectPart::Type::kCapsule:
-          o << "type=\"" << (part.type == ObjectPart::Type::kCylinder ? "cylinder" : "capsule") << "\" size=\""
-            << w.Num(part.size_m[0]) << "\" fromto=\"" << w.Vec(part.position_m - half) << " "
-            << w.Vec(part.position_m + half) << "\"";
-          break;
-        case ObjectPart::Type::kSphere:
-          o << "type=\"sphere\" size=\"" << w.Num(part.size_m[0]) << "\" pos=\"" << w.Vec(part.position_m) << "\"";
-          break;
-        case ObjectPart::Type::kMesh:
-          o << "type=\"mesh\" mesh=\"object_mesh_" << k << "\"";
-          break;
-      }
-      o << " mass=\"" << w.Num(part.mass_kg) << "\" priority=\"1\" condim=\"" << object_condim << "\" friction=\""
-        << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " " << w.Num(kRollingFriction)
-        << "\"";
-      if (part.collides) {
-        o << " contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
-      } else {
-        o << " contype=\"0\" conaffinity=\"0\" rgba=\"0.3 0.5 0.9 0.6\"/>\n";
-      }
-    }
-  } else {
-  o << "      <geom name=\"object_geom\" ";
-  switch (object.shape) {
-    case ObjectShape::kBox:
-      o << "type=\"box\" size=\""
-        << w.Vec(0.5 * object.size_m[0], 0.5 * object.size_m[1], 0.5 * object.size_m[2]) << "\"";
-      break;
-    case ObjectShape::kCylinder:
-      o << "type=\"cylinder\" size=\"" << w.Num(0.5 * object.size_m[0]) << " "
-        << w.Num(0.5 * object.size_m[2]) << "\"";
-      break;
-    case ObjectShape::kSphere:
-      o << "type=\"sphere\" size=\"" << w.Num(0.5 * object.size_m[0]) << "\"";
-      break;
-    default:
-      break;
-  }
-  o << " mass=\"" << w.Num(object.mass_kg) << "\" priority=\"1\" condim=\"" << object_condim
-    << "\" friction=\"" << w.Num(object.friction) << " " << w.Num(object.torsional_friction) << " "
-    << w.Num(kRollingFriction) << "\" contype=\"1\" conaffinity=\"3\" rgba=\"0.3 0.7 0.4 1\"/>\n";
-  }
-  o << "    </body>\n";
+  const std::vector<std::string> object_geoms = WriteObjectBody(w, scene, parts, "    ");
   o << "  </worldbody>\n";
   if (physics.contact_pairs) WriteContactPairs(w, scene, hand_geoms, object_geoms);
 

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "sensor/layout.h"
+#include "sim/grasp_placement.h"
 #include "sim/hand_kinematics.h"
 #include "sim/scene_config.h"
 
@@ -51,6 +52,8 @@ struct HandPlacement {
   /// In a wrap, the pose the kinematics solved (cylinder axis, contact and clearance angles, lever
   /// arms; preshape_joint above is that pre-shape opened further so both digits arrive together).
   std::optional<WrapPose> wrap;
+  /// In a prosthetic pinch, the placement chosen from the object's geometry (PlacePinch).
+  std::optional<PinchPlacement> pinch;
 };
 
 /// Computes the start pose and motor sizing that GenerateMjcf uses. Throws std::invalid_argument
@@ -65,6 +68,10 @@ std::vector<std::string> GripBrakeNames(HandModel model);
 /// the hand frame, pre-shape and contact angles, lever arms, motor sizes, pinch height), for docs and
 /// for users checking a pre-shape; the numbers are the ones GenerateMjcf uses.
 std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene);
+
+/// MJCF of the object alone at its start pose (no table, no hand, no gravity): what the grasp
+/// placement probes the object's surfaces in.
+std::string ObjectOnlyMjcf(const SceneConfig& scene);
 
 /// Full MJCF text of the scene. Throws std::invalid_argument if the layout or scene is invalid
 /// (e.g. more units than sensor::kMaxUnits, an object too wide for the hand).

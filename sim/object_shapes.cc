@@ -414,6 +414,20 @@ MassProperties ComputeMassProperties(const std::vector<ObjectPart>& parts) {
   return props;
 }
 
+std::optional<RoundSection> PinchRoundSection(const ObjectConfig& object) {
+  const std::array<double, 3>& s = object.size_m;
+  switch (object.shape) {
+    case ObjectShape::kSphere:
+      return RoundSection{Eigen::Vector3d::Zero(), 0.5 * s[0], "its centre"};
+    case ObjectShape::kEgg:
+      return RoundSection{Eigen::Vector3d(0.0, 0.0, (kEggEquatorShare - 0.5) * s[2]), 0.5 * s[0], "its equator"};
+    case ObjectShape::kBanana:  // the middle capsule's axis runs along y through the origin
+      return RoundSection{Eigen::Vector3d::Zero(), 0.5 * s[1], "its middle, across its thickness"};
+    default:
+      return std::nullopt;
+  }
+}
+
 double MeshFile::SignedVolume() const {
   double six_volume = 0.0;
   for (const auto& t : triangles) six_volume += vertices[t[0]].dot(vertices[t[1]].cross(vertices[t[2]]));

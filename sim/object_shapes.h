@@ -13,6 +13,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,19 @@ std::vector<ObjectPart> ObjectParts(const ObjectConfig& object);
 /// primitives, the exact polygonal frustums of a revolution profile, the convex hull's tetrahedra
 /// for a user's mesh.
 MassProperties ComputeMassProperties(const std::vector<ObjectPart>& parts);
+
+/// A section of the object that is round in the pinch's plane (world x-z at its start pose), which a
+/// pinch grips through its centre: a ball's great circle, an egg's equator (its profile's widest
+/// ring; the profile's curvature there is the egg's, approximated by the circle), a banana's middle
+/// across its thickness.
+struct RoundSection {
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< object frame [m]
+  double radius_m = 0.0;                               ///< [m]
+  const char* where = "";                              ///< "its centre", "its equator", ...
+};
+
+/// The round section a pinch takes `object` by, or nullopt for an object pinched by its faces.
+std::optional<RoundSection> PinchRoundSection(const ObjectConfig& object);
 
 /// Mass of the liquid in a part-filled container (bottle), 0 for everything else [kg].
 double LiquidMassKg(const ObjectConfig& object);

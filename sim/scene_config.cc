@@ -105,6 +105,11 @@ double SceneConfig::ThumbOppositionRad() const {
   return std::isnan(hand.thumb.opposition_rad) ? 0.0 : hand.thumb.opposition_rad;
 }
 
+double SceneConfig::TorsionalFrictionM(double friction) const {
+  if (!std::isnan(object.torsional_friction)) return object.torsional_friction;
+  return 2.0 / 3.0 * friction * hand.contact_patch_radius_m;
+}
+
 double ObjectConfig::RestHalfHeightM() const {
   switch (shape) {
     case ObjectShape::kBox:
@@ -149,7 +154,10 @@ const common::FieldTable<ObjectConfig>& ObjectConfigFields() {
                         "Coulomb coefficient of every contact with the object"),
           Table::Number("torsional_friction", &C::torsional_friction,
                         NumberRule::Between(0.0, kMaxTorsionalFrictionM), "m",
-                        "only with `physics.condim` or `condim` >= 4"),
+                        "torque about a contact's normal per newton of normal force, only with "
+                        "`physics.condim` or `condim` >= 4; auto: the soft finger's (2/3) x `friction` x "
+                        "`hand.contact_patch_radius_m`")
+              .NanIsAuto(),
           Table::Integer("condim", &C::condim, 0, 6, "",
                          "contact dimensionality of this object's contacts; 0 = `physics.condim`; 6 adds "
                          "rolling friction (0.1 mm), which a soft object the pad sinks into needs")
@@ -374,6 +382,9 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
                       "the hand's centre, the pad tilted for any other width"),
           Table::Number("preshape_clearance_m", &C::preshape_clearance_m, NumberRule::Between(0.0, 0.05), "m",
                         "clearance on each side of the object in the automatic pre-shape"),
+          Table::Number("contact_patch_radius_m", &C::contact_patch_radius_m, NumberRule::Between(0.0, 0.02), "m",
+                        "a fingertip's contact patch on an object: the soft finger's spin friction (2/3) mu x "
+                        "this (half the default holder's minor axis)"),
           Table::Number("palm_mass_kg", &C::palm_mass_kg, NumberRule::Between(kMinPalmMassKg, kMaxPalmMassKg),
                         "kg", "palm with wrist carriage"),
           Table::Number("digit_mass_kg", &C::digit_mass_kg,
@@ -419,7 +430,10 @@ const common::FieldTable<PhysicsConfig>& PhysicsConfigFields() {
                          "Newton iterations"),
           Table::Number("tolerance", &C::tolerance, NumberRule::Between(kMinTolerance, kMaxTolerance), "-",
                         "solver tolerance"),
-          Table::Integer("condim", &C::condim, 3, 6, "", "object contact dimensionality").Note("not 5"),
+          Table::Integer("condim", &C::condim, 3, 6, "",
+                         "object contact dimensionality: 4, the soft finger, resists spin about each contact "
+                         "normal; 3, point contacts an object pivots about; 6 adds rolling friction")
+              .Note("not 5"),
           Table::Number("gravity_m_s2", &C::gravity_m_s2, NumberRule::Between(0.0, kMaxGravityMS2), "m/s^2",
                         "along -z; 0 = off"),
           Table::Bool("table", &C::table, "include the table (off for free-floating tests)"),

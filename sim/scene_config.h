@@ -99,7 +99,9 @@ struct ObjectConfig {
   /// Coulomb friction coefficient of every contact with the object (the object's geom has contact
   /// priority, so its friction and compliance govern its contacts with the fingers and the table).
   double friction = 0.8;
-  double torsional_friction = 0.0;  ///< MuJoCo torsional friction [m] (only with condim >= 4)
+  /// MuJoCo torsional friction [m]: the most torque about the contact normal per newton of normal
+  /// force (only with condim >= 4). NaN: the soft finger's, SceneConfig::TorsionalFrictionM.
+  double torsional_friction = std::numeric_limits<double>::quiet_NaN();
   /// Contact dimensionality of this object's contacts (3, 4 or 6); 0 = physics.condim. A soft object
   /// the pad sinks into takes 6: its rolling friction stands for the wide patch that keeps it from
   /// rolling about the point contacts (docs/scenarios.md, "Object compliance").
@@ -119,6 +121,9 @@ struct ObjectConfig {
 
   /// Height of the object's centre above its lowest point when standing upright [m].
   double RestHalfHeightM() const;
+  /// World height of the object's centre at the start [m]: initial_position_m z, or resting on the
+  /// table (RestHalfHeightM) when that is negative.
+  double StartCentreZM() const { return initial_position_m[2] < 0.0 ? RestHalfHeightM() : initial_position_m[2]; }
   /// The contact dimensionality the object's contacts get: condim, or `physics_condim` when 0.
   int ContactCondim(int physics_condim) const { return condim != 0 ? condim : physics_condim; }
 };
@@ -227,6 +232,11 @@ struct HandConfig {
   /// hand's centre; false: both digits meet it at the same distance from the centre, the pad tilted
   /// (17 deg for an 18 mm marker, which then tips against it).
   bool pinch_square_pad = false;
+  /// Radius of the contact patch a fingertip's silicone skin makes on an object [m]: a soft finger
+  /// resists spin about the contact normal up to (2/3) mu a N, a uniform-pressure disc's friction
+  /// torque (docs/simulation.md, "The soft finger"). 4 mm: half the default holder's 8 mm minor axis,
+  /// the widest patch the pad's curved face can make across it.
+  double contact_patch_radius_m = 0.004;
   /// Mass of the palm (with the wrist carriage) [kg], of each digit [kg].
   double palm_mass_kg = 0.3;
   double digit_mass_kg = 0.03;
@@ -268,7 +278,9 @@ struct PhysicsConfig {
   int noslip_iterations = 0;
   int solver_iterations = 100;  ///< Newton iterations
   double tolerance = 1e-10;     ///< solver tolerance
-  int condim = 3;               ///< contact dimensionality of object contacts (3, 4 or 6)
+  /// Contact dimensionality of object contacts (3, 4 or 6): 4, the soft finger, resists spin about
+  /// each contact's normal (3: point contacts an object pivots about).
+  int condim = 4;
   double gravity_m_s2 = 9.81;   ///< magnitude, along world -z [m/s^2]; 0 disables gravity
   bool table = true;            ///< include the table (off for free-floating tests)
   /// List the geom pairs that can touch in the model (collision="predefined"); false leaves them
@@ -288,6 +300,10 @@ struct SceneConfig {
   /// The pre-shape aperture in use [m]: hand.open_gap_m, or the object's width plus clearance on
   /// both sides when it is NaN (the pre-shape follows the object).
   double OpenGapM() const;
+  /// Torsional friction of the object's contacts at sliding friction `friction` [m]:
+  /// object.torsional_friction, or when it is NaN the soft finger's (2/3) friction x
+  /// hand.contact_patch_radius_m.
+  double TorsionalFrictionM(double friction) const;
   /// Thumb opposition in use [rad].
   double ThumbOppositionRad() const;
 

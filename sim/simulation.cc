@@ -208,7 +208,13 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     GripDrive drive;
     drive.actuator = RequireId(m, mjOBJ_ACTUATOR, motors[k].c_str());
     drive.brake_equality = RequireId(m, mjOBJ_EQUALITY, brakes[k].c_str());
-    drive.brake_joint_qpos = m->jnt_qposadr[m->eq_obj1id[drive.brake_equality]];
+    if (m->eq_type[drive.brake_equality] == mjEQ_TENDON) {
+      drive.brake_tendon = m->eq_obj1id[drive.brake_equality];
+    } else {
+      drive.brake_joint_qpos = m->jnt_qposadr[m->eq_obj1id[drive.brake_equality]];
+    }
+    // A motor on a tendon (the wrap's flexor) moves it 2 rad per radian of the free finger's MCP.
+    if (m->actuator_trntype[drive.actuator] == mjTRN_TENDON) drive.transmission = 2.0;
     drive.stall = place.stall_effort[k];
     drive.no_load_speed = place.no_load_speed[k];
     drive.lever_arm_m = place.lever_arm_m[k];
@@ -242,6 +248,11 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
       }
       break;
     }
+  }
+  geom_is_link_.assign(m->ngeom, 0);
+  for (const char* link : {"finger_proximal", "finger_middle", "finger_link"}) {
+    const int geom = mj_name2id(m, mjOBJ_GEOM, link);
+    if (geom >= 0) geom_is_link_[geom] = 1;
   }
   unit_frames_.resize(layout_.unit_count());
   for (int i = 0; i < layout_.unit_count(); ++i) {
@@ -289,9 +300,12 @@ void Simulation::SetGripEffort(double effort) {
 void Simulation::SetGripBrake(bool engaged) {
   for (const GripDrive& drive : grip_drives_) {
     if (engaged && !brake_engaged_) {
-      // Joint equality with only joint1: joint = qpos0 + polycoef[0].
+      // Joint (tendon) equality with only joint1 (tendon1): joint = qpos0 + polycoef[0] (the tendon's
+      // length = its length at qpos0 + polycoef[0]).
       model_->eq_data[drive.brake_equality * mjNEQDATA + 0] =
-          data_->qpos[drive.brake_joint_qpos] - model_->qpos0[drive.brake_joint_qpos];
+          drive.brake_tendon >= 0
+              ? data_->ten_length[drive.brake_tendon] - model_->tendon_length0[drive.brake_tendon]
+              : data_->qpos[drive.brake_joint_qpos] - model_->qpos0[drive.brake_joint_qpos];
     }
     model_->eq_active[drive.brake_equality] = engaged ? 1 : 0;
   }
@@ -343,11 +357,17 @@ void Simulation::SetObjectFriction(double friction) {
   if (!(friction > 0.0) || !std::isfinite(friction)) {
     throw std::invalid_argument("object friction = " + std::to_string(friction) + ": must be > 0");
   }
-  for (const int geom : object_geoms_) model_->geom_friction[3 * geom] = friction;
-  // The listed contact pairs carry their own friction (sliding along both tangents).
+  // The soft finger's spin friction follows the sliding friction (its patch does not change).
+  const double torsional = scene_.TorsionalFrictionM(friction);
+  for (const int geom : object_geoms_) {
+    model_->geom_friction[3 * geom] = friction;
+    model_->geom_friction[3 * geom + 1] = torsional;
+  }
+  // The listed contact pairs carry their own friction (sliding along both tangents, then spin).
   for (const int pair : object_pairs_) {
     model_->pair_friction[5 * pair] = friction;
     model_->pair_friction[5 * pair + 1] = friction;
+    model_->pair_friction[5 * pair + 2] = torsional;
   }
 }
 
@@ -539,8 +559,9 @@ GroundTruth Simulation::truth() const {
   }
   // Stall x effort minus the back-EMF term carried by the driven joint's damping, as pinch force.
   const GripDrive& drive = grip_drives_.front();
-  t.grip_motor_force_n = (d->actuator_force[drive.actuator] -
-                          drive.stall * d->actuator_velocity[drive.actuator] / drive.no_load_speed) /
+  t.grip_motor_force_n = (drive.transmission * d->actuator_force[drive.actuator] -
+                          drive.stall * d->actuator_velocity[drive.actuator] /
+                              (drive.transmission * drive.no_load_speed)) /
                          drive.lever_arm_m;
 
   double finger_on_object = 0.0;
@@ -558,6 +579,13 @@ GroundTruth Simulation::truth() const {
     const int side2 = geom_side_[contact.geom2];
     const bool digit1 = side1 == kFinger || side1 == kThumb;
     const bool digit2 = side2 == kFinger || side2 == kThumb;
+    if ((side1 == kHandOther && geom_is_object_[contact.geom2]) ||
+        (side2 == kHandOther && geom_is_object_[contact.geom1])) {
+      mjtNum palm[6];
+      mj_contactForce(m, d, c, palm);
+      t.palm_normal_force_n += palm[0];
+      continue;
+    }
     if (digit1 == digit2) continue;  // hand on hand, or nothing of the digits
     if (side1 == kHandOther || side2 == kHandOther) continue;
     const int digit_geom = digit1 ? contact.geom1 : contact.geom2;
@@ -581,6 +609,7 @@ GroundTruth Simulation::truth() const {
     if (side == kFinger) {
       finger_on_object += normal;
       ++t.finger_contacts;
+      if (geom_is_link_[digit_geom]) t.finger_links_normal_force_n += normal;
       if (geom_unit_[digit_geom] >= 0) {
         t.max_mesa_penetration_m = std::max(t.max_mesa_penetration_m, -contact.dist);
       } else if (digit_geom == holder_shell_geom_ && contact.dist < 0.0) {

@@ -75,6 +75,10 @@ struct GroundTruth {
   /// outside the hand [N]; on the thumb (pad, link) [N].
   double finger_normal_force_n = 0.0;
   double thumb_normal_force_n = 0.0;
+  /// Normal force on the object from the index's proximal and middle phalanges (the jaw's link) and
+  /// from the palm [N]: in a wrap the links and the palm take a share of the squeeze.
+  double finger_links_normal_force_n = 0.0;
+  double palm_normal_force_n = 0.0;
   /// Normal force carried by the mesas (sensed) and by the whole holder (mesas + shell) [N].
   double sensed_normal_force_n = 0.0;
   double holder_normal_force_n = 0.0;
@@ -218,7 +222,11 @@ class Simulation {
   struct GripDrive {
     int actuator = -1;
     int brake_equality = -1;
-    int brake_joint_qpos = -1;   ///< qpos address of the joint the brake holds
+    int brake_joint_qpos = -1;   ///< qpos address of the joint the brake holds (-1: a tendon)
+    int brake_tendon = -1;       ///< the tendon the brake holds (-1: a joint)
+    /// Radians (metres) the actuator's transmission moves per radian (metre) of the driven joint
+    /// in free motion: 2 for the wrap's flexor tendon across MCP and PIP, else 1.
+    double transmission = 1.0;
     double stall = 0.0;          ///< stall torque [N m] or force [N]
     double no_load_speed = 1.0;  ///< [rad/s] or [m/s]
     double lever_arm_m = 1.0;    ///< drive -> pinch force [m] (1 for the jaw)
@@ -228,8 +236,10 @@ class Simulation {
   std::array<int, 3> wrist_joint_qpos_{-1, -1, -1};
   /// geom id -> unit index (-1 for non-mesa geoms); built once.
   std::vector<int> geom_unit_;
-  /// geom id -> 1 finger, 2 thumb, 0 other (hand-side classification for ground truth).
+  /// geom id -> 1 finger, 2 thumb, 3 palm and wrist, 0 other (hand-side classification for ground truth).
   std::vector<int> geom_side_;
+  /// geom id -> whether it is a finger link below the holder (proximal, middle phalanx; jaw link).
+  std::vector<char> geom_is_link_;
   /// Unit frames in the holder body frame (inward normal, beam axis, cross axis, centre), per unit.
   std::vector<std::array<double, 12>> unit_frames_;
   /// The object as compiled: mass [kg], principal inertia [kg m^2], and what MuJoCo derived from

@@ -84,6 +84,7 @@ class TruthRing {
 // order SimRun::Record fills them.
 constexpr const char* kTruthNames[] = {
     "true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",     "true_squeeze_n",
+    "true_links_fn_n",    "true_palm_fn_n",
     "slip_speed_mm_s",    "sliding_speed_mm_s", "finger_sliding_mm_s", "thumb_sliding_mm_s",
     "sliding_load_share", "load_bound_grip_n",  "object_x_m",          "object_y_m",
     "object_z_m",         "object_height_m",    "wrist_x_m",           "wrist_y_m",
@@ -283,6 +284,8 @@ class SimRun final : public internal::RunBackend {
         truth_.finger_normal_force_n,
         truth_.thumb_normal_force_n,
         truth_.object_squeeze_n,
+        truth_.finger_links_normal_force_n,
+        truth_.palm_normal_force_n,
         truth_.slip_speed_m_s * 1e3,
         truth_.sliding_speed_m_s * 1e3,
         truth_.finger_sliding_speed_m_s * 1e3,
@@ -334,7 +337,7 @@ class SimRun final : public internal::RunBackend {
     result.metrics.physics_fault = fault.occurred;
     result.metrics.physics_fault_cause = fault.occurred ? fault.cause_text() : "";
     result.metrics.physics_fault_time_s = fault.time_s;
-    result.outcomes = EvaluateExpectations(config_.expectations, result.metrics);
+    result.outcomes = EvaluateExpectations(config_.expectations, result.metrics, config_.metrics);
     // An event action that never ran fails the run like an expectation.
     for (ExpectationOutcome& outcome : player_.EventOutcomes(sim_s)) result.outcomes.push_back(std::move(outcome));
     result.script_timings = player_.timings();
