@@ -50,6 +50,8 @@ Metrics HeldMetrics() {
   m.ft_rmse_n = 0.3;
   m.time_to_stable_s = 0.5;
   m.held_s = 60.0;
+  m.sensed_grip_share = 0.9;
+  m.contact_unit = 9;
   return m;
 }
 
@@ -182,19 +184,46 @@ TEST(ExpectationsTest, EstimationErrorTakesTheWorseOfFnAndFtAndFailsWithoutConta
   EXPECT_EQ(unscored.value_text, "no contact");
 }
 
-TEST(ExpectationsTest, PhysicsFaultIsAlwaysCheckedAndOnlyConfiguredOnesAppear) {
+TEST(ExpectationsTest, PhysicsFaultAndGraspedOnSensorAreAlwaysCheckedAndOnlyConfiguredOnesAppear) {
   Metrics m = HeldMetrics();
   std::vector<ExpectationOutcome> outcomes = EvaluateExpectations(Expectations{}, m, MetricsConfig{});
-  ASSERT_EQ(outcomes.size(), 1u);
-  EXPECT_EQ(outcomes[0].name, "no_physics_fault");
+  ASSERT_EQ(outcomes.size(), 2u);
+  EXPECT_EQ(outcomes[0].name, "grasped_on_sensor");
   EXPECT_TRUE(outcomes[0].passed);
+  EXPECT_EQ(outcomes[1].name, "no_physics_fault");
+  EXPECT_TRUE(outcomes[1].passed);
   m.physics_fault = true;
   m.physics_fault_cause = "NaN in qacc";
   m.physics_fault_time_s = 0.75;
   outcomes = EvaluateExpectations(Expectations{}, m, MetricsConfig{});
-  EXPECT_FALSE(outcomes[0].passed);
-  EXPECT_EQ(outcomes[0].value_text, "NaN in qacc");
-  EXPECT_EQ(outcomes[0].note, "at t = 0.75 s");
+  EXPECT_FALSE(outcomes[1].passed);
+  EXPECT_EQ(outcomes[1].value_text, "NaN in qacc");
+  EXPECT_EQ(outcomes[1].note, "at t = 0.75 s");
+  // Set false, grasped_on_sensor is not checked (a scene meant to be held off the pad).
+  Expectations off_pad;
+  off_pad.grasped_on_sensor = false;
+  EXPECT_EQ(EvaluateExpectations(off_pad, m, MetricsConfig{}).size(), 1u);
+}
+
+// grasped_on_sensor fails a held object the units barely felt, by either of its limits, and says
+// which; a run that never held anything passes it (not_dropped speaks for that).
+TEST(ExpectationsTest, GraspedOnSensorFailsAnObjectHeldOffThePadByTimeOrByShare) {
+  const MetricsConfig config;
+  Metrics m = HeldMetrics();
+  EXPECT_TRUE(Find(EvaluateExpectations(Expectations{}, m, config), "grasped_on_sensor").passed);
+  m.unsensed_held_s = config.max_unsensed_held_s + 0.01;
+  const ExpectationOutcome unsensed = Find(EvaluateExpectations(Expectations{}, m, config), "grasped_on_sensor");
+  EXPECT_FALSE(unsensed.passed);
+  EXPECT_NE(unsensed.note.find("with no unit loaded"), std::string::npos) << unsensed.note;
+  m.unsensed_held_s = config.max_unsensed_held_s;  // at the limit: passes
+  EXPECT_TRUE(Find(EvaluateExpectations(Expectations{}, m, config), "grasped_on_sensor").passed);
+  m.sensed_grip_share = config.min_sensed_grip_share - 0.01;
+  const ExpectationOutcome light = Find(EvaluateExpectations(Expectations{}, m, config), "grasped_on_sensor");
+  EXPECT_FALSE(light.passed);
+  EXPECT_NE(light.note.find("beside the pad"), std::string::npos) << light.note;
+  EXPECT_NEAR(*light.value, config.min_sensed_grip_share - 0.01, 1e-12);
+  Metrics never;
+  EXPECT_TRUE(Find(EvaluateExpectations(Expectations{}, never, config), "grasped_on_sensor").passed);
 }
 
 TEST(SummaryTableTest, EstimationErrorKeepsItsSignificantDigits) {
@@ -221,6 +250,8 @@ class TrackerTest : public ::testing::Test {
     truth_.thumb_contacts = 1;
     truth_.finger_normal_force_n = 2.0;
     truth_.object_squeeze_n = 2.0;
+    // Lifted off the table: the grasp is established at the first touch (no acquisition).
+    truth_.object_height_above_table_m = 0.01;
     state_.unit_count = 1;
     loads_[0].fn_n = 1.0;
     state_.fn_n[0] = 1.0;
@@ -730,6 +761,113 @@ expectations: {slip_detected_within_ms: 50, not_dropped: true}
   EXPECT_FALSE(Find(blind.result.outcomes, "slip_detected_within_ms").passed);
   EXPECT_FALSE(Find(blind.result.outcomes, "not_dropped").passed);
   EXPECT_GT(blind.result.metrics.drop_time_s, 0.85);
+}
+
+
+// Acquisition: an object on the table that the closing digits push 1 mm and that then stays put is
+// established once still for acquisition_settle_s; the push is acquisition_shift_mm, not slip, and
+// the held time starts there.
+TEST_F(TrackerTest, AnObjectPushedWhileTheDigitsCloseIsAcquisitionNotSlip) {
+  const MetricsConfig config;
+  truth_.object_height_above_table_m = 0.0;  // on the table: only settling establishes the grasp
+  Run(0.1, 0.0, false, controller::GraspIntent::kIdle);
+  // 0.1 .. 0.2 s: closing, touching, the object pushed 1 mm along x at 10 mm/s, sliding on the pad.
+  while (time_s_ < 0.2 - kTimeTolS) {
+    truth_.object_position_m[0] = 0.01 * (time_s_ - 0.1);
+    Run(time_s_ + kTickS, 0.01);
+  }
+  // Still means within acquisition_settle_m of one place: the stretch began when the push last
+  // crossed that band, at most settle_m / speed before it stopped.
+  const double band_s = config.acquisition_settle_m / 0.01;
+  Run(0.2 + config.acquisition_settle_s - band_s - 2 * kTickS, 0.0);
+  EXPECT_FALSE(tracker_.holding());
+  Run(0.2 + config.acquisition_settle_s + 2 * kTickS, 0.0);
+  EXPECT_TRUE(tracker_.holding());
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.1);
+  EXPECT_TRUE(m.grasped);
+  EXPECT_FALSE(m.dropped);
+  EXPECT_NEAR(m.contact_time_s, 0.1, 1e-9);
+  EXPECT_GE(m.grasp_time_s, 0.2 + config.acquisition_settle_s - band_s - kTickS);
+  EXPECT_LE(m.grasp_time_s, 0.2 + config.acquisition_settle_s + kTickS);
+  EXPECT_NEAR(m.acquisition_shift_mm, 1.0, 0.02);
+  EXPECT_EQ(m.max_slip_mm, 0.0);
+  EXPECT_EQ(m.slip_events, 0);
+  EXPECT_NEAR(m.held_s, 1.0 - m.grasp_time_s, 2 * kTickS);
+}
+
+// An object that keeps creeping on the table is established acquisition_max_s after the touch, and
+// from then its motion is slip.
+TEST_F(TrackerTest, AGraspStillMovingWhenTheAcquisitionTimeIsUpIsEstablishedAndSlipsFromThere) {
+  const MetricsConfig config;
+  truth_.object_height_above_table_m = 0.0;
+  while (time_s_ < 1.0 - kTimeTolS) {
+    truth_.object_position_m[2] = -0.005 * time_s_;  // 5 mm/s downwards, relative to the still wrist
+    Run(time_s_ + kTickS, 0.005);
+  }
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  EXPECT_NEAR(m.grasp_time_s, config.acquisition_max_s, 2 * kTickS);
+  EXPECT_NEAR(m.acquisition_shift_mm, 5.0 * config.acquisition_max_s, 0.05);
+  EXPECT_NEAR(m.max_slip_mm, 5.0 * (1.0 - config.acquisition_max_s), 0.05);
+  EXPECT_EQ(m.slip_events, 1);
+}
+
+// Pushed out: more than drop_distance_m from where it was at the close, before the grasp is
+// established, is a failed grasp and a drop; the wrist lifting away from an object the digits never
+// reached counts the same.
+TEST_F(TrackerTest, AnObjectPushedOutOrLeftBehindBeforeTheGraspIsEstablishedIsDropped) {
+  const MetricsConfig config;
+  truth_.object_height_above_table_m = 0.0;
+  while (time_s_ < 0.1 - kTimeTolS) {
+    truth_.object_position_m[1] = 0.25 * time_s_;  // 25 mm in 0.1 s, sideways out of the pinch
+    Run(time_s_ + kTickS, 0.25);
+  }
+  const Metrics m = tracker_.Finish(0.1, 0.1, 0.0);
+  EXPECT_TRUE(m.pushed_out);
+  EXPECT_TRUE(m.dropped);
+  EXPECT_FALSE(m.grasped);
+  EXPECT_NEAR(m.drop_time_s, config.drop_distance_m / 0.25, 2 * kTickS);
+  Expectations held;
+  held.not_dropped = true;
+  const ExpectationOutcome dropped = Find(EvaluateExpectations(held, m, config), "not_dropped");
+  EXPECT_FALSE(dropped.passed);
+  EXPECT_EQ(dropped.value_text.rfind("pushed out at", 0), 0u) << dropped.value_text;
+
+  MetricsTracker late(config, 8.0, 0.05);
+  sim::GroundTruth truth = truth_;
+  truth.object_position_m = {0.0, 0.0, 0.0};
+  TickSample sample;
+  sample.intent = controller::GraspIntent::kClose;
+  sample.truth = &truth;
+  sample.state = &state_;
+  sample.true_loads = loads_;
+  for (int tick = 0; tick < 1000; ++tick) {
+    sample.time_s = truth.time_s = tick * kTickS;
+    // The wrist rises 50 mm in the first 0.5 s with nothing in the hand; the digits touch after.
+    truth.wrist_position_m[2] = 0.05 * std::min(1.0, sample.time_s / 0.5);
+    truth.finger_contacts = truth.thumb_contacts = sample.time_s >= 0.6 ? 1 : 0;
+    late.Update(sample);
+  }
+  const Metrics left_behind = late.Finish(1.0, 0.1, 0.0);
+  EXPECT_TRUE(left_behind.pushed_out);
+  EXPECT_TRUE(left_behind.dropped);
+}
+
+// Where the held object sits on the sensor: the mesas' share of the finger's normal force over the
+// held time, the time with no unit loaded, and the unit that carried most.
+TEST_F(TrackerTest, TheSensedShareAndTheUnsensedTimeAreOverTheHeldTime) {
+  truth_.finger_normal_force_n = 4.0;
+  truth_.sensed_normal_force_n = 3.0;
+  Run(0.5, 0.0);
+  truth_.sensed_normal_force_n = 1.0;  // the rest of the run half as much on the mesas
+  loads_[0].fn_n = 0.01;               // and no unit above the 0.05 N contact threshold
+  Run(1.0, 0.0);
+  const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
+  ASSERT_TRUE(m.sensed_grip_share.has_value());
+  EXPECT_NEAR(*m.sensed_grip_share, 0.5, 0.01);  // (3 x 0.5 + 1 x 0.5) / (4 x 1)
+  EXPECT_NEAR(m.unsensed_held_s, 0.5, 2 * kTickS);
+  EXPECT_EQ(m.contact_unit, 0);
+  EXPECT_FALSE(Find(EvaluateExpectations(Expectations{}, m, MetricsConfig{}), "grasped_on_sensor").passed);
 }
 
 }  // namespace

@@ -403,6 +403,7 @@ void ForEachConfigField(const ScenarioConfig& a, const ScenarioConfig& b, Fn&& f
   field("hand.palm_mass_kg", ah.palm_mass_kg, bh.palm_mass_kg);
   field("hand.digit_mass_kg", ah.digit_mass_kg, bh.digit_mass_kg);
   field("hand.friction", ah.friction, bh.friction);
+  field("hand.contact_patch_radius_m", ah.contact_patch_radius_m, bh.contact_patch_radius_m);
   field("hand.initial_wrist_position_m", ah.initial_wrist_position_m, bh.initial_wrist_position_m);
   field("hand.wrist_stiffness_n_m", ah.wrist_stiffness_n_m, bh.wrist_stiffness_n_m);
   field("hand.wrist_damping_n_s_m", ah.wrist_damping_n_s_m, bh.wrist_damping_n_s_m);
@@ -509,6 +510,7 @@ void ForEachConfigField(const ScenarioConfig& a, const ScenarioConfig& b, Fn&& f
   field("expectations.max_estimation_error_n", ae.max_estimation_error_n, be.max_estimation_error_n);
   field("expectations.stable_within_s", ae.stable_within_s, be.stable_within_s);
   field("expectations.max_false_slip_per_min", ae.max_false_slip_per_min, be.max_false_slip_per_min);
+  field("expectations.grasped_on_sensor", ae.grasped_on_sensor, be.grasped_on_sensor);
 
   const MetricsConfig& at = a.metrics;
   const MetricsConfig& bt = b.metrics;
@@ -523,6 +525,13 @@ void ForEachConfigField(const ScenarioConfig& a, const ScenarioConfig& b, Fn&& f
   field("metrics.grasp_force_n", at.grasp_force_n, bt.grasp_force_n);
   field("metrics.seating_s", at.seating_s, bt.seating_s);
   field("metrics.drop_distance_m", at.drop_distance_m, bt.drop_distance_m);
+  field("metrics.acquisition_lift_m", at.acquisition_lift_m, bt.acquisition_lift_m);
+  field("metrics.acquisition_settle_s", at.acquisition_settle_s, bt.acquisition_settle_s);
+  field("metrics.acquisition_settle_m", at.acquisition_settle_m, bt.acquisition_settle_m);
+  field("metrics.acquisition_wrist_m", at.acquisition_wrist_m, bt.acquisition_wrist_m);
+  field("metrics.acquisition_max_s", at.acquisition_max_s, bt.acquisition_max_s);
+  field("metrics.max_unsensed_held_s", at.max_unsensed_held_s, bt.max_unsensed_held_s);
+  field("metrics.min_sensed_grip_share", at.min_sensed_grip_share, bt.min_sensed_grip_share);
   field("metrics.stable_window_s", at.stable_window_s, bt.stable_window_s);
   field("metrics.stable_force_band", at.stable_force_band, bt.stable_force_band);
 }
@@ -575,6 +584,7 @@ object: {shape: cylinder, size_m: [0.05, 0, 0.1], mass_kg: 0.15, friction: 0.45,
 hand:
   grasp: wrap
   preshape_clearance_m: 0.006
+  contact_patch_radius_m: 0.005
   palm_mass_kg: 0.4
   digit_mass_kg: 0.02
   friction: 0.9
@@ -587,7 +597,7 @@ hand:
   digit_motor: {stall_pinch_force_n: 25, no_load_speed_rad_s: 1.8, armature_kg_m2: 3e-4, damping_n_m_s: 0.003,
                 wrap_thumb_share: 0.6}
 physics: {timestep_s: 0.0005, elliptic_cones: false, impratio: 100, noslip_iterations: 5, solver_iterations: 50,
-          tolerance: 1e-9, condim: 4, gravity_m_s2: 9.7, table: false, contact_pairs: false}
+          tolerance: 1e-9, condim: 6, gravity_m_s2: 9.7, table: false, contact_pairs: false}
 sensor:
   layout: paper_3x3
   sample_rate_hz: 800
@@ -633,10 +643,14 @@ script:
   - {after: released, delay_s: 0.1, timeout_s: 1, action: idle}
 expectations: {not_dropped: true, max_slip_mm: 1, max_peak_grip_n: 7, not_crushed: true,
                slip_detected_within_ms: 30, micro_slip_detected_within_ms: 45, max_grip_efficiency: 2.5,
-               max_estimation_error_n: 0.5, stable_within_s: 0.8, max_false_slip_per_min: 2}
+               max_estimation_error_n: 0.5, stable_within_s: 0.8, max_false_slip_per_min: 2,
+               grasped_on_sensor: false}
 metrics: {sliding_friction_fraction: 0.9, slip_min_load_share: 0.25, creep_speed_m_s: 0.0004,
           slip_speed_m_s: 0.003, creep_event_m: 0.0002, slip_event_gap_s: 0.04, early_detection_window_s: 0.06,
           gross_slip_m: 0.0007, grasp_force_n: 0.4, seating_s: 0.06, drop_distance_m: 0.025,
+          acquisition_lift_m: 0.002, acquisition_settle_s: 0.1, acquisition_settle_m: 0.0003,
+          acquisition_wrist_m: 0.002, acquisition_max_s: 0.4, max_unsensed_held_s: 0.2,
+          min_sensed_grip_share: 0.3,
           stable_window_s: 0.25, stable_force_band: 0.12}
 )";
 const char* const kEveryFieldSerial = R"(name: round_trip_serial
