@@ -24,7 +24,7 @@ namespace {
 
 // The pinch the hand has always made on a box or upright cylinder: the pad's centre this far below
 // the top, so the middle phalanx passes over the object, and never lower than kMinPadHeightM
-// (holder half length + tip cap + 3 mm) unless the object's centre is lower [m].
+// (holder half length + tip cap + 3 mm), where the fingertip clears the table [m].
 constexpr double kPinchBelowTopM = 0.013;
 constexpr double kMinPadHeightM = 0.023;
 // The lowest point of the fingertip and the thumb's tip in a round pinch stay this far above the
@@ -54,8 +54,12 @@ std::string ObjectName(const ObjectConfig& object) {
 }
 
 [[noreturn]] void Refuse(const ObjectConfig& object, const std::string& why) {
-  throw std::invalid_argument(ObjectName(object) + ": this hand cannot pinch it: " + why);
+  throw std::invalid_argument("scene: object.size_m = " + FormatConfigTriple(object.size_m) + ": " +
+                              ObjectName(object) + ": this hand cannot pinch it: " + why);
 }
+
+// Whether the table limits how low the pinch goes (a scene without one, in free space, does not).
+bool TableBoundsThePinch(const SceneConfig& scene) { return scene.physics.table; }
 
 // The object's centre of mass, world frame at its start pose [m].
 Eigen::Vector3d StartCentreOfMass(const ObjectConfig& object) {
@@ -100,11 +104,16 @@ class ObjectProbe {
   std::unique_ptr<mjData, DataFree> data_;
 };
 
+// The lowest the pad's centre goes [m]: where the fingertip clears the table, or without a table
+// bounding it, the object's centre if that is lower.
+double LowestPadHeightM(const SceneConfig& scene) {
+  return TableBoundsThePinch(scene) ? kMinPadHeightM : std::min(scene.object.StartCentreZM(), kMinPadHeightM);
+}
+
 // The preferred height of a faces pinch: 13 mm below the top, not below the pad's lowest [m].
-double PreferredFacesHeightM(const ObjectConfig& object) {
-  const double centre = object.StartCentreZM();
-  const double top = centre + object.RestHalfHeightM();
-  return std::max(top - kPinchBelowTopM, std::min(centre, kMinPadHeightM));
+double PreferredFacesHeightM(const SceneConfig& scene) {
+  const double top = scene.object.StartCentreZM() + scene.object.RestHalfHeightM();
+  return std::max(top - kPinchBelowTopM, LowestPadHeightM(scene));
 }
 
 // Whether the index's proximal or middle phalanx, in the posture that puts the pad's centre at the
@@ -131,7 +140,15 @@ PinchPlacement PlaceFacesPinch(const SceneConfig& scene, const ProstheticKinemat
   const ObjectConfig& object = scene.object;
   PinchPlacement place;
   place.kind = PinchKind::kFaces;
-  const double preferred = PreferredFacesHeightM(object);
+  const double preferred = PreferredFacesHeightM(scene);
+  const double top = object.StartCentreZM() + object.RestHalfHeightM();
+  if (TableBoundsThePinch(scene) && preferred > top - kProbeTopMarginM) {
+    std::ostringstream why;
+    why << std::fixed << std::setprecision(1) << "its top is " << 1e3 * top
+        << " mm above the table: the pad's centre cannot come lower than " << 1e3 * kMinPadHeightM
+        << " mm (the fingertip above the table) and meet it " << 1e3 * kProbeTopMarginM << " mm below its top";
+    Refuse(object, why.str());
+  }
   if (object.shape == ObjectShape::kBox || object.shape == ObjectShape::kCylinder) {
     // Parallel vertical faces at every height: the pinch the hand has always made.
     place.line_y_m = object.initial_position_m[1];
@@ -143,9 +160,8 @@ PinchPlacement PlaceFacesPinch(const SceneConfig& scene, const ProstheticKinemat
   }
   const Eigen::Vector3d com = StartCentreOfMass(object);
   const ObjectProbe probe(scene);
-  const double centre = object.StartCentreZM();
-  const double lowest = std::min(centre, kMinPadHeightM);
-  const double highest = centre + object.RestHalfHeightM() - kProbeTopMarginM;
+  const double lowest = LowestPadHeightM(scene);
+  const double highest = top - kProbeTopMarginM;
   const double friction_angle = std::atan(object.friction);
   double best_cost = std::numeric_limits<double>::infinity();
   double best_angle = std::numeric_limits<double>::infinity();
@@ -217,7 +233,7 @@ PinchPlacement PlaceRoundPinch(const SceneConfig& scene, const ProstheticKinemat
       continue;
     }
     const double wrist_z = centre.z() - pose.centre_xz.y();
-    if (wrist_z + pose.lowest_z_m < kTableClearanceM) {
+    if (TableBoundsThePinch(scene) && wrist_z + pose.lowest_z_m < kTableClearanceM) {
       std::ostringstream why;
       why << std::fixed << std::setprecision(1) << "pinched through " << section.where << ", the fingertip would reach "
           << 1e3 * (wrist_z + pose.lowest_z_m) << " mm above the table (at least " << 1e3 * kTableClearanceM

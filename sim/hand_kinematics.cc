@@ -80,7 +80,7 @@ constexpr double kScanStepRad = 0.005;
 // When the pad touches the cylinder the proximal and middle phalanges are at most kWrapLinkContactM
 // from it if the pad's contact can move that far towards the DIP (kWrapMaxAlongPadM, the first mesa
 // row, in kWrapAlongStepM steps), and never closer than kMinLinkClearanceM (overlapping it) [m].
-constexpr double kWrapLinkContactM = 0.5e-3;
+constexpr double kWrapLinkContactM = 1.0e-3;
 constexpr double kWrapMaxAlongPadM = 0.010;
 constexpr double kWrapAlongStepM = 0.0005;
 constexpr double kMinLinkClearanceM = -0.5e-3;
@@ -286,14 +286,25 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
   // Where along the pad it touches: as near the pad's centre as lets the middle phalanx meet the
   // cylinder too (within kWrapLinkContactM), at most at the pad's first mesa row, so that finger,
   // pad and palm close round it together as a hand's wrap does.
-  WrapPose pose;
+  const auto pose_at = [&](double along) {
+    WrapPose at;
+    at.index_contact_rad = Bisect([&](double q) { return palm_gap(q, along); }, palm_gap_m, mcp_square,
+                                  kMcpMaxRad, -1.0);
+    at.centre_xz = centre_for(at.index_contact_rad, along);
+    at.pad_contact_along_m = along;
+    at.index_link_clearance_m = IndexClearanceM(at.index_contact_rad, at.centre_xz, radius_m, true);
+    return at;
+  };
+  // Where the links cannot reach the cylinder (a small one) or only with the pad meeting it from the
+  // side (a large one), the pad's centre meets it.
+  WrapPose pose = pose_at(0.0);
   for (double along = 0.0; along >= -kWrapMaxAlongPadM - 1e-12; along -= kWrapAlongStepM) {
-    pose.index_contact_rad = Bisect([&](double q) { return palm_gap(q, along); }, palm_gap_m, mcp_square,
-                                    kMcpMaxRad, -1.0);
-    pose.centre_xz = centre_for(pose.index_contact_rad, along);
-    pose.pad_contact_along_m = along;
-    pose.index_link_clearance_m = IndexClearanceM(pose.index_contact_rad, pose.centre_xz, radius_m, true);
-    if (pose.index_link_clearance_m <= kWrapLinkContactM) break;
+    const WrapPose at = pose_at(along);
+    if (IndexPad(at.index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) break;
+    if (at.index_link_clearance_m <= kWrapLinkContactM) {
+      pose = at;
+      break;
+    }
   }
   if (IndexPad(pose.index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) {
     fail("too large: the pad would meet it from the side, not press it against the palm");

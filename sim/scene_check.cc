@@ -19,19 +19,9 @@ struct Overlap {
   int geom2 = -1;
 };
 
-std::string Number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%g", value);
-  return text;
-}
+std::string Number(double value) { return FormatConfigNumber(value); }
 
-std::string Triple(const std::array<double, 3>& values) {
-  std::string text = "[";
-  for (int k = 0; k < 3; ++k) {
-    text += (k ? ", " : "") + (std::isnan(values[k]) ? std::string("auto") : Number(values[k]));
-  }
-  return text + "]";
-}
+std::string Triple(const std::array<double, 3>& values) { return FormatConfigTriple(values); }
 
 std::string GeomName(const mjModel* m, int geom) {
   const char* name = mj_id2name(m, mjOBJ_GEOM, geom);

@@ -1,6 +1,7 @@
 #include "sim/scene_config.h"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -103,6 +104,20 @@ double SceneConfig::OpenGapM() const {
 
 double SceneConfig::ThumbOppositionRad() const {
   return std::isnan(hand.thumb.opposition_rad) ? 0.0 : hand.thumb.opposition_rad;
+}
+
+std::string FormatConfigNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
+std::string FormatConfigTriple(const std::array<double, 3>& values) {
+  std::string text = "[";
+  for (int k = 0; k < 3; ++k) {
+    text += (k ? ", " : "") + (std::isnan(values[k]) ? std::string("auto") : FormatConfigNumber(values[k]));
+  }
+  return text + "]";
 }
 
 double SceneConfig::TorsionalFrictionM(double friction) const {

@@ -288,6 +288,10 @@ struct PhysicsConfig {
   bool contact_pairs = true;
 };
 
+/// A config value as messages quote it: "%g", and a triple as "[x, y, z]" with "auto" for NaN.
+std::string FormatConfigNumber(double value);
+std::string FormatConfigTriple(const std::array<double, 3>& values);
+
 /// Everything of the scene besides the layout.
 struct SceneConfig {
   ObjectConfig object;

@@ -114,8 +114,10 @@ TEST(GraspPlacementTest, LibraryShapesAndMeshesArePinchedAtTheirMostParallelFace
   EXPECT_NEAR(hex_placed.width_m, 0.045, 1e-4) << "across the flats";
   EXPECT_LT(std::max(hex_placed.face_angle_rad[0], hex_placed.face_angle_rad[1]), 1.0 * kDeg);
 
+  // The 30 mm puck: 13 mm below its top would put the fingertip into the table; the pad's centre
+  // stays at its lowest, 23 mm (holder half length, tip cap and 3 mm).
   const SceneConfig puck = Mesh("puck_40x40x30.stl");
-  EXPECT_NEAR(PlacePinch(puck, Kinematics(puck)).height_m, 0.030 - 0.013, 1e-9);
+  EXPECT_NEAR(PlacePinch(puck, Kinematics(puck)).height_m, 0.023, 1e-9);
 
   // The wedge has no parallel faces: its sides meet the pinch 30 degrees from square, within the
   // cone of mu 0.8 (38.7 degrees); the line passes through its centre of mass, a third of its
@@ -156,6 +158,16 @@ TEST(GraspPlacementTest, AnObjectTheHandCannotPinchIsRefusedWithItsNameAndWhy) {
   }
   // The generator refuses it the same way.
   EXPECT_THROW(GenerateMjcf(DefaultLayout(), low_ball), std::invalid_argument);
+  SceneConfig flat_box;  // 20 mm tall: the pad's centre cannot come down to it
+  flat_box.object.size_m = {0.05, 0.05, 0.02};
+  try {
+    PlacePinch(flat_box, Kinematics(flat_box));
+    FAIL() << "a 20 mm box was placed";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("the box: this hand cannot pinch it: its top is 20.0 mm above the table"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 // `graspbed model --kinematics` says which placement it chose.

@@ -215,10 +215,10 @@ TEST_F(RunEndsCliTest, ScenesWhoseBodiesStartInsideEachOtherAreRefusedNamingTheK
       {"hand.initial_wrist_position_m=[0.02,0,0.1546]",
        {"the object and the hand overlap by ", "object.size_m = [0.05, 0.05, 0.08]",
         "hand.open_gap_m = auto = 0.065 m", "hand.initial_wrist_position_m = [0.02, 0, 0.1546]"}},
-      // A 3 mm high box puts the fingertip, level with its centre, into the table.
+      // A 3 mm high box: the pad's centre cannot come down to it with the fingertip above the table.
       {"object.size_m=[0.05,0.05,0.003]",
-       {"the hand and the table overlap by ", "hand.initial_wrist_position_m = [auto, auto, auto]",
-        "object.size_m = [0.05, 0.05, 0.003]"}},
+       {"object.size_m = [0.05, 0.05, 0.003]: the box: this hand cannot pinch it: its top is 3.0 mm above "
+        "the table"}},
       {"object.initial_position_m=[0,0,0.01]",
        {"the object and the table overlap by ", "object.initial_position_m = [0, 0, 0.01]"}},
   };
