@@ -706,8 +706,9 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
     const WrapPose& wrap = *place.wrap;
     o << "wrap: palm sideways (H z -> world -y, H y -> world z); cylinder axis at H x "
       << mm(wrap.centre_xz.x()) << " z " << mm(wrap.centre_xz.y()) << " mm, " << mm(kWrapPalmGapM)
-      << " mm from the palm when the pad touches it; proximal and middle phalanges "
-      << mm(wrap.index_link_clearance_m) << " mm clear then\n";
+      << " mm from the palm when the pad touches it " << mm(-wrap.pad_contact_along_m)
+      << " mm from its centre towards the DIP; proximal and middle phalanges " << mm(wrap.index_link_clearance_m)
+      << " mm clear then\n";
     joint_rows("pad normal");
     o << "lever arms at contact: pad " << mm(place.lever_arm_m[0]) << " mm (along its normal), thumb "
       << mm(place.lever_arm_m[1]) << " mm (towards the axis)\n";

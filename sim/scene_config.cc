@@ -376,10 +376,12 @@ const common::FieldTable<HandConfig>& HandConfigFields() {
                         "bench fixture (docs/simulation.md, \"The jaw fixture\")"),
           Table::Choice("grasp", &C::grasp, {{GraspType::kPinch, "pinch"}, {GraspType::kWrap, "wrap"}},
                         "the grasp the pre-shape prepares. `pinch`: index fingertip pad against the thumb "
-                        "tip, near the object's top (a box or cylinder 13 mm below its top, a sphere at its "
-                        "equator). `wrap` (prosthetic hand, upright cylinder, a bottle's or a mug's body): the palm "
-                        "faces the cylinder from the side at its mid-height, the index curls round it until "
-                        "its pad presses it against the palm, the thumb closes round its other side "
+                        "tip, placed from the object's geometry (a box or cylinder 13 mm below its top, a ball, "
+                        "an egg or a banana through its round section's centre, other shapes and meshes at "
+                        "their most parallel faces: docs/simulation.md, \"How a placement is chosen\"). `wrap` "
+                        "(prosthetic hand, upright cylinder, a bottle's or a mug's body): the palm faces the "
+                        "cylinder from the side at its mid-height, the index curls round it until its pad "
+                        "presses it against the palm, the thumb closes round its other side "
                         "(docs/simulation.md, \"The wrap\"). Unset with a library object (`object: {name: "
                         "...}`): chosen from its shape and size, wrap for a can, a bottle or a mug 40 to 90 mm "
                         "across, pinch for the rest (`graspbed objects` lists each one's)"),

@@ -243,9 +243,8 @@ struct HandConfig {
   /// Friction of hand geoms (used only against geoms without priority, e.g. the table).
   double friction = 1.0;
   /// Initial wrist position [m], world frame; NaN entries: chosen so the digits straddle the object
-  /// (pre-grasp pose): prosthetic hand, pad centre at the pinch height (a box or cylinder 13 mm
-  /// below its top, a sphere at its equator; docs/simulation.md); jaw, holder centre level with the
-  /// object's centre.
+  /// (pre-grasp pose): prosthetic hand, the contacts where the placement puts them (PlacePinch,
+  /// sim/grasp_placement.h; docs/simulation.md); jaw, holder centre level with the object's centre.
   std::array<double, 3> initial_wrist_position_m = {std::numeric_limits<double>::quiet_NaN(),
                                                     std::numeric_limits<double>::quiet_NaN(),
                                                     std::numeric_limits<double>::quiet_NaN()};

@@ -167,5 +167,40 @@ TEST(GraspFamilyTest, TheShippedObjectScenariosOraclesAgainstTheirLoadBoundsAndS
   for (const auto& [name, why] : share_exceptions) std::printf("[ not yet ] share of %s: %s\n", name.c_str(), why.c_str());
 }
 
+// The default scenario's lift with each library object by name and nothing else changed: the oracle
+// grip of each, printed as a table; at most 10 N for each but the listed.
+TEST(GraspFamilyTest, TheDefaultLiftOfEachLibraryObjectByNameHasAnOracleGripOfAtMostTenNewtons) {
+  // Measured; docs/notes/2026-11-28-grasps-on-the-sensor.md.
+  const std::map<std::string, std::string> not_yet = {
+      {"bottle", "the full 470 g bottle (mu 0.45) wrapped: 12.5 N; its pad meets it at its first mesa row"},
+      {"banana", "none: the 3e3 N/m banana flattens between pad and thumb; from 8 N it is squeezed out"},
+      {"apple", "none: the 180 g, 5e4 N/m apple sinks over three mesa rows and slides about 1 mm over them as "
+                "the lift starts, at every grip (stiffened to 2e5 N/m: 1.93 N)"},
+  };
+  const std::string library_objects[] = {"can",   "bottle",      "bottle_half", "mug",    "marker",
+                                         "card",  "banana",      "tennis_ball", "apple",  "egg",
+                                         "plastic_cup", "foam_brick", "wine_glass"};
+  std::printf("[ measure ] object       grasp  oracle N  weight / (2 mu) N\n");
+  int within = 0;
+  for (const std::string& name : library_objects) {
+    SCOPED_TRACE(name);
+    const std::string text =
+        "name: lift_" + name + "\nseed: 1\nduration_s: 2.5\nobject: {name: " + name +
+        "}\nsensor: {profile: inamp_16bit}\ncontroller: {name: grip_slip}\nscript:\n"
+        "  - {at_s: 0.15, action: close}\n  - {at_s: 0.8, action: lift, height_m: 0.05, duration_s: 0.8}\n";
+    const ScenarioConfig scenario = LoadScenarioFromString(text, name + ".yaml");
+    const OracleSearch oracle = FindOracleGrip(scenario);
+    const bool wrap = scenario.scene.hand.grasp == sim::GraspType::kWrap;
+    const double bound = scenario.scene.object.mass_kg * 9.81 / (2.0 * scenario.scene.object.friction);
+    std::printf("[ measure ] %-12s %-5s  %8s  %17.2f\n", name.c_str(), wrap ? "wrap" : "pinch",
+                oracle.grip.grip_n ? std::to_string(*oracle.grip.grip_n).substr(0, 5).c_str() : "none", bound);
+    const bool ok = oracle.grip.grip_n && *oracle.grip.grip_n <= 10.0;
+    within += ok ? 1 : 0;
+    if (!not_yet.contains(name)) EXPECT_TRUE(ok) << oracle.grip.reason;
+  }
+  std::printf("[ measure ] %d of 13 with an oracle grip of at most 10 N\n", within);
+  for (const auto& [name, why] : not_yet) std::printf("[ not yet ] %s: %s\n", name.c_str(), why.c_str());
+}
+
 }  // namespace
 }  // namespace graspbed::testbed
