@@ -71,7 +71,8 @@ Eigen::Vector3d StartCentreOfMass(const ObjectConfig& object) {
 // The object alone in MuJoCo, for ray casts against its geoms (the surfaces the digits meet).
 class ObjectProbe {
  public:
-  explicit ObjectProbe(const SceneConfig& scene) : model_(CompileMjcf(ObjectOnlyMjcf(scene)), mj_deleteModel) {
+  explicit ObjectProbe(const SceneConfig& scene)
+      : model_(CompileMjcf(ObjectOnlyMjcf(scene)), mj_deleteModel), x_centre_(scene.object.initial_position_m[0]) {
     data_.reset(mj_makeData(model_.get()));
     mj_kinematics(model_.get(), data_.get());
   }
@@ -79,7 +80,7 @@ class ObjectProbe {
   // Where the line along x at (y, z) first meets the object coming from -x (side -1) or +x (side
   // +1): its x [m], or NaN when it misses.
   double FaceX(double y, double z, int side) const {
-    const mjtNum start[3] = {side < 0 ? -kFar : kFar, y, z};
+    const mjtNum start[3] = {x_centre_ + (side < 0 ? -kFar : kFar), y, z};
     const mjtNum direction[3] = {side < 0 ? 1.0 : -1.0, 0.0, 0.0};
     int geom = -1;
     const mjtNum distance = mj_ray(model_.get(), data_.get(), start, direction, nullptr, 1, -1, &geom);
@@ -99,8 +100,9 @@ class ObjectProbe {
   struct DataFree {
     void operator()(mjData* d) const { mj_deleteData(d); }
   };
-  static constexpr double kFar = 1.0;  // rays start this far out [m]
+  static constexpr double kFar = 1.0;  // rays start this far either side of the object's start [m]
   std::unique_ptr<mjModel, void (*)(mjModel*)> model_;
+  double x_centre_ = 0.0;  // the object's start x [m]
   std::unique_ptr<mjData, DataFree> data_;
 };
 
@@ -223,7 +225,8 @@ PinchPlacement PlaceRoundPinch(const SceneConfig& scene, const ProstheticKinemat
   PinchPlacement place;
   place.kind = PinchKind::kRound;
   std::string last_error;
-  // The pad's centre first; tipwards only as far as the table asks.
+  // The pad's centre first; tipwards until the fingertip clears the table and the posture is in
+  // the joints' ranges with the links clear (the last reason a step failed is the refusal's).
   for (double along = 0.0; along <= kMaxAlongPadM + 1e-12; along += kAlongPadStepM) {
     RoundPinchPose pose;
     try {

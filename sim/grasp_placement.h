@@ -32,7 +32,7 @@ const char* ToString(PinchKind kind);
 
 /// A pinch placement.
 struct PinchPlacement {
-  PinchKind kind = PinchKind::kFaces;
+  PinchKind kind = PinchKind::kFaces;  ///< how the pinch meets the object
   /// The pinch line: world y (the centre of mass's) and z of the contacts' midpoint [m].
   double line_y_m = 0.0;
   double height_m = 0.0;
@@ -43,9 +43,11 @@ struct PinchPlacement {
   /// Each contact surface's normal from the pinch axis [rad]: the finger's side, the thumb's. 0 is
   /// square to the pinch; the squeeze pushes the object out of a grasp whose angles reach atan(mu).
   std::array<double, 2> face_angle_rad{};
-  /// Round: the pad's contact from its centre towards the tip [m] (moved tipwards only as far as
-  /// the table asks), the posture solved; faces: 0.
+  /// Round: the pad's contact from its centre towards the tip [m] (moved tipwards in steps from 0
+  /// until the fingertip clears the table and the posture is in the joints' ranges with the links
+  /// clear); faces: 0.
   double along_pad_m = 0.0;
+  /// Round: the posture solved (hand frame H); faces: unused.
   RoundPinchPose round;
   /// One line: what was chosen and why, for `graspbed model --kinematics`.
   std::string reason;

@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -286,7 +287,10 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
   // Where along the pad it touches: as near the pad's centre as lets the middle phalanx meet the
   // cylinder too (within kWrapLinkContactM), at most at the pad's first mesa row, so that finger,
   // pad and palm close round it together as a hand's wrap does.
-  const auto pose_at = [&](double along) {
+  // The pose with the pad touching `along` from its centre; nullopt when no MCP in the range puts the
+  // cylinder the gap from the palm there.
+  const auto pose_at = [&](double along) -> std::optional<WrapPose> {
+    if (palm_gap(kMcpMaxRad, along) > palm_gap_m || palm_gap(mcp_square, along) < palm_gap_m) return std::nullopt;
     WrapPose at;
     at.index_contact_rad = Bisect([&](double q) { return palm_gap(q, along); }, palm_gap_m, mcp_square,
                                   kMcpMaxRad, -1.0);
@@ -297,12 +301,12 @@ WrapPose ProstheticKinematics::Wrap(double radius_m, double palm_gap_m, double c
   };
   // Where the links cannot reach the cylinder (a small one) or only with the pad meeting it from the
   // side (a large one), the pad's centre meets it.
-  WrapPose pose = pose_at(0.0);
+  WrapPose pose = *pose_at(0.0);  // bracketed: checked above
   for (double along = 0.0; along >= -kWrapMaxAlongPadM - 1e-12; along -= kWrapAlongStepM) {
-    const WrapPose at = pose_at(along);
-    if (IndexPad(at.index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) break;
-    if (at.index_link_clearance_m <= kWrapLinkContactM) {
-      pose = at;
+    const std::optional<WrapPose> at = pose_at(along);
+    if (!at || IndexPad(at->index_contact_rad).normal_angle_rad < kMinWrapPadNormalRad) break;
+    if (at->index_link_clearance_m <= kWrapLinkContactM) {
+      pose = *at;
       break;
     }
   }

@@ -28,16 +28,18 @@ struct DigitContact {
 /// the hand and the driven joints' angles that meet it and that open around it.
 struct WrapPose {
   Eigen::Vector2d centre_xz{0.0, 0.0};  ///< cylinder axis [m], (x, z) in H
-  double index_contact_rad = 0.0;       ///< MCP at which the pad's centre touches the cylinder [rad]
+  double index_contact_rad = 0.0;       ///< MCP at which the pad touches it (pad_contact_along_m) [rad]
   double thumb_contact_rad = 0.0;       ///< thumb flexion at which the thumb first touches it [rad]
-  double index_preshape_rad = 0.0;      ///< MCP opened until the whole index clears it by the clearance
+  /// MCP opened until the middle phalanx and the holder clear it by the clearance (the proximal
+  /// phalanx's root sits beside it whatever the opening) [rad].
+  double index_preshape_rad = 0.0;
   double thumb_preshape_rad = 0.0;      ///< thumb flexion opened likewise [rad]
   /// Where along the pad it touches, from the pad's centre towards the tip [m] (<= 0: towards the
   /// DIP, so that the middle phalanx meets the cylinder too).
   double pad_contact_along_m = 0.0;
-  /// Clearance of the proximal and middle phalanges when the pad touches [m]: within half a
-  /// millimetre (the links close on the cylinder with the pad) where the pad's contact can move far
-  /// enough towards the DIP; more for a small cylinder.
+  /// Clearance of the proximal and middle phalanges when the pad touches [m]: at most 1 mm (the links
+  /// close on the cylinder with the pad) where the pad's contact can move far enough towards the DIP,
+  /// more otherwise; never below -0.5 mm (overlapping it).
   double index_link_clearance_m = 0.0;
   /// Forces [N] per motor torque [N m] turned into the cylinder at contact: the pad's travel along
   /// its own normal per radian of MCP (the PIP follows through the linkage), and the thumb's
@@ -136,11 +138,12 @@ class ProstheticKinematics {
                          bool links_only = false) const;
   /// The same for the thumb (base sphere, proximal and distal capsules) [m].
   double ThumbClearanceM(double flexion_rad, const Eigen::Vector2d& centre_xz, double radius_m) const;
-  /// The wrap of a cylinder of `radius_m`: the pad's centre touches it when its surface is
-  /// `palm_gap_m` from the palmar face (the pad then presses it against the palm), and both digits
-  /// open until every link clears it by `clearance_m`. Throws std::invalid_argument when the
-  /// cylinder cannot be wrapped (too small or too large for the finger to meet it with its pad
-  /// first, or out of the thumb's reach).
+  /// The wrap of a cylinder of `radius_m`: the pad touches it when its surface is `palm_gap_m` from
+  /// the palmar face (the pad then presses it against the palm), as near the pad's centre as brings
+  /// the middle phalanx within 1 mm of it, at most at the first mesa row; both digits open until the
+  /// links that sweep round it clear it by `clearance_m`. Throws std::invalid_argument when the
+  /// cylinder cannot be wrapped (too small or too large for the finger to meet it with its pad,
+  /// or out of the thumb's reach).
   WrapPose Wrap(double radius_m, double palm_gap_m, double clearance_m) const;
 
   /// Design constants, H frame [m].

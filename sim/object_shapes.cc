@@ -421,8 +421,16 @@ std::optional<RoundSection> PinchRoundSection(const ObjectConfig& object) {
       return RoundSection{Eigen::Vector3d::Zero(), 0.5 * s[0], "its centre"};
     case ObjectShape::kEgg:
       return RoundSection{Eigen::Vector3d(0.0, 0.0, (kEggEquatorShare - 0.5) * s[2]), 0.5 * s[0], "its equator"};
-    case ObjectShape::kBanana:  // the middle capsule's axis runs along y through the origin
-      return RoundSection{Eigen::Vector3d::Zero(), 0.5 * s[1], "its middle, across its thickness"};
+    case ObjectShape::kBanana: {
+      // Across the middle capsule (ObjectParts): with an odd number of segments y = 0 falls at the
+      // middle of a chord, which lies R (1 - cos(half angle / segments)) towards +x of the arc's middle.
+      const double chord = s[0], sagitta = s[2];
+      const double arc_radius = (0.25 * chord * chord + sagitta * sagitta) / (2.0 * sagitta);
+      const double half_angle = std::asin(0.5 * chord / arc_radius);
+      const double offset =
+          kBananaSegments % 2 == 1 ? arc_radius * (1.0 - std::cos(half_angle / kBananaSegments)) : 0.0;
+      return RoundSection{Eigen::Vector3d(offset, 0.0, 0.0), 0.5 * s[1], "its middle, across its thickness"};
+    }
     default:
       return std::nullopt;
   }

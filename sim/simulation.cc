@@ -610,6 +610,7 @@ GroundTruth Simulation::truth() const {
       finger_on_object += normal;
       ++t.finger_contacts;
       if (geom_is_link_[digit_geom]) t.finger_links_normal_force_n += normal;
+      if (geom_unit_[digit_geom] >= 0) t.sensed_object_normal_force_n += normal;
       if (geom_unit_[digit_geom] >= 0) {
         t.max_mesa_penetration_m = std::max(t.max_mesa_penetration_m, -contact.dist);
       } else if (digit_geom == holder_shell_geom_ && contact.dist < 0.0) {
@@ -652,6 +653,7 @@ GroundTruth Simulation::truth() const {
   if (slip_weight > 0.0) t.mean_slip_speed_m_s = slip_weighted / slip_weight;
   if (t.holder_normal_force_n > 1e-9) t.sensed_share = t.sensed_normal_force_n / t.holder_normal_force_n;
   t.object_squeeze_n = std::max(finger_on_object, thumb_on_object);
+  t.finger_object_normal_force_n = finger_on_object;
   if (finger_on_object > 0.0) t.sliding_load_share = finger_sliding_normal / finger_on_object;
   if (thumb_on_object > 0.0)
     t.sliding_load_share = std::max(t.sliding_load_share, thumb_sliding_normal / thumb_on_object);

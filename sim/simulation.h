@@ -79,6 +79,9 @@ struct GroundTruth {
   /// from the palm [N]: in a wrap the links and the palm take a share of the squeeze.
   double finger_links_normal_force_n = 0.0;
   double palm_normal_force_n = 0.0;
+  /// Normal force of the index finger (every part) and of its mesas on the object alone [N].
+  double finger_object_normal_force_n = 0.0;
+  double sensed_object_normal_force_n = 0.0;
   /// Normal force carried by the mesas (sensed) and by the whole holder (mesas + shell) [N].
   double sensed_normal_force_n = 0.0;
   double holder_normal_force_n = 0.0;

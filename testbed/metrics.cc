@@ -175,7 +175,7 @@ void MetricsTracker::UpdateGrasp(const TickSample& sample, double dt) {
     grasped_ = false;
     holding_ = false;
     touching_ = false;
-  } else if (!grasped_ && !dropped_) {
+  } else if (!grasped_) {
     UpdateAcquisition(sample);
   }
   const bool was_holding = holding_;
@@ -234,10 +234,10 @@ void MetricsTracker::UpdateAcquisition(const TickSample& sample) {
   acquisition_shift_m_ = std::max(acquisition_shift_m_, shift_m);
   if (Distance(offset, close_offset_m_) > config_.drop_distance_m) {
     // Pushed out, knocked over, or left behind by a wrist that moved on before the digits closed:
-    // a failed grasp, and a drop of the run.
+    // a failed grasp, and a drop of the run (timed at the first).
     pushed_out_ = true;
+    if (!dropped_) drop_time_s_ = t;
     dropped_ = true;
-    drop_time_s_ = t;
     return;
   }
   if (Distance(offset, settle_offset_m_) > config_.acquisition_settle_m) {
@@ -261,8 +261,8 @@ void MetricsTracker::UpdateAcquisition(const TickSample& sample) {
 
 void MetricsTracker::UpdateSensorContact(const TickSample& sample, double dt) {
   const sim::GroundTruth& truth = *sample.truth;
-  sensed_integral_n_s_ += truth.sensed_normal_force_n * dt;
-  finger_integral_n_s_ += truth.finger_normal_force_n * dt;
+  sensed_integral_n_s_ += truth.sensed_object_normal_force_n * dt;
+  finger_integral_n_s_ += truth.finger_object_normal_force_n * dt;
   bool loaded = false;
   const size_t units = std::min(sample.true_loads.size(), unit_integral_n_s_.size());
   for (size_t u = 0; u < units; ++u) {

@@ -95,7 +95,8 @@ struct Metrics {
   /// the hand's load over 2 mu) [N].
   double peak_load_bound_grip_n = 0.0;
   /// Where the grasp meets the sensor, over the held time. sensed_grip_share: the normal force the
-  /// mesas carry over the index finger's whole normal force (holder, tip cap, phalanges), both
+  /// mesas press on the object over the index finger's whole normal force on it (holder, tip cap,
+  /// phalanges; a fingertip brushing the table counts in neither), both
   /// integrated over the held time [-]; nullopt when never held or the finger carried nothing.
   std::optional<double> sensed_grip_share;
   /// Time held with no unit's true normal force at or above the contact threshold [s].

@@ -72,7 +72,7 @@ TEST(GraspPlacementTest, RoundSectionsArePinchedThroughTheirCentreOnOneLine) {
     EXPECT_NEAR((pose.centre_xz - pad.point_xz).dot(normal), section.radius_m, 1e-6);
     const Eigen::Vector2d to_thumb = kin.ThumbTipCentre(pose.thumb_rad) - pose.centre_xz;
     EXPECT_NEAR(to_thumb.norm(), section.radius_m + scene.hand.thumb.tip_radius_m, 1e-6);
-    EXPECT_NEAR(std::abs(to_thumb.normalized().dot(normal)), 1.0, 1e-9) << "collinear";
+    EXPECT_NEAR(to_thumb.normalized().dot(normal), 1.0, 1e-9) << "collinear, beyond the centre from the pad";
     const double wrist_z = placed.height_m - pose.centre_xz.y();
     EXPECT_GE(wrist_z + pose.lowest_z_m, 1.5e-3 - 1e-9) << "the fingertip above the table";
     EXPECT_LT(std::abs(pose.line_angle_rad), 20.0 * kDeg);

@@ -856,15 +856,16 @@ TEST_F(TrackerTest, AnObjectPushedOutOrLeftBehindBeforeTheGraspIsEstablishedIsDr
 // Where the held object sits on the sensor: the mesas' share of the finger's normal force over the
 // held time, the time with no unit loaded, and the unit that carried most.
 TEST_F(TrackerTest, TheSensedShareAndTheUnsensedTimeAreOverTheHeldTime) {
-  truth_.finger_normal_force_n = 4.0;
-  truth_.sensed_normal_force_n = 3.0;
+  truth_.finger_object_normal_force_n = 4.0;
+  truth_.sensed_object_normal_force_n = 3.0;
+  truth_.finger_normal_force_n = 9.0;  // the fingertip also on the table: not the object's share
   Run(0.5, 0.0);
-  truth_.sensed_normal_force_n = 1.0;  // the rest of the run half as much on the mesas
+  truth_.sensed_object_normal_force_n = 1.0;  // the rest of the run less on the mesas
   loads_[0].fn_n = 0.01;               // and no unit above the 0.05 N contact threshold
   Run(1.0, 0.0);
   const Metrics m = tracker_.Finish(1.0, 0.1, 0.0);
   ASSERT_TRUE(m.sensed_grip_share.has_value());
-  EXPECT_NEAR(*m.sensed_grip_share, 0.5, 0.01);  // (3 x 0.5 + 1 x 0.5) / (4 x 1)
+  EXPECT_NEAR(*m.sensed_grip_share, 0.5, 0.01);  // (3 x 0.5 + 1 x 0.5) / (4 x 1), the table's 5 N apart
   EXPECT_NEAR(m.unsensed_held_s, 0.5, 2 * kTickS);
   EXPECT_EQ(m.contact_unit, 0);
   EXPECT_FALSE(Find(EvaluateExpectations(Expectations{}, m, MetricsConfig{}), "grasped_on_sensor").passed);
