@@ -270,7 +270,9 @@ void MetricsTracker::UpdateSensorContact(const TickSample& sample, double dt) {
     loaded = loaded || fn >= contact_threshold_n_;
     unit_integral_n_s_[u] += std::max(fn, 0.0) * dt;
   }
-  if (!loaded) unsensed_held_s_ += dt;
+  // An object sliding out of the hand leaves the pad on its way: the slip event and the drop speak
+  // for that time, not grasped_on_sensor.
+  if (!loaded && !event_open_) unsensed_held_s_ += dt;
 }
 
 void MetricsTracker::UpdateSlip(const TickSample& sample, double dt) {

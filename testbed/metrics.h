@@ -99,7 +99,8 @@ struct Metrics {
   /// phalanges; a fingertip brushing the table counts in neither), both
   /// integrated over the held time [-]; nullopt when never held or the finger carried nothing.
   std::optional<double> sensed_grip_share;
-  /// Time held with no unit's true normal force at or above the contact threshold [s].
+  /// Time held with no unit's true normal force at or above the contact threshold, outside slip
+  /// events (an object sliding out of the hand leaves the pad on its way) [s].
   double unsensed_held_s = 0.0;
   /// The unit (layout order) whose true normal force integrated over the held time is largest: where
   /// the contact sits on the fingertip; -1 when no unit was loaded while held.

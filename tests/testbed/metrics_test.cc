@@ -871,5 +871,21 @@ TEST_F(TrackerTest, TheSensedShareAndTheUnsensedTimeAreOverTheHeldTime) {
   EXPECT_FALSE(Find(EvaluateExpectations(Expectations{}, m, MetricsConfig{}), "grasped_on_sensor").passed);
 }
 
+// An object sliding out of the hand leaves the pad on its way: time with no unit loaded during a
+// slip event does not count as held off the sensor (the slip and the drop speak for it).
+TEST_F(TrackerTest, UnloadedUnitsDuringASlipEventAreNotTimeOffTheSensor) {
+  truth_.finger_object_normal_force_n = 2.0;
+  truth_.sensed_object_normal_force_n = 2.0;
+  Run(0.5, 0.0);
+  loads_[0].fn_n = 0.0;
+  Run(0.8, 0.01);  // sliding at 10 mm/s with nothing on the units: a slip event
+  const Metrics sliding = tracker_.Finish(0.8, 0.1, 0.0);
+  EXPECT_EQ(sliding.slip_events, 1);
+  EXPECT_NEAR(sliding.unsensed_held_s, 0.0, 2 * kTickS);
+  Run(1.2, 0.0);  // then still, and still nothing on the units: off the sensor
+  const Metrics still = tracker_.Finish(1.2, 0.1, 0.0);
+  EXPECT_NEAR(still.unsensed_held_s, 0.4 - MetricsConfig{}.slip_event_gap_s, 3 * kTickS);
+}
+
 }  // namespace
 }  // namespace graspbed::testbed
