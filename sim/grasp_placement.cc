@@ -3,12 +3,15 @@
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Geometry>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -42,6 +45,8 @@ constexpr double kNormalProbeM = 0.0005;
 // bowl is pinched at its widest and a box at the usual height [rad/m].
 constexpr double kSquareEnoughRad = 1.0 * std::numbers::pi / 180.0;
 constexpr double kHeightCostRadPerM = 0.25 * std::numbers::pi / 180.0 / 1e-3;
+// Placements kept per process before the cache starts over.
+constexpr size_t kPlacementCacheEntries = 256;
 // The index's proximal and middle phalanges must clear the object above the pad by this much [m].
 constexpr double kLinkClearanceM = 0.001;
 
@@ -274,8 +279,28 @@ double PinchCentreX(const SceneConfig& scene, const ProstheticKinematics& kin, d
 const char* ToString(PinchKind kind) { return kind == PinchKind::kRound ? "round" : "faces"; }
 
 PinchPlacement PlacePinch(const SceneConfig& scene, const ProstheticKinematics& kin) {
+  // Probing compiles the object and casts a few thousand rays (8 ms for the plastic cup), and a run
+  // places its scene more than once (the MJCF, the Simulation, an oracle search's every step): the
+  // placements are kept per process, keyed by the scene as config.yaml writes it and the fingertip.
+  YAML::Emitter emitted;
+  emitted << YAML::BeginMap;
+  EmitSceneConfig(scene, emitted);
+  emitted << YAML::EndMap;
+  std::ostringstream key;
+  key << std::setprecision(17) << emitted.c_str() << "\nholder " << kin.holder_length_m() << " " << kin.pad_depth_m();
+  static std::mutex mutex;
+  static std::map<std::string, PinchPlacement> placed;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto found = placed.find(key.str());
+    if (found != placed.end()) return found->second;
+  }
   const std::optional<RoundSection> section = PinchRoundSection(scene.object);
-  return section ? PlaceRoundPinch(scene, kin, *section) : PlaceFacesPinch(scene, kin);
+  PinchPlacement placement = section ? PlaceRoundPinch(scene, kin, *section) : PlaceFacesPinch(scene, kin);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (placed.size() >= kPlacementCacheEntries) placed.clear();  // a sweep's many scenes: start over
+  placed.emplace(key.str(), placement);
+  return placement;
 }
 
 }  // namespace graspbed::sim
