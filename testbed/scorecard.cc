@@ -48,6 +48,16 @@ double NumberOf(const std::string& file, const YAML::Node& node, const std::stri
   Fail(file, node, key, NodeText(node), "expected a number");
 }
 
+/// A map of dotted keys to values as --set overrides, in file order; a map or list value as flow YAML.
+std::vector<Override> OverridesOf(const YAML::Node& group) {
+  std::vector<Override> overrides;
+  for (const auto& pair : group) {
+    const YAML::Node value = pair.second;
+    overrides.push_back({pair.first.as<std::string>(), value.IsScalar() ? value.as<std::string>() : NodeText(value)});
+  }
+  return overrides;
+}
+
 std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& list,
                                      const std::string& where) {
   std::vector<ScorecardVary> vary;
@@ -70,13 +80,7 @@ std::vector<ScorecardVary> ParseVary(const std::string& file, const YAML::Node& 
           Fail(file, group, at + ".choose[" + std::to_string(c) + "]", NodeText(group),
                "expected a map of dotted keys to values, e.g. {object.shape: box}");
         }
-        std::vector<Override> overrides;
-        for (const auto& pair : group) {
-          const YAML::Node value = pair.second;
-          overrides.push_back(
-              {pair.first.as<std::string>(), value.IsScalar() ? value.as<std::string>() : NodeText(value)});
-        }
-        entry.choices.push_back(std::move(overrides));
+        entry.choices.push_back(OverridesOf(group));
       }
     } else {
       if (!item["key"] || !item["min"] || !item["max"]) {
@@ -163,6 +167,27 @@ ScorecardSet LoadScorecardSet(const std::string& path) {
       }
       base.variations = static_cast<int>(count);
     }
+    base.name = fs::path(base.scenario_path).stem().string();
+    if (item["name"]) {
+      const YAML::Node name = item["name"];
+      if (!name.IsScalar() || name.Scalar().empty() || name.Scalar().find_first_of("/ ") != std::string::npos)
+        Fail(path, name, at + ".name", NodeText(name), "expected a run name (no spaces or slashes)");
+      base.name = name.Scalar();
+    }
+    for (const ScorecardBase& earlier : set.bases) {
+      if (earlier.name == base.name) {
+        Fail(path, item["name"] ? item["name"] : item["scenario"], at + ".name", base.name,
+             "another base has this name; give each base of the same scenario its own `name`");
+      }
+    }
+    if (item["set"]) {
+      const YAML::Node group = item["set"];
+      if (!group.IsMap() || group.size() == 0) {
+        Fail(path, group, at + ".set", NodeText(group),
+             "expected a map of keys to values, e.g. {object: {name: apple}}");
+      }
+      base.set = OverridesOf(group);
+    }
     base.vary = ParseVary(path, item["vary"], at + ".vary");
     set.bases.push_back(std::move(base));
   }
@@ -173,11 +198,11 @@ std::vector<ScorecardRun> ExpandScorecardSet(const ScorecardSet& set) {
   std::vector<ScorecardRun> runs;
   for (size_t b = 0; b < set.bases.size(); ++b) {
     const ScorecardBase& base = set.bases[b];
-    const std::string stem = fs::path(base.scenario_path).stem().string();
     for (int k = 0; k <= base.variations; ++k) {
       ScorecardRun run;
-      run.name = stem + ".v" + std::to_string(k);
+      run.name = base.name + ".v" + std::to_string(k);
       run.scenario_path = base.scenario_path;
+      run.overrides = base.set;
       if (k > 0) {
         std::seed_seq seeds{static_cast<uint32_t>(set.seed), static_cast<uint32_t>(set.seed >> 32),
                             static_cast<uint32_t>(b), static_cast<uint32_t>(k)};

@@ -36,6 +36,12 @@ struct ScorecardVary {
 /// One base scenario of a set and how many seeded variations of it run beside it.
 struct ScorecardBase {
   std::string scenario_path;        ///< resolved relative to the set file
+  /// Its runs' names' stem (`name:`; default the scenario file's stem); unique within a set, so one
+  /// scenario file can be a base several times with different `set` overrides.
+  std::string name;
+  /// Overrides of every run of this base, v0 included, applied before the variations' (`set:`, a map of
+  /// keys as for --set to values, e.g. {object: {name: apple}}).
+  std::vector<Override> set;
   int variations = 0;               ///< seeded variations besides the base as shipped (>= 0)
   std::vector<ScorecardVary> vary;  ///< applied after the set's common ones
 };
@@ -56,9 +62,9 @@ ScorecardSet LoadScorecardSet(const std::string& path);
 
 /// One run of a set (per controller).
 struct ScorecardRun {
-  std::string name;  ///< <base scenario name>.v<k>; v0 is the base as shipped
+  std::string name;  ///< <base name>.v<k>; v0 is the base with its `set` overrides only
   std::string scenario_path;
-  std::vector<Override> overrides;  ///< the sampled overrides (empty for v0)
+  std::vector<Override> overrides;  ///< the base's `set`, then the sampled overrides (none for v0)
 };
 
 /// Every run of the set: per base, v0 then variations 1..N; variation k of base b is drawn from its

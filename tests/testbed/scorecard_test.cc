@@ -141,8 +141,9 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
   EXPECT_GE(set.version, 1);
   const std::vector<ScorecardRun> runs = ExpandScorecardSet(set);
   // The boxes, cylinders and disturbances first (the ctest below scores them), then the everyday
-  // objects: 60 runs per controller.
-  ASSERT_EQ(runs.size(), 60u);
+  // objects' tasks (19 runs), then the default lift of each of the 13 library objects by name (26):
+  // 86 runs per controller.
+  ASSERT_EQ(runs.size(), 86u);
   EXPECT_EQ(runs[kBoxAndDisturbanceRuns - 1].name, "wrap_cylinder.v3");
   // Both grasps are scored (the wrap base is in the set), and each everyday task of the objects'
   // shipped scenarios.
@@ -150,6 +151,17 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
                            "carry_egg.v0", "lift_plastic_cup.v0", "hold_foam_brick.v0", "pour_bottle.v0"}) {
     EXPECT_TRUE(std::any_of(runs.begin(), runs.end(), [&](const ScorecardRun& run) { return run.name == base; }))
         << base;
+  }
+  // Each library object by name in the default lift, v0 with that one override and nothing else.
+  for (const char* object : {"can", "bottle", "bottle_half", "mug", "marker", "card", "banana", "tennis_ball",
+                             "apple", "egg", "plastic_cup", "foam_brick", "wine_glass"}) {
+    const std::string name = std::string("default_") + object + ".v0";
+    const auto run = std::find_if(runs.begin(), runs.end(), [&](const ScorecardRun& r) { return r.name == name; });
+    ASSERT_NE(run, runs.end()) << name;
+    EXPECT_EQ(run->scenario_path, kScenarios + "/default.yaml");
+    ASSERT_EQ(run->overrides.size(), 1u) << name;
+    EXPECT_EQ(run->overrides[0].key, "object");
+    EXPECT_EQ(LoadScenario(run->scenario_path, run->overrides).scene.object.name, object);
   }
   const std::vector<ScorecardRun> again = ExpandScorecardSet(LoadScorecardSet(kShippedSet));
   ASSERT_EQ(again.size(), runs.size());
@@ -161,7 +173,7 @@ TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
       EXPECT_EQ(runs[i].overrides[k].key, again[i].overrides[k].key);
       EXPECT_EQ(runs[i].overrides[k].value, again[i].overrides[k].value);
     }
-    if (runs[i].name.ends_with(".v0")) {
+    if (runs[i].name.ends_with(".v0") && !runs[i].name.starts_with("default_")) {
       EXPECT_TRUE(runs[i].overrides.empty()) << runs[i].name;
     }
     // The last value of a key is the one that applies; the mass and friction ranges hold.
@@ -203,6 +215,40 @@ TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
       graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_range); });
   EXPECT_NE(range_message.find("bases[0].vary[0].max = 0.1: must be >= min"), std::string::npos)
       << range_message;
+  // One scenario twice needs a name per base, or the runs' names (and their output folders) collide.
+  const std::string base = "  - scenario: " + kScenarios + "/default.yaml\n";
+  const std::string twice = dir.Write("d.yaml", "name: s\nversion: 1\nbases:\n" + base + base);
+  const std::string twice_message =
+      graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(twice); });
+  EXPECT_NE(twice_message.find("d.yaml:5: bases[1].name = default: another base has this name"), std::string::npos)
+      << twice_message;
+  const std::string bad_set = dir.Write("e.yaml", "name: s\nversion: 1\nbases:\n" + base + "    set: [1, 2]\n");
+  const std::string set_message =
+      graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_set); });
+  EXPECT_NE(set_message.find("e.yaml:5: bases[0].set = [1, 2]: expected a map"), std::string::npos) << set_message;
+}
+
+TEST(ScorecardTest, ABaseNamedAndSetRunsItsOverridesBeforeEachVariations) {
+  TempDir dir;
+  const std::string path = dir.Write(
+      "s.yaml", "name: s\nversion: 1\nseed: 4\nbases:\n  - scenario: " + kScenarios +
+                    "/default.yaml\n    name: lift_egg\n    set: {object: {name: egg}, seed: 7}\n    variations: 1\n"
+                    "    vary:\n      - {key: object.mass_kg, min: 0.05, max: 0.06}\n");
+  const std::vector<ScorecardRun> runs = ExpandScorecardSet(LoadScorecardSet(path));
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0].name, "lift_egg.v0");
+  EXPECT_EQ(runs[1].name, "lift_egg.v1");
+  ASSERT_EQ(runs[0].overrides.size(), 2u);
+  EXPECT_EQ(runs[0].overrides[0].key, "object");
+  EXPECT_EQ(runs[0].overrides[0].value, "{name: egg}");
+  EXPECT_EQ(runs[0].overrides[1].key, "seed");
+  // The variation keeps the base's overrides first, so its drawn mass and seed win.
+  const ScenarioConfig varied = LoadScenario(runs[1].scenario_path, runs[1].overrides);
+  EXPECT_EQ(varied.scene.object.name, "egg");
+  EXPECT_GE(varied.scene.object.mass_kg, 0.05);
+  EXPECT_LE(varied.scene.object.mass_kg, 0.06);
+  EXPECT_NE(varied.seed, 7u);
+  EXPECT_EQ(LoadScenario(runs[0].scenario_path, runs[0].overrides).seed, 7u);
 }
 
 // A small set through the real CLI: two bases (a pull ramp and an added mass step), one seeded
