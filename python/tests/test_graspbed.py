@@ -259,14 +259,16 @@ def test_a_python_controller_runs_on_the_hand_over_the_serial_link(tmp_path):
     assert "true_squeeze_n" not in signals  # no ground truth over the wire
     assert {"closing", "holding"} <= set(signals["phase"])
     hand = json.loads(out)
-    # What follows holds when the link kept real time. On a machine too busy for it, frames are
-    # dropped, the state goes stale and the device's 100 ms watchdog stops the motor: skipped with
-    # the figures (pytest counts it), not passed and not failed.
+    # Stale periods and dropped frames are the host falling behind for a moment: the controller
+    # still commands the motor, so the grasp is judged. Only a tripped watchdog (the device stopped
+    # the motor after 100 ms without a command) takes the hand from the controller: then the grasp
+    # is not judged, and ctest shows the entry skipped (ctest_pytest.py) with the figures.
     bench = summary["bench"]
     behind = {"stale periods": bench["stale_periods"], "dropped frames": bench["dropped"],
               "watchdog trips": hand["watchdog_trips"]}
-    if any(behind.values()):
-        pytest.skip("the serial link fell behind real time (%s): the grasp is not judged" %
+    print("serial link: %s" % ", ".join("%d %s" % (n, what) for what, n in behind.items()))
+    if hand["watchdog_trips"]:
+        pytest.skip("the device's watchdog stopped the motor (%s): the grasp is not judged" %
                     ", ".join("%d %s" % (n, what) for what, n in behind.items()))
     # It held the box at its 3 N target, as it does in simulation: the sensed grip over the last
     # 0.3 s, and the hand's own account of the object (the emulator's ground truth).

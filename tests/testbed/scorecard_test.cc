@@ -385,7 +385,7 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
 // objects' bases are left to `graspbed score` (8.6 min with their oracle searches on 2 cores): the
 // reference drops the foam brick and crushes the plastic cup and one egg variation there, each a
 // failure tests/controller/reference_suite_test.cc lists for the object's shipped scenario.
-TEST(ScorecardTest, ReferenceOnTheBoxesAndDisturbancesDropsAndCrushesNothingAndEveryRunHasAnOracle) {
+TEST(ScorecardTest, ReferenceOnTheBoxesAndDisturbancesDropsAndCrushesNothingAndHoldsNearTheOracleGrip) {
   ScorecardOptions options;
   options.controllers = {"grip_slip"};
   options.jobs = 2;
@@ -417,7 +417,16 @@ TEST(ScorecardTest, ReferenceOnTheBoxesAndDisturbancesDropsAndCrushesNothingAndE
       EXPECT_FALSE(row.result.metrics.oracle->reason.empty()) << row.run;
     }
   }
+  // The grip it holds against each run's oracle. Printed 2026-11-28 (the line above): 34 passed,
+  // efficiency median 1.51, p95 3.22; the runs are seeded, so these move only when the code does.
+  // With the grip target tripled (grip_slip_controller.cc, target_n_) the reference still drops and
+  // crushes nothing but passes 30, median 1.77, p95 6.46: the bounds sit between the two, so a
+  // reference that squeezes more than it needs fails here.
   ASSERT_TRUE(score.grip_efficiency_median.has_value());
+  ASSERT_TRUE(score.grip_efficiency_p95.has_value());
+  EXPECT_LE(*score.grip_efficiency_median, 1.65);
+  EXPECT_LE(*score.grip_efficiency_p95, 4.5);
+  EXPECT_GE(score.passed, 32);
   // The set does exercise slip: the figures above are over real events.
   EXPECT_GT(score.slip_events, 10);
 }
