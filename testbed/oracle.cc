@@ -35,34 +35,7 @@ OracleStep RunStep(const ScenarioConfig& config, double setpoint_n, const std::a
   RunOptions options;
   options.oracle = OracleMode::kNever;
   options.stop = stop;
-  const RunResult result = RunScenario(OracleStepConfig(config, setpoint_n), options);
-  const Metrics& m = result.metrics;
-  OracleStep step;
-  step.setpoint_n = setpoint_n;
-  step.mean_grip_n = m.mean_held_grip_n;
-  step.peak_grip_n = m.peak_grip_n;
-  step.max_slip_mm = m.max_slip_mm;
-  if (m.physics_fault) {
-    step.outcome = "physics fault: " + m.physics_fault_cause;
-  } else if (!m.grasped) {
-    step.outcome = "never grasped";
-  } else if (m.ungrasped_closes > 0) {
-    step.outcome = "not grasped after " + std::to_string(m.ungrasped_closes) + " close command(s)";
-  } else if (m.dropped) {
-    step.outcome = "dropped at " + Number(m.drop_time_s) + " s";
-  } else if (m.gross.events > 0) {
-    for (const SlipEvent& event : m.events) {
-      if (!event.gross) continue;
-      step.outcome = "gross slip of " + Number(event.distance_m * 1e3) + " mm at " + Number(event.onset_s) + " s";
-      break;
-    }
-  } else if (!result.completed) {
-    step.outcome = "stopped";
-  } else {
-    step.held = true;
-    step.outcome = "held";
-  }
-  return step;
+  return JudgeOracleStep(setpoint_n, RunScenario(OracleStepConfig(config, setpoint_n), options));
 }
 
 /// Lightest setpoint the search halves down to when nothing above the first guess holds [N].
@@ -182,6 +155,37 @@ Cache& TheCache() {
 }
 
 }  // namespace
+
+OracleStep JudgeOracleStep(double setpoint_n, const RunResult& result) {
+  const Metrics& m = result.metrics;
+  OracleStep step;
+  step.setpoint_n = setpoint_n;
+  step.mean_grip_n = m.mean_held_grip_n;
+  step.peak_grip_n = m.peak_grip_n;
+  step.max_slip_mm = m.max_slip_mm;
+  if (m.physics_fault) {
+    step.outcome = "physics fault: " + m.physics_fault_cause;
+  } else if (!m.grasped) {
+    step.outcome = "never grasped";
+  } else if (m.ungrasped_closes > 0) {
+    step.outcome = "not grasped after " + std::to_string(m.ungrasped_closes) + " close command(s)";
+  } else if (m.dropped) {
+    step.outcome = "dropped at " + Number(m.drop_time_s) + " s";
+  } else if (m.gross.events > 0) {
+    step.outcome = "gross slip";
+    for (const SlipEvent& event : m.events) {
+      if (!event.gross) continue;
+      step.outcome = "gross slip of " + Number(event.distance_m * 1e3) + " mm at " + Number(event.onset_s) + " s";
+      break;
+    }
+  } else if (!result.completed) {
+    step.outcome = "stopped";
+  } else {
+    step.held = true;
+    step.outcome = "held";
+  }
+  return step;
+}
 
 bool IsDisturbance(ActionKind kind) {
   return kind == ActionKind::kAddMass || kind == ActionKind::kPull || kind == ActionKind::kSetFriction ||

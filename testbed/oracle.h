@@ -48,6 +48,14 @@ struct OracleStep {
   std::string outcome;          ///< "held", "dropped at 1.62 s", "gross slip of 0.8 mm at 1.7 s", ...
 };
 
+struct RunResult;  // testbed/runner.h
+
+/// The oracle's hold rule on one finished constant_grip run at `setpoint_n`: held when it had no
+/// physics fault, grasped at every close command, dropped nothing, had no gross slip
+/// (Metrics::gross, a slip >= metrics.gross_slip_m after the grasp was established) and ran to its
+/// end; otherwise the first of those that failed, in that order, is the outcome.
+OracleStep JudgeOracleStep(double setpoint_n, const RunResult& result);
+
 /// The result of one search.
 struct OracleSearch {
   OracleGrip grip;                   ///< the oracle grip (mean squeeze of the lightest holding run)
