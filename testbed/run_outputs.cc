@@ -120,6 +120,15 @@ std::vector<std::string> UnitColumns(int units, bool with_truth) {
   return names;
 }
 
+std::vector<std::string> GroundTruthColumns(int units) {
+  std::vector<std::string> names(kGroundTruthColumnNames.begin(), kGroundTruthColumnNames.end());
+  const std::vector<std::string> without = UnitColumns(units, /*with_truth=*/false);
+  for (const std::string& name : UnitColumns(units, /*with_truth=*/true)) {
+    if (std::find(without.begin(), without.end(), name) == without.end()) names.push_back(name);
+  }
+  return names;
+}
+
 void WriteUnitCells(double* cells, int units, const controller::ControlLoop& loop,
                     std::span<const sensor::UnitLoad> true_loads) {
   const sensor::RawFrame& frame = loop.frame();

@@ -3,6 +3,7 @@
 /// the output directory, the columns of the control loop and of the units in signals.csv, and the
 /// plots drawn from them. Internal to graspbed_testbed_run.
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -69,6 +70,20 @@ void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& l
 /// ft_est_n, then (`with_truth`: the simulation only) fn_true_n and ft_true_n, then validity; "_K"
 /// after each for unit K, unit by unit.
 std::vector<std::string> UnitColumns(int units, bool with_truth);
+/// The simulation's ground-truth columns of signals.csv, after the loop's and before the units', in
+/// the order the simulation backend fills them (testbed/sim_run.cc). A bench backend has none of them.
+inline constexpr std::array<const char*, 28> kGroundTruthColumnNames = {
+    "true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",     "true_squeeze_n",
+    "true_links_fn_n",    "true_palm_fn_n",
+    "slip_speed_mm_s",    "sliding_speed_mm_s", "finger_sliding_mm_s", "thumb_sliding_mm_s",
+    "sliding_load_share", "load_bound_grip_n",  "object_x_m",          "object_y_m",
+    "object_z_m",         "object_height_m",    "wrist_x_m",           "wrist_y_m",
+    "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",      "object_mass_kg",
+    "external_force_x_n", "external_force_y_n", "external_force_z_n",  "holding",
+    "slip_event",         "slip_distance_mm"};
+/// Every column only the simulation writes for `units` units: kGroundTruthColumnNames, then each
+/// unit's truth columns (UnitColumns with_truth less without).
+std::vector<std::string> GroundTruthColumns(int units);
 /// Fills the UnitColumns of `units` units for the tick `loop` just ran into `cells`: its frame and
 /// estimate, and `true_loads` (one per unit) when not empty.
 void WriteUnitCells(double* cells, int units, const controller::ControlLoop& loop,

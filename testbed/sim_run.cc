@@ -80,24 +80,13 @@ class TruthRing {
   std::vector<sensor::UnitLoad> loads_;
 };
 
-// The ground-truth columns, after the loop's (internal::LoopColumn) and before the units', in the
-// order SimRun::Record fills them.
-constexpr const char* kTruthNames[] = {
-    "true_sensed_fn_n",   "true_finger_fn_n",   "true_thumb_fn_n",     "true_squeeze_n",
-    "true_links_fn_n",    "true_palm_fn_n",
-    "slip_speed_mm_s",    "sliding_speed_mm_s", "finger_sliding_mm_s", "thumb_sliding_mm_s",
-    "sliding_load_share", "load_bound_grip_n",  "object_x_m",          "object_y_m",
-    "object_z_m",         "object_height_m",    "wrist_x_m",           "wrist_y_m",
-    "wrist_z_m",          "wrist_target_z_m",   "grip_closure_m",      "object_mass_kg",
-    "external_force_x_n", "external_force_y_n", "external_force_z_n",  "holding",
-    "slip_event",         "slip_distance_mm"};
-constexpr size_t kTruthCount = std::size(kTruthNames);
+constexpr size_t kTruthCount = internal::kGroundTruthColumnNames.size();
 static_assert(kLoopColumnCount + kTruthCount <= kSignalBoundFixedColumns,
               "the loader's bound on signal memory must count every column");
 
 // The simulation's block of signals.csv: the truth, then every unit's columns with the truth's.
 std::vector<std::string> SimColumns(int units) {
-  std::vector<std::string> names(std::begin(kTruthNames), std::end(kTruthNames));
+  std::vector<std::string> names(internal::kGroundTruthColumnNames.begin(), internal::kGroundTruthColumnNames.end());
   const std::vector<std::string> unit_names = internal::UnitColumns(units, /*with_truth=*/true);
   names.insert(names.end(), unit_names.begin(), unit_names.end());
   return names;
