@@ -227,7 +227,11 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
     ASSERT_GT(signals[column].size(), 100u) << column << " missing from the simulation's signals.csv";
   }
   EXPECT_TRUE(hw_metrics.at("grasped").get<bool>());
-  if (kept_pace) {
+  // Held, unless the device's watchdog stopped the motor: stale periods and dropped frames make the
+  // controller hold or regrip on purpose, which keeps the object; only the motor turned off by the
+  // watchdog (commands stopped for 100 ms) may let it fall. Measured with both cores taken: the one
+  // drop seen came with 3 watchdog trips.
+  if (watchdog_trips == 0) {
     EXPECT_FALSE(hw_metrics.at("dropped").get<bool>()) << device.dump(2);
   }
   const double hw_slip_mm = hw_metrics.at("max_slip_mm").get<double>();

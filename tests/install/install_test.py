@@ -273,15 +273,17 @@ def example_hw(source_dir, stage_dir):
     if hw["corrupt"] != 0:
         fail("link: " + json.dumps(hw))
     metrics = device["metrics"]
-    # The rest needs a machine that kept real time: a busy one drops frames, goes stale, trips the
-    # device's motor watchdog or simulates too little before the host stops. Skipped with the figures
-    # (ctest shows it skipped), not failed and not passed.
+    # Stale periods and dropped frames leave the controller commanding the motor, so the grasp is
+    # judged; a tripped motor watchdog (commands stopped for 100 ms) or a device that simulated too
+    # little before the host stopped takes it from the controller: skipped with the figures (ctest
+    # shows it skipped), not failed and not passed.
     behind = {"stale periods": hw["stale_periods"], "dropped frames": hw["dropped"],
               "watchdog trips": device["watchdog_trips"]}
-    if any(behind.values()) or hw["frames"] < 1000 or device["sim_time_s"] < 1.8:
-        print("the link fell behind real time (%s; %d frames, %.2f s simulated): the grasp is not judged"
-              % (", ".join("%d %s" % (n, what) for what, n in behind.items()), hw["frames"], device["sim_time_s"]),
-              file=sys.stderr)
+    figures = "%s; %d frames, %.2f s simulated" % (
+        ", ".join("%d %s" % (n, what) for what, n in behind.items()), hw["frames"], device["sim_time_s"])
+    print("link: " + figures)
+    if device["watchdog_trips"] or device["sim_time_s"] < 1.8:
+        print("the link fell behind real time (%s): the grasp is not judged" % figures, file=sys.stderr)
         sys.exit(SKIP)
     if not metrics["grasped"] or metrics["dropped"]:
         fail("over the emulator the example controller did not hold the object: " + json.dumps(metrics))
