@@ -5,6 +5,7 @@
 #include <string>
 
 #include "app/command_registry.h"
+#include "testbed/oracle.h"
 
 int main(int argc, char** argv) {
   CLI::App root{
@@ -12,6 +13,11 @@ int main(int argc, char** argv) {
       "fingertip (elastic steel frame units, piezoresistive R1/R2)"};
   root.require_subcommand(1);
   root.set_version_flag("--version", std::string("graspbed ") + GRASPBED_VERSION);
+  // Given before or after the subcommand (fallthrough): the oracle searches of this process are
+  // neither read from nor written to the disk cache (docs/scenarios.md, "The oracle grip").
+  root.add_flag_callback("--no-oracle-cache", [] { graspbed::testbed::SetOracleDiskCacheOff(); },
+                         "do not read or keep oracle searches in the disk cache ($XDG_CACHE_HOME/graspbed/oracle)");
+  root.fallthrough();
   try {
     // Inside the try: some options' defaults are data files, and a missing data directory is an
     // error message, not std::terminate.

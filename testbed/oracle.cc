@@ -1,5 +1,8 @@
 #include "testbed/oracle.h"
 
+#include <dlfcn.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -109,10 +112,25 @@ OracleSearch Search(const ScenarioConfig& config, const OracleOptions& options) 
   return search;
 }
 
-/// The directory of the opt-in disk cache ($GRASPBED_ORACLE_CACHE_DIR), "" when unset.
-std::string DiskCacheDir() {
-  const char* dir = std::getenv("GRASPBED_ORACLE_CACHE_DIR");
-  return dir != nullptr ? dir : "";
+std::atomic<bool> disk_cache_off{false};
+
+/// The file holding this code (the executable, or the Python module) with its size and modification
+/// time: a rebuild changes it, so searches cached by another build are not read.
+const std::string& BuildIdentity() {
+  static const std::string identity = [] {
+    Dl_info info{};
+    std::string code = "/proc/self/exe";  // the executable, when dladdr does not name a file that exists
+    struct stat status {};
+    if (dladdr(reinterpret_cast<const void*>(&BuildIdentity), &info) != 0 && info.dli_fname != nullptr &&
+        ::stat(info.dli_fname, &status) == 0) {
+      code = info.dli_fname;
+    } else if (::stat(code.c_str(), &status) != 0) {
+      return std::string("unknown build");
+    }
+    return code + " " + std::to_string(status.st_size) + " " + std::to_string(status.st_mtim.tv_sec) + "." +
+           std::to_string(status.st_mtim.tv_nsec);
+  }();
+  return identity;
 }
 
 nlohmann::json SearchJson(const OracleSearch& search);
@@ -249,8 +267,13 @@ OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& o
     throw std::invalid_argument("oracle: first_guess_n must be > 0 and one resolution > 0");
   }
   // The hash covers everything the search runs (the step config at a placeholder setpoint) and how.
-  const std::string key_text = EmitScenarioYaml(OracleStepConfig(config, 1.0)) + "\n# oracle search 2 graspbed " +
-                               GRASPBED_VERSION + " " +
+  // Not the run's name or description: one scenario under several controllers ("default.v1@open_loop")
+  // is one search.
+  ScenarioConfig keyed = OracleStepConfig(config, 1.0);
+  keyed.name = "oracle";
+  keyed.description.clear();
+  const std::string key_text = EmitScenarioYaml(keyed) + "\n# oracle search 3 graspbed " + GRASPBED_VERSION +
+                               " " + BuildIdentity() + " " +
                                Number(options.relative_resolution, "%.17g") + " " +
                                Number(options.absolute_resolution_n, "%.17g") + " " +
                                Number(options.first_guess_n, "%.17g");
@@ -274,7 +297,7 @@ OracleSearch FindOracleGrip(const ScenarioConfig& config, const OracleOptions& o
   }
   if (!compute) return future.get();  // computed, or being computed by another thread
   try {
-    const std::string disk = DiskCacheDir();
+    const std::string disk = OracleDiskCacheDir();
     if (!disk.empty()) {
       if (std::optional<OracleSearch> stored = ReadDiskCache(disk, Hex(key))) {
         stored->config_hash = Hex(key);
@@ -410,6 +433,21 @@ std::string OracleReportTable(const ScenarioConfig& config, const OracleReport& 
   }
   return out.str();
 }
+
+std::string OracleDiskCacheDir() {
+  if (disk_cache_off) return "";
+  if (const char* dir = std::getenv("GRASPBED_ORACLE_CACHE_DIR")) {
+    const std::string text = dir;
+    return text == "off" ? "" : text;
+  }
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg != nullptr && *xdg != '\0') return std::string(xdg) + "/graspbed/oracle";
+  const char* home = std::getenv("HOME");
+  if (home != nullptr && *home != '\0') return std::string(home) + "/.cache/graspbed/oracle";
+  return "";
+}
+
+void SetOracleDiskCacheOff() { disk_cache_off = true; }
 
 OracleCacheCounters OracleCacheCountersNow() {
   Cache& cache = TheCache();

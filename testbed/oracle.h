@@ -11,11 +11,12 @@
 /// holding run, so a controller's mean grip compares with it in the same units whatever its sensor
 /// reports; the constant_grip setpoint that gave it is kept beside it.
 ///
-/// Results are cached per resolved oracle configuration (a hash of its config.yaml text and the
-/// graspbed version) for the life of the process, so a suite or a scorecard pays once per distinct
-/// scenario, whatever the number of controllers or threads asking. With $GRASPBED_ORACLE_CACHE_DIR
-/// set they are also kept there as <hash>.json across processes (a tuning aid: a search depends on
-/// the simulation, the sensor model and constant_grip, so clear the directory after changing them).
+/// Results are cached per resolved oracle configuration (a hash of its config.yaml text less the
+/// run's name, and of the graspbed build that searched) for the life of the process, so a suite or a
+/// scorecard pays once per distinct scenario, whatever the number of controllers or threads asking.
+/// They are also kept across processes as <hash>.json in the disk cache (OracleDiskCacheDir): the
+/// build's file, size and modification time are part of the hash, so a rebuilt graspbed never reads
+/// the searches of another build.
 
 #include <atomic>
 #include <cstdint>
@@ -106,6 +107,13 @@ OracleReport RunOracleReport(const ScenarioConfig& config, const OracleOptions& 
 nlohmann::json OracleReportJson(const ScenarioConfig& config, const OracleReport& report);
 /// The same as a short table for the terminal.
 std::string OracleReportTable(const ScenarioConfig& config, const OracleReport& report);
+
+/// The directory of the disk cache, "" when it is off: $GRASPBED_ORACLE_CACHE_DIR when set ("" or
+/// "off" turn it off), else $XDG_CACHE_HOME/graspbed/oracle, else $HOME/.cache/graspbed/oracle (off
+/// without HOME). SetOracleDiskCacheOff() (`--no-oracle-cache`) turns it off for the process.
+std::string OracleDiskCacheDir();
+/// Turns the disk cache off for the rest of the process (the in-process cache stays).
+void SetOracleDiskCacheOff();
 
 /// Searches run since the process started and how many were answered from the cache (tests).
 struct OracleCacheCounters {

@@ -394,11 +394,17 @@ TEST_F(BenchRunTest, OneIntentScriptDrivesTheSamePhasesOnEveryBackend) {
                                      Path("serial") + "/signals.csv --controller grip_slip --no-plots --out " +
                                      Path("replay_reference"));
   ASSERT_EQ(reference.exit_code, 0) << reference.out << reference.err;
-  std::vector<std::string> reference_phases = PhaseSequence(ReadCsv(Path("replay_reference") + "/signals.csv"));
+  const std::vector<std::string> reference_phases =
+      PhaseSequence(ReadCsv(Path("replay_reference") + "/signals.csv"));
   std::printf("[   INFO   ] grip_slip on the recorded frames: %s\n", Join(reference_phases).c_str());
-  // Before the session's first frame the state is stale and the controller is in safe hold.
-  if (!reference_phases.empty() && reference_phases.front() == "safe_hold") reference_phases.erase(reference_phases.begin());
-  EXPECT_EQ(Join(reference_phases), "idle closing loading holding");
+  // Where the recording's frames went stale (before its first frame; on a busy machine, stale periods
+  // of the session) the controller is in safe hold and resumes its phase after: without those, the
+  // phases in order.
+  std::vector<std::string> fresh_phases;
+  for (const std::string& phase : reference_phases) {
+    if (phase != "safe_hold" && (fresh_phases.empty() || fresh_phases.back() != phase)) fresh_phases.push_back(phase);
+  }
+  EXPECT_EQ(Join(fresh_phases), "idle closing loading holding");
 }
 
 TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {

@@ -33,8 +33,11 @@ def run(args, env=None, cwd=None, timeout=600):
 
 
 def clean_env():
-    """The environment without any GRASPBED_ variable, so nothing but the binary's location finds data."""
-    return {k: v for k, v in os.environ.items() if not k.startswith("GRASPBED_")}
+    """The environment without any GRASPBED_ variable, so nothing but the binary's location finds data;
+    the oracle's disk cache stays off, as in every test."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("GRASPBED_")}
+    env["GRASPBED_ORACLE_CACHE_DIR"] = "off"
+    return env
 
 
 def stage(build_dir, stage_dir):

@@ -273,7 +273,7 @@ TEST(OracleCliTest, PrintsBothOraclesAsJsonWithTheStepsAndRefusesBadInput) {
   EXPECT_NE(bad.err.find("object.mass_kg = -1"), std::string::npos) << bad.err;
 }
 
-TEST(OracleCliTest, TheOptInDiskCacheAnswersAnotherProcessAndAnUnreadableEntryIsSearchedAgain) {
+TEST(OracleCliTest, TheDiskCacheAnswersAnotherProcessAndAnUnreadableEntryIsSearchedAgain) {
   TempDir dir;
   const std::string env = "env GRASPBED_ORACLE_CACHE_DIR=" + dir.Path("cache") + " ";
   const std::string arguments = "oracle " + kDefault + " --set object.mass_kg=0.12 --json";
@@ -295,6 +295,35 @@ TEST(OracleCliTest, TheOptInDiskCacheAnswersAnotherProcessAndAnUnreadableEntryIs
   const nlohmann::json again = nlohmann::json::parse(RunCliUnder(env, arguments).out);
   EXPECT_EQ(again.at("oracle_grip_n"), searched.at("oracle_grip_n"));
   EXPECT_EQ(nlohmann::json::parse(graspbed::test_support::ReadText(entry)).at("grip_n"), searched.at("oracle_grip_n"));
+}
+
+TEST(OracleCliTest, TheDiskCacheIsOnByDefaultUnderTheUsersCacheDirectoryAndOffOnRequest) {
+  TempDir dir;
+  // As a user's shell has it: no GRASPBED_ORACLE_CACHE_DIR (the tests' environment sets it off).
+  const std::string user = "env -u GRASPBED_ORACLE_CACHE_DIR XDG_CACHE_HOME=" + dir.Path("xdg") + " ";
+  const std::string arguments = "oracle " + kDefault + " --set object.mass_kg=0.125 --json";
+  const CliResult first = RunCliUnder(user, arguments);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string hash = nlohmann::json::parse(first.out).at("full").at("config_hash").get<std::string>();
+  EXPECT_TRUE(std::filesystem::exists(dir.Path("xdg") + "/graspbed/oracle/" + hash + ".json"));
+  // Without XDG_CACHE_HOME: under HOME/.cache.
+  const CliResult home = RunCliUnder("env -u GRASPBED_ORACLE_CACHE_DIR -u XDG_CACHE_HOME HOME=" + dir.Path("home") + " ",
+                                     arguments);
+  ASSERT_EQ(home.exit_code, 0) << home.err;
+  EXPECT_TRUE(std::filesystem::exists(dir.Path("home") + "/.cache/graspbed/oracle/" + hash + ".json"));
+  // --no-oracle-cache, before or after the command: nothing read (a doctored entry is not used) and
+  // nothing written.
+  std::ofstream(dir.Path("xdg") + "/graspbed/oracle/" + hash + ".json") << "{ not json";
+  for (const std::string& command : {"--no-oracle-cache " + arguments, arguments + " --no-oracle-cache"}) {
+    const CliResult off = RunCliUnder("env -u GRASPBED_ORACLE_CACHE_DIR XDG_CACHE_HOME=" + dir.Path("xdg") + " ", command);
+    ASSERT_EQ(off.exit_code, 0) << command << ": " << off.err;
+    EXPECT_EQ(graspbed::test_support::ReadText(dir.Path("xdg") + "/graspbed/oracle/" + hash + ".json"), "{ not json");
+  }
+  // The key leaves out the run's name: the same scenario renamed (as a scorecard names each
+  // controller's run) is the same search.
+  const CliResult renamed = RunCliUnder(user, arguments + " --set name=another");
+  ASSERT_EQ(renamed.exit_code, 0) << renamed.err;
+  EXPECT_EQ(nlohmann::json::parse(renamed.out).at("full").at("config_hash").get<std::string>(), hash);
 }
 
 }  // namespace

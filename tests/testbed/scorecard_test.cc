@@ -2,6 +2,7 @@
 // within its ranges), the set file's error messages, and `graspbed score` on a small set with both
 // controllers (table, CSV and JSON columns, the PNG, the reference ahead of open_loop on slip detection).
 #include "testbed/scorecard.h"
+#include "testbed/oracle.h"
 
 #include <gtest/gtest.h>
 
@@ -226,6 +227,32 @@ TEST(ScorecardTest, SetFileErrorsNameTheFileLineAndKey) {
   const std::string set_message =
       graspbed::test_support::ErrorOf<common::ConfigError>([&] { LoadScorecardSet(bad_set); });
   EXPECT_NE(set_message.find("e.yaml:5: bases[0].set = [1, 2]: expected a map"), std::string::npos) << set_message;
+}
+
+TEST(ScorecardTest, EachRunsOracleIsSearchedOnceWhateverTheNumberOfControllers) {
+  SetOracleDiskCacheOff();  // searched here, not read from another process's cache
+  TempDir dir;
+  // Masses no other test uses, so this process has not searched them yet.
+  const std::string path = dir.Write(
+      "s.yaml", "name: s\nversion: 1\nseed: 5\nbases:\n  - scenario: " + kScenarios +
+                    "/default.yaml\n    set: {object.mass_kg: 0.1234, duration_s: 1.6}\n    variations: 1\n"
+                    "    vary:\n      - {key: object.mass_kg, min: 0.131, max: 0.139}\n");
+  ScorecardOptions options;
+  options.controllers = {"grip_slip", "open_loop", "constant_grip"};
+  options.jobs = 2;
+  const OracleCacheCounters before = OracleCacheCountersNow();
+  const Scorecard scorecard = RunScorecard(LoadScorecardSet(path), options);
+  const OracleCacheCounters after = OracleCacheCountersNow();
+  ASSERT_TRUE(scorecard.completed);
+  ASSERT_EQ(scorecard.rows.size(), 6u);
+  // Six runs asked, two searches ran (one per run of the set), four were answered by them.
+  EXPECT_EQ(after.searches - before.searches, 6u);
+  EXPECT_EQ((after.searches - after.cache_hits) - (before.searches - before.cache_hits), 2u);
+  for (const ScorecardRow& row : scorecard.rows) {
+    ASSERT_TRUE(row.result.metrics.oracle.has_value()) << row.run;
+    EXPECT_EQ(row.result.metrics.oracle->grip_n, scorecard.rows[row.run == "default.v0" ? 0 : 1].result.metrics.oracle->grip_n)
+        << row.run << "@" << row.controller;
+  }
 }
 
 TEST(ScorecardTest, ABaseNamedAndSetRunsItsOverridesBeforeEachVariations) {
@@ -461,12 +488,13 @@ TEST(ScorecardCliTest, SeedAndVariationsScaleDrawAHeldOutSetFromTheSameRanges) {
   TempDir dir;
   const std::string common = "score --set-dir " + std::string(GRASPBED_SOURCE_DIR) +
                              "/scenarios/scorecard --limit 5 --controller open_loop ";
+  const std::string version = " v" + std::to_string(LoadScorecardSet(kShippedSet).version);
   CliResult result = RunCli(common + "--out " + dir.Path("shipped"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v4 seed 2026 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(version + " seed 2026 ("), std::string::npos) << result.out;
   result = RunCli(common + "--seed 11 --variations-scale 2 --out " + dir.Path("held_out"));
   ASSERT_EQ(result.exit_code, kExitOk) << result.out << result.err;
-  EXPECT_NE(result.out.find(" v4 seed 11 ("), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(version + " seed 11 ("), std::string::npos) << result.out;
   const nlohmann::json shipped = nlohmann::json::parse(ReadText(dir.Path("shipped") + "/scorecard.json"));
   const nlohmann::json held_out = nlohmann::json::parse(ReadText(dir.Path("held_out") + "/scorecard.json"));
   EXPECT_EQ(held_out.at("set").at("seed"), 11);
