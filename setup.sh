@@ -53,13 +53,5 @@ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" 
   || { cat "$build_dir.configure.log"; exit 1; }
 cmake --build "$build_dir" -j2
 
-# The libFuzzer targets in a clang tree of their own (docs/hardware.md, "Fuzzing"); ctest's
-# scenario_fuzz runs the scenario loader's for 30 s. Its failure to build does not stop the main
-# build (that test then fails, pointing at the log).
-fuzz_dir=build-fuzz  # tests/fuzz/CMakeLists.txt looks for it there
-if ! { CC=clang-14 CXX=clang++-14 cmake -S . -B "$fuzz_dir" -G Ninja -DGRASPBED_FUZZ=ON -DGRASPBED_PYTHON=OFF \
-         -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" &&
-       cmake --build "$fuzz_dir" -j2 --target scenario_fuzz make_scenario_seeds decoder_fuzz; } \
-     > "$fuzz_dir.build.log" 2>&1; then
-  echo "setup: the fuzz targets did not build (log: $fuzz_dir.build.log); ctest's scenario_fuzz fails until they do" >&2
-fi
+# The libFuzzer targets' clang tree (build-fuzz/) is not built here: only the tests use it, and
+# ctest's fuzz.build_tree builds it before scenario_fuzz (fuzz/build_fuzz_tree.sh).

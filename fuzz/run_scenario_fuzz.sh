@@ -16,14 +16,12 @@ target=$fuzz_dir/fuzz/scenario_fuzz
 seeds_tool=$fuzz_dir/fuzz/make_scenario_seeds
 
 if [ ! -x "$target" ] || [ ! -x "$seeds_tool" ]; then
-  echo "scenario_fuzz: $target is not built. ./setup.sh builds it; or, from $source_dir:" >&2
-  echo "  CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DGRASPBED_FUZZ=ON -DGRASPBED_PYTHON=OFF \\" >&2
-  echo "      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO='-O1 -gline-tables-only'" >&2
-  echo "  cmake --build build-fuzz -j2 --target scenario_fuzz make_scenario_seeds" >&2
-  if [ -f "$fuzz_dir.build.log" ]; then echo "setup.sh's log of its build: $fuzz_dir.build.log" >&2; fi
+  echo "scenario_fuzz: $target is not built: ctest's fuzz.build_tree builds it, or from $source_dir:" >&2
+  echo "  fuzz/build_fuzz_tree.sh $fuzz_dir" >&2
+  if [ -f "$fuzz_dir.build.log" ]; then echo "the log of its last build: $fuzz_dir.build.log" >&2; fi
   exit 1
 fi
-# The sources may have changed since setup.sh built it: fuzz what is checked out (no-op when current).
+# The sources may have changed since the tree was built: fuzz what is checked out (no-op when current).
 cmake --build "$fuzz_dir" -j2 --target scenario_fuzz make_scenario_seeds > "$fuzz_dir.test-build.log" 2>&1 ||
   { cat "$fuzz_dir.test-build.log" >&2; exit 1; }
 

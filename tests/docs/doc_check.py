@@ -7,7 +7,9 @@ links      every relative link and image resolves to a file, every `#anchor` to 
 tables     every table between `<!-- config-reference PATH -->` and `<!-- /config-reference -->`
            equals what `graspbed config-reference PATH` prints
 commands   every ```sh block right after a `<!-- doc-check -->` line (or `<!-- doc-check: exit N -->`)
-           runs with bash -e -o pipefail and exits 0 (or N). The blocks of one file run in order in
+           runs with bash -e -o pipefail and exits 0 (or N); a ```python block runs with
+           /usr/bin/python3 and PYTHONPATH=build/python, a ```cpp block compiles with g++ -std=c++20
+           -fsyntax-only -Wall -Werror against the source tree's headers. The blocks of one file run in order in
            one scratch directory that looks like a checkout after ./setup.sh: a symlink for each
            top-level entry of the source tree and `build` pointing at the build tree under test, whose
            directory is also first on PATH (so `graspbed` is the build's). Each block has
@@ -219,6 +221,22 @@ def write_tables(source, binary, doc):
     return failures
 
 
+def as_here_document(command, code):
+    """`command` reading `code` on its standard input, as a bash block (the code quoted verbatim)."""
+    return f"{command} <<'DOC_CHECK_BLOCK'\n{code}DOC_CHECK_BLOCK\n"
+
+
+# How a marked block runs, by its fence's language: a shell block as it is; a Python block with
+# Debian's interpreter and the build tree's module (the one the docs tell users to use); a C++ block
+# compiled (not linked) against the controller API's headers, which the install ships as they are in
+# the source tree.
+RUNNERS = {
+    "sh": lambda code: code,
+    "python": lambda code: as_here_document("PYTHONPATH=build/python /usr/bin/python3 -", code),
+    "cpp": lambda code: as_here_document("g++ -std=c++20 -fsyntax-only -Wall -Werror -I. -x c++ -", code),
+}
+
+
 def marked_blocks(doc):
     """(line, expected exit, code) of each marked block; a marker not followed by a sh fence is an error."""
     lines = doc.read_text().split("\n")
@@ -232,13 +250,14 @@ def marked_blocks(doc):
             errors.append((index + 1, f"malformed marker {line.strip()!r} (`<!-- doc-check -->` or "
                                       "`<!-- doc-check: exit N -->`)"))
             continue
-        if not fence or fence.group(2) != "sh":
-            errors.append((index + 1, "a doc-check marker must stand right before a ```sh fence"))
+        if not fence or fence.group(2) not in RUNNERS:
+            errors.append((index + 1, "a doc-check marker must stand right before a ```sh, ```python or ```cpp fence"))
             continue
         end = index + 2
         while end < len(lines) and not lines[end].strip().startswith(fence.group(1)):
             end += 1
-        blocks.append((index + 2, int(match.group(1) or 0), "\n".join(lines[index + 2:end]) + "\n"))
+        code = "\n".join(lines[index + 2:end]) + "\n"
+        blocks.append((index + 2, int(match.group(1) or 0), RUNNERS[fence.group(2)](code)))
     return blocks, errors
 
 
