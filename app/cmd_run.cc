@@ -98,7 +98,8 @@ struct RunCommandOptions {
   bool no_stdin_intent = false;
 };
 
-void RunCommand(const RunCommandOptions& options) {
+/// The scenario with the command line's overrides applied.
+testbed::ScenarioConfig LoadRunScenario(const RunCommandOptions& options) {
   std::vector<testbed::Override> overrides;
   // The port and the log before the backend that needs them (each override is checked as applied).
   if (!options.port.empty()) overrides.push_back({"serial.port", options.port});
@@ -109,8 +110,12 @@ void RunCommand(const RunCommandOptions& options) {
   }
   if (options.seed >= 0) overrides.push_back({"seed", std::to_string(options.seed)});
   for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
-  const testbed::ScenarioConfig config = testbed::LoadScenario(options.scenario, overrides);
+  return testbed::LoadScenario(options.scenario, overrides);
+}
 
+/// The run's options from the command line; `terminal`: draw the progress line.
+testbed::RunOptions MakeRunOptions(const RunCommandOptions& options, const testbed::ScenarioConfig& config,
+                                   bool terminal) {
   testbed::RunOptions run;
   run.out_dir = options.out_dir.empty() ? "out/" + config.name : options.out_dir;
   run.write_plots = !options.no_plots;
@@ -119,26 +124,70 @@ void RunCommand(const RunCommandOptions& options) {
   run.prompt_actions = options.prompt_actions;
   run.intent_stdin = config.backend == testbed::Backend::kSerial && !options.no_stdin_intent;
   run.intent_fifo = options.intent_fifo;
-  // The progress line would run into the bench's prompts and intent echoes.
-  const bool terminal = StderrIsTerminal() && config.backend == testbed::Backend::kSim;
   if (terminal) {
-    run.progress = [&config](double sim_s, double duration_s) {
-      std::fprintf(stderr, "\r  %s: %.2f / %.2f s simulated ", config.name.c_str(), sim_s, duration_s);
+    run.progress = [name = config.name](double sim_s, double duration_s) {
+      std::fprintf(stderr, "\r  %s: %.2f / %.2f s simulated ", name.c_str(), sim_s, duration_s);
       std::fflush(stderr);
     };
   }
-  std::shared_ptr<const show::VideoCost> video_cost;
+  return run;
+}
+
+/// With --video, attaches the recorder to `run` (null without); refused for a backend without a
+/// simulation.
+std::shared_ptr<const show::VideoCost> AttachRunVideo(const RunCommandOptions& options,
+                                                      const testbed::ScenarioConfig& config,
+                                                      testbed::RunOptions& run) {
   if (options.video.enabled && config.backend != testbed::Backend::kSim) {
     throw std::invalid_argument(std::string("--video: renders the simulation, and backend ") +
                                 testbed::BackendName(config.backend) + " has none");
   }
-  if (options.video.enabled) {
-    const show::VideoOptions video = options.video.Resolve();
-    std::error_code error;
-    fs::create_directories(run.out_dir, error);  // the encoder writes there from the first frame
-    video_cost =
-        show::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
+  if (!options.video.enabled) return nullptr;
+  const show::VideoOptions video = options.video.Resolve();
+  std::error_code error;
+  fs::create_directories(run.out_dir, error);  // the encoder writes there from the first frame
+  return show::AttachVideo(config, video, run.out_dir + "/video.mp4", run.out_dir + "/video_strip.png", run);
+}
+
+/// The summary (table or JSON) and the list of outputs on stdout.
+void PrintRunSummary(const RunCommandOptions& options, const testbed::ScenarioConfig& config,
+                     const testbed::RunResult& result, const std::string& out_dir) {
+  if (options.json) {
+    std::cout << testbed::SummaryJson(result).dump(2) << '\n';
+    return;
   }
+  std::cout << testbed::SummaryTable(result);
+  const bool sim = config.backend == testbed::Backend::kSim;
+  std::cout << "  outputs: " << out_dir << "/ (signals.csv, summary.json, config.yaml"
+            << (options.no_plots ? ""
+                : sim            ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, "
+                                   "taxels_fn.png, taxels_ft.png"
+                                 : ", forces.png, grip.png, taxels_fn.png, taxels_ft.png")
+            << (sim ? ", states.csv" : "") << (options.video.enabled ? ", video.mp4, video_strip.png" : "")
+            << ")\n";
+}
+
+/// An interrupted run (exit 130) or a physics fault on stderr; the exit code.
+void EndRun(const testbed::RunResult& result, const std::string& out_dir) {
+  if (!result.completed) {
+    std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in "
+              << out_dir << " (marked INCOMPLETE)\n";
+    ExitWith(kExitInterrupted);
+  }
+  if (result.metrics.physics_fault) {
+    std::cerr << "graspbed: physics fault at t = " << result.metrics.physics_fault_time_s
+              << " s ended the run (" << result.metrics.physics_fault_cause << "); results up to it in "
+              << out_dir << "\n";
+  }
+  ExitWith(result.passed ? kExitOk : kExitFailed);
+}
+
+void RunCommand(const RunCommandOptions& options) {
+  const testbed::ScenarioConfig config = LoadRunScenario(options);
+  // The progress line would run into the bench's prompts and intent echoes.
+  const bool terminal = StderrIsTerminal() && config.backend == testbed::Backend::kSim;
+  testbed::RunOptions run = MakeRunOptions(options, config, terminal);
+  const std::shared_ptr<const show::VideoCost> video_cost = AttachRunVideo(options, config, run);
   StopSignalGuard guard;
   const testbed::RunResult result = testbed::RunScenario(config, run);
   if (terminal) std::fprintf(stderr, "\r\033[K");
@@ -149,31 +198,8 @@ void RunCommand(const RunCommandOptions& options) {
         run.out_dir.c_str(), video_cost->frames, video_cost->render_ms / video_cost->frames,
         video_cost->encode_ms / video_cost->frames);
   }
-
-  if (options.json) {
-    std::cout << testbed::SummaryJson(result).dump(2) << '\n';
-  } else {
-    std::cout << testbed::SummaryTable(result);
-    const bool sim = config.backend == testbed::Backend::kSim;
-    std::cout << "  outputs: " << run.out_dir << "/ (signals.csv, summary.json, config.yaml"
-              << (options.no_plots ? ""
-                  : sim            ? ", forces.png, estimate_vs_truth.png, grip.png, slip.png, height.png, "
-                                     "taxels_fn.png, taxels_ft.png"
-                                   : ", forces.png, grip.png, taxels_fn.png, taxels_ft.png")
-              << (sim ? ", states.csv" : "") << (options.video.enabled ? ", video.mp4, video_strip.png" : "")
-              << ")\n";
-  }
-  if (!result.completed) {
-    std::cerr << "graspbed: interrupted at t = " << result.metrics.sim_s << " s; partial results in "
-              << run.out_dir << " (marked INCOMPLETE)\n";
-    ExitWith(kExitInterrupted);
-  }
-  if (result.metrics.physics_fault) {
-    std::cerr << "graspbed: physics fault at t = " << result.metrics.physics_fault_time_s
-              << " s ended the run (" << result.metrics.physics_fault_cause << "); results up to it in "
-              << run.out_dir << "\n";
-  }
-  ExitWith(result.passed ? kExitOk : kExitFailed);
+  PrintRunSummary(options, config, result, run.out_dir);
+  EndRun(result, run.out_dir);
 }
 
 void AddRunCommand(CLI::App& root) {

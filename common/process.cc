@@ -1,12 +1,21 @@
 #include "common/process.h"
 
 #include <fcntl.h>
+#include <sched.h>
+#include <signal.h>
 #include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <stdexcept>
+#include <system_error>
+#include <thread>
 
 extern char** environ;
 
@@ -43,6 +52,57 @@ int SpawnProcess(const std::vector<std::string>& argv, int stdin_fd, const std::
   posix_spawn_file_actions_destroy(&actions);
   if (error != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
   return pid;
+}
+
+int WaitExit(int pid, double timeout_s) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    int status = 0;
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (done < 0) return -2;
+    if (std::chrono::steady_clock::now() >= deadline) return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+int EndChild(int pid) {
+  ::kill(pid, SIGTERM);
+  int code = WaitExit(pid, 10.0);
+  if (code == -1) {
+    ::kill(pid, SIGKILL);
+    code = WaitExit(pid, 10.0);
+  }
+  return code;
+}
+
+std::string SelfExecutablePath() {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) throw std::runtime_error("cannot find this executable (/proc/self/exe): " + error.message());
+  return self.string();
+}
+
+double LoadAverage1Min() {
+  double load = -1.0;
+  if (std::FILE* file = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(file, "%lf", &load) != 1) load = -1.0;
+    std::fclose(file);
+  }
+  return load;
+}
+
+void UseRealTimePriority(int priority) {
+  sched_param parameters{};
+  parameters.sched_priority = priority;
+  if (::sched_setscheduler(0, SCHED_FIFO, &parameters) != 0) {
+    const int error = errno;
+    throw std::runtime_error(
+        std::string("SCHED_FIFO refused (") + std::strerror(error) +
+        "): needs the CAP_SYS_NICE capability (root has it unless a container drops it; for a user, setcap "
+        "cap_sys_nice+ep on the binary) or an rtprio limit of at least " +
+        std::to_string(priority) + " for your user (/etc/security/limits.conf)");
+  }
 }
 
 double ThreadCpuSeconds() {

@@ -1,0 +1,140 @@
+#include "testbed/emulator_session.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <thread>
+
+namespace graspbed::testbed {
+namespace {
+
+ScenarioConfig LoadEmulatedScenario(const std::string& path) {
+  if (!path.empty()) return LoadScenario(path);
+  ScenarioConfig config;
+  config.name = "plain";
+  config.duration_s = 0.0;  // no scenario: until stopped
+  return config;
+}
+
+void AddEmulatorStats(const hardware::EmulatorStats& stats, nlohmann::json& summary) {
+  summary["frames_sent"] = stats.frames_sent;
+  summary["frames_overflowed"] = stats.frames_overflowed;
+  summary["frames_dropped"] = stats.frames_dropped;
+  summary["frames_corrupted"] = stats.frames_corrupted;
+  summary["frames_reordered"] = stats.frames_reordered;
+  summary["frames_trailing"] = stats.frames_trailing;
+  summary["garbage_packets"] = stats.garbage_packets;
+  summary["vanishes"] = stats.vanishes;
+  summary["settles"] = stats.settles;
+  summary["settles_unconfirmed"] = stats.settles_unconfirmed;
+  summary["hellos_sent"] = stats.hellos_sent;
+  summary["motor_commands"] = stats.motor_commands;
+  summary["max_command_interval_s"] = stats.max_command_interval_s;
+  summary["watchdog_trips"] = stats.watchdog_trips;
+  summary["stream_starts"] = stats.stream_starts;
+  summary["connects"] = stats.connects;
+  summary["commands_before_hello"] = stats.commands_before_hello;
+  summary["host_corrupt"] = stats.host_corrupt;
+}
+
+}  // namespace
+
+EmulatorSession::EmulatorSession(const EmulateOptions& options)
+    : options_(options),
+      config_(LoadEmulatedScenario(options.scenario)),
+      layout_(sensor::LoadLayout(ResolveLayoutPath(config_))),
+      device_(std::make_unique<EmulatedHand>(config_, layout_)) {
+  hardware::EmulatorConfig emulator_config;
+  emulator_config.link_path = options_.link;
+  emulator_config.unit_count = layout_.unit_count();
+  emulator_config.frame_rate_hz = static_cast<int>(std::lround(config_.sensor.sample_rate_hz));
+  emulator_config.nominal_r0_ohm = config_.sensor.strain_model.nominal.r0_ohm;
+  schedule_.cycles = options_.soak_cycles;
+  schedule_.period_s = options_.soak_period_s;
+  schedule_.downtime_s = options_.soak_downtime_s;
+  if (soak()) schedule_.Validate();
+  // In a soak the device's pauses and disconnects are its own doing, not the host's end: the hand
+  // is simulated (and scored) from the first stream start on until the host stops streaming.
+  emulator_ = std::make_unique<hardware::DeviceEmulator>(
+      emulator_config,
+      [this](double, bool streaming, sensor::RawFrame* frame) {
+        host_streamed_ = host_streamed_ || streaming;
+        device_->Frame(soak() ? host_streamed_ : streaming, frame);
+      },
+      [this](const hardware::EmulatedMotor& motor) {
+        device_->Motor({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
+      });
+}
+
+// The emulator's thread calls into device_: it ends first.
+EmulatorSession::~EmulatorSession() { emulator_.reset(); }
+
+nlohmann::json EmulatorSession::Run(const std::atomic<bool>& stop, std::ostream& progress) {
+  emulator_->Start();
+  std::unique_ptr<hardware::SoakInjector> injector;
+  if (soak()) {
+    injector = std::make_unique<hardware::SoakInjector>(*emulator_, schedule_);
+    injector->Start();
+  }
+  progress << "emulate: device '" << config_.name << "' (" << layout_.unit_count() << " units) at "
+           << options_.link << " -> " << emulator_->slave_path() << "; waiting for a host";
+  if (soak()) {
+    progress << "; soak: " << schedule_.cycles << " cycles of " << schedule_.period_s << " s, down "
+             << schedule_.downtime_s << " s each";
+  }
+  progress << "\n";
+  const double duration_s = options_.duration_s >= 0.0 ? options_.duration_s
+                            : soak()                   ? 0.0
+                                                       : config_.duration_s;
+  const bool one_trial = !options_.scenario.empty();
+  std::string ended_by = "signal";
+  while (!stop.load()) {
+    if (duration_s > 0.0 && device_->started() && device_->sim_time_s() >= duration_s) {
+      ended_by = "duration";
+      break;
+    }
+    if (soak() ? emulator_->stats().stream_stops > 0 : one_trial && device_->host_done()) {
+      ended_by = "host_stopped";
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (injector) injector->Stop();
+  const hardware::EmulatorStats stats = emulator_->stats();
+  emulator_->Stop();
+
+  nlohmann::json summary = device_->Summary();
+  summary["scenario"] = config_.name;
+  summary["link"] = options_.link;
+  summary["ended_by"] = ended_by;
+  AddEmulatorStats(stats, summary);
+  if (injector) {
+    const hardware::SoakProgress soak_progress = injector->progress();
+    summary["soak"] = {{"period_s", schedule_.period_s},
+                       {"cycles", schedule_.cycles},
+                       {"downtime_s", schedule_.downtime_s},
+                       {"cycles_completed", soak_progress.cycles_completed},
+                       {"final_settle_confirmed", soak_progress.final_settle_confirmed}};
+  }
+  return summary;
+}
+
+std::string EmulateSummaryText(const nlohmann::json& summary) {
+  const nlohmann::json& metrics = summary.at("metrics");
+  std::ostringstream text;
+  text << "emulate " << summary.at("link").get<std::string>() << " ("
+       << summary.at("ended_by").get<std::string>() << "): " << summary.at("sim_time_s").get<double>()
+       << " s simulated, " << summary.at("frames_sent").get<uint64_t>() << " frames sent, "
+       << summary.at("motor_commands").get<uint64_t>() << " motor commands, "
+       << summary.at("watchdog_trips").get<uint64_t>() << " watchdog trips; object "
+       << (!metrics.at("grasped").get<bool>()  ? "not grasped"
+           : metrics.at("dropped").get<bool>() ? "DROPPED"
+                                               : "held")
+       << ", lifted " << 1e3 * summary.at("object_lift_m").get<double>() << " mm, peak grip "
+       << metrics.at("peak_grip_n").get<double>() << " N, slip " << metrics.at("max_slip_mm").get<double>()
+       << " mm\n";
+  return text.str();
+}
+
+}  // namespace graspbed::testbed
