@@ -203,6 +203,16 @@ class BenchRunTest : public ::testing::Test {
     return path;
   }
 
+  /// Why the grasp over the wire cannot be compared with the simulation's, or "" when it can: the
+  /// device's watchdog stopped the motor (no command for 100 ms, a machine too busy for real time),
+  /// which takes the hand from the controller. `device` is `emulate --json`'s summary.
+  static std::string MotorStoppedByWatchdog(const nlohmann::json& device) {
+    const int trips = device.at("watchdog_trips").get<int>();
+    if (trips == 0) return "";
+    return "the device's watchdog stopped the motor " + std::to_string(trips) +
+           " time(s): the host fell behind real time, the grasp is not the controller's to compare";
+  }
+
   const std::string binary_ = CliBinary();
   const TempDir dir_{"bench_run"};
 };
@@ -249,6 +259,8 @@ TEST_F(BenchRunTest, AShippedScenarioOnTheEmulatorGivesTheSimulationsPhasesAndGr
     EXPECT_EQ(serial.numeric.count(column), 1u) << column;
   }
 
+  const nlohmann::json device = nlohmann::json::parse(emulator->out());
+  if (const std::string why = MotorStoppedByWatchdog(device); !why.empty()) GTEST_SKIP() << why;
   // A machine too busy to feed the host every frame makes its state stale; the open-loop
   // controller's command does not depend on the frames (in safe hold it keeps its effort), so the
   // grasp is the same and is compared all the same.
@@ -330,7 +342,7 @@ TEST_F(BenchRunTest, OneIntentScriptDrivesTheSamePhasesOnEveryBackend) {
       RunCli(std::string("run ") + kScenario + " --controller " + kController +
              " --set sensor.latency_s=" + kFramePeriodText + " --no-plots --out " + Path("sim"));
   ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
-  auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS});
+  auto emulator = StartEmulator({kScenario, "--duration", kEmulatorDurationS, "--json"});
   ChildProcess host({binary_, "run", kScenario, "--controller", kController, "--backend", "serial", "--port",
                      Path("dev"), "--prompt-actions", "--no-plots", "--out", Path("serial")},
                     Path("host.out"), Path("host.err"));
@@ -379,6 +391,9 @@ TEST_F(BenchRunTest, OneIntentScriptDrivesTheSamePhasesOnEveryBackend) {
   EXPECT_EQ(replayed.numeric.at("est_total_fn_n"), serial.numeric.at("est_total_fn_n"));
   EXPECT_EQ(replayed.numeric.at("grip_effort"), serial.numeric.at("grip_effort"));
   EXPECT_EQ(replayed.numeric.at("r1_ohm_7"), serial.numeric.at("r1_ohm_7"));
+  if (const std::string why = MotorStoppedByWatchdog(nlohmann::json::parse(emulator->out())); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
   // The emulator is the simulation's physics fed the same commands: the grip the units report held
   // at the end agrees within the timing's 5 %, and the close lands within the same frame or two.
   const double sim_held_n = MeanAtEnd(simulated, "est_total_fn_n", kHoldWindowS);
@@ -435,7 +450,7 @@ TEST_F(BenchRunTest, SimulatorActionsAreRefusedByNameBeforeThePortIsOpened) {
 }
 
 TEST_F(BenchRunTest, LinesOnStdinAndOnAFifoChangeTheIntentAtTheNextTick) {
-  auto emulator = StartEmulator({"--duration", "10"});
+  auto emulator = StartEmulator({"--duration", "10", "--json"});
   int pipe_fds[2];
   ASSERT_EQ(::pipe(pipe_fds), 0);
   const std::string fifo = Path("emg");
@@ -472,10 +487,18 @@ TEST_F(BenchRunTest, LinesOnStdinAndOnAFifoChangeTheIntentAtTheNextTick) {
   const Csv csv = ReadCsv(Path("live") + "/signals.csv");
   EXPECT_LE(TicksLate(csv, close.at("received_s").get<double>(), "close"), 1);
   EXPECT_LE(TicksLate(csv, open.at("received_s").get<double>(), "open"), 1);
-  // The controller acted on it: it closed, then released.
+  EXPECT_NE(host.err().find("intent: close (stdin) at"), std::string::npos) << host.err();
+  // The controller acted on it: it closed, then released (on a machine that kept the pace: with its
+  // state stale the controller holds safe instead of closing).
+  emulator->Wait(kRunDeadlineS);
+  const std::string device_text = emulator->out();
+  if (!device_text.empty()) {
+    if (const std::string why = MotorStoppedByWatchdog(nlohmann::json::parse(device_text)); !why.empty()) {
+      GTEST_SKIP() << why;
+    }
+  }
   const std::vector<std::string> phases = PhaseSequence(csv);
   EXPECT_NE(std::find(phases.begin(), phases.end(), "closing"), phases.end()) << Join(phases);
-  EXPECT_NE(host.err().find("intent: close (stdin) at"), std::string::npos) << host.err();
 }
 
 TEST_F(BenchRunTest, KeysOnATerminalChangeTheIntentAndQEndsTheSession) {
