@@ -3,11 +3,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <thread>
 
 namespace graspbed::testbed {
 namespace {
+
+/// How long a trial's device waits past its scenario's end for the host to stop the stream [s].
+constexpr double kHostGraceS = 5.0;
 
 ScenarioConfig LoadEmulatedScenario(const std::string& path) {
   if (!path.empty()) return LoadScenario(path);
@@ -89,20 +93,30 @@ nlohmann::json EmulatorSession::Run(const std::atomic<bool>& stop, std::ostream&
                                                        : config_.duration_s;
   const bool one_trial = !options_.scenario.empty();
   std::string ended_by = "signal";
+  // A trial's device outlives its scenario's end while the host still streams, for up to
+  // kHostGraceS: a host running the same scenario ends it by its own clock, a moment later than the
+  // device's (it started later), and must find the device there to stop the stream and close cleanly.
+  std::optional<std::chrono::steady_clock::time_point> scenario_ended;
   while (!stop.load()) {
-    if (duration_s > 0.0 && device_->started() && device_->sim_time_s() >= duration_s) {
-      ended_by = "duration";
-      break;
-    }
     if (soak() ? emulator_->stats().stream_stops > 0 : one_trial && device_->host_done()) {
       ended_by = "host_stopped";
       break;
     }
+    if (duration_s > 0.0 && device_->started() && device_->sim_time_s() >= duration_s) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!scenario_ended) scenario_ended = now;
+      if (!one_trial || now - *scenario_ended >= std::chrono::duration<double>(kHostGraceS)) {
+        ended_by = "duration";
+        break;
+      }
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   if (injector) injector->Stop();
-  const hardware::EmulatorStats stats = emulator_->stats();
+  // Stopped first, so every frame it sent is counted (a frame sent after a snapshot was the one the
+  // host counted beyond the device's).
   emulator_->Stop();
+  const hardware::EmulatorStats stats = emulator_->stats();
 
   nlohmann::json summary = device_->Summary();
   summary["scenario"] = config_.name;
