@@ -60,7 +60,7 @@ void RunFea(const FeaOptions& options) {
     }
     sensor::SaveCalibration(calibration, options.calibration_path);
     if (!options.json)
-      std::printf("  wrote %s (%d units)\n", options.calibration_path.c_str(), options.units);
+      std::printf("  wrote %s (%d unit%s)\n", options.calibration_path.c_str(), options.units, options.units == 1 ? "" : "s");
   }
 }
 

@@ -106,7 +106,8 @@ testbed::ScenarioConfig LoadRunScenario(const RunCommandOptions& options) {
   if (!options.log.empty()) overrides.push_back({"log", options.log});
   if (!options.backend.empty()) overrides.push_back({"backend", options.backend});
   if (!options.controller.empty()) {
-    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
+    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, "."),
+                         "--controller " + options.controller});
   }
   if (options.seed >= 0) overrides.push_back({"seed", std::to_string(options.seed)});
   for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
@@ -266,7 +267,8 @@ struct SuiteCommandOptions {
 void SuiteCommand(const SuiteCommandOptions& options) {
   std::vector<testbed::Override> overrides;
   if (!options.controller.empty()) {
-    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, ".")});
+    overrides.push_back({"controller.name", controller::ResolvePluginName(options.controller, "."),
+                         "--controller " + options.controller});
   }
   for (const std::string& text : options.sets) overrides.push_back(testbed::ParseOverride(text));
   const std::vector<testbed::ScenarioConfig> configs =

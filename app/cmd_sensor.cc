@@ -143,8 +143,8 @@ void RunLayout(const LayoutOptions& options) {
   const sensor::Layout layout = sensor::LoadLayout(options.layout_path);
   if (!options.picture_path.empty()) {
     plot::WritePng(sensor::LayoutDrawing(layout), options.picture_path);
-    std::printf("wrote %s (layout %s, %d units)\n", options.picture_path.c_str(), layout.name.c_str(),
-                layout.unit_count());
+    std::printf("wrote %s (layout %s, %d unit%s)\n", options.picture_path.c_str(), layout.name.c_str(),
+                layout.unit_count(), layout.unit_count() == 1 ? "" : "s");
     return;
   }
   if (options.json) {

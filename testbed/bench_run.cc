@@ -377,7 +377,8 @@ class SerialRun final : public BenchRun {
     char length[32] = "until stopped";
     if (std::isfinite(config_.duration_s)) std::snprintf(length, sizeof(length), "%.1f s", config_.duration_s);
     std::fprintf(stderr, "run: backend serial on %s: session started (%s; live intent: %s)\n",
-                 config_.serial.port.c_str(), length, inputs.empty() ? "none" : inputs.c_str());
+                 config_.serial.port.c_str(), length,
+                 inputs.empty() ? "none, the intent follows the script" : inputs.c_str());
   }
 
   std::optional<double> NextTick() override {

@@ -20,6 +20,14 @@
 namespace graspbed::testbed {
 namespace {
 
+/// A force for a person to read: two decimals ("4.30"), not a double's seventeen digits.
+std::string FormatNewtons(double newtons) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", newtons);
+  return text;
+}
+
+
 /// Frames whose loop latency `hw --latency-report` keeps (17 min at 1 kHz, 8 MB).
 constexpr size_t kLatencyReportFrames = size_t{1} << 20;
 
@@ -178,7 +186,7 @@ std::string HwSummaryText(const HwSessionResult& result) {
        << summary.at("dropped") << " dropped, " << summary.at("reordered") << " reordered, "
        << summary.at("unknown_packets") << " unknown, " << summary.at("reconnects") << " reconnects, "
        << summary.at("stale_periods") << " stale periods, " << summary.at("sessions")
-       << " sessions; peak grip " << summary.at("peak_total_fn_n") << " N (sensed)"
+       << " sessions; peak grip " << FormatNewtons(summary.at("peak_total_fn_n").get<double>()) << " N (sensed)"
        << (result.connected_at_end ? "" : "; device DISCONNECTED at the end")
        << (result.log_error.empty() ? "" : "; log: " + result.log_error) << '\n';
   if (summary.contains("latency")) {

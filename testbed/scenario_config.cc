@@ -966,6 +966,12 @@ void ScenarioConfig::Validate() const {
   }
 }
 
+/// How the user gave `override_value`, for an error's context.
+static std::string OverrideOrigin(const Override& override_value) {
+  return override_value.origin.empty() ? "--set " + override_value.key + "=" + override_value.value
+                                       : override_value.origin;
+}
+
 Override ParseOverride(const std::string& text) {
   const size_t equals = text.find('=');
   if (equals == std::string::npos || equals == 0) {
@@ -1055,11 +1061,11 @@ ScenarioConfig LoadScenarioFromString(const std::string& text, const std::string
       } catch (const ConfigError& error) {
         if (std::string(error.what()) != full.what()) continue;
         if (count == 0) throw;
-        throw error.WithContext("--set " + overrides[count - 1].key + "=" + overrides[count - 1].value);
+        throw error.WithContext(OverrideOrigin(overrides[count - 1]));
       }
     }
     const Override& last = overrides.back();
-    throw full.WithContext("--set " + last.key + "=" + last.value);
+    throw full.WithContext(OverrideOrigin(last));
   }
 }
 

@@ -319,6 +319,8 @@ struct ScenarioConfig {
 struct Override {
   std::string key;
   std::string value;
+  /// What the user typed, when not `--set key=value` (e.g. "--controller plugin:x.so"): errors name it.
+  std::string origin = {};
 };
 
 /// Parses "key=value".

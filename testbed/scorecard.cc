@@ -523,7 +523,7 @@ std::string ScorecardTable(const Scorecard& scorecard) {
   std::ostringstream out;
   out << "scorecard " << scorecard.set_name << " v" << scorecard.set_version << " seed " << scorecard.set_seed
       << " (" << scorecard.set_file << "): " << scorecard.runs_per_controller << " runs per controller, "
-      << scorecard.jobs << " jobs, " << FormatNumber(scorecard.wall_s) << " s"
+      << scorecard.jobs << (scorecard.jobs == 1 ? " job, " : " jobs, ") << FormatNumber(scorecard.wall_s) << " s"
       << (scorecard.completed ? "" : ", INCOMPLETE") << "\n";
   constexpr int kLabelWidth = 26;
   constexpr int kColumnWidth = 24;

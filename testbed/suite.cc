@@ -168,9 +168,9 @@ std::string SuiteTable(const SuiteResult& result) {
   out << "  (acq_mm: the object's shift while the digits closed, before the grasp was established; gross, micro: "
          "slip events flagged / all; oracle_N: the lightest constant grip that holds; effic: mean grip held / "
          "oracle; sensed: share of the finger's squeeze on the units)\n";
-  std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenarios in %.2f s with %d jobs%s\n",
-                result.passed, result.failed, result.runs.size(), result.wall_s, result.jobs,
-                result.completed ? "" : " (INTERRUPTED)");
+  std::snprintf(line, sizeof(line), "%d passed, %d failed, %zu scenario%s in %.2f s with %d job%s%s\n",
+                result.passed, result.failed, result.runs.size(), result.runs.size() == 1 ? "" : "s", result.wall_s,
+                result.jobs, result.jobs == 1 ? "" : "s", result.completed ? "" : " (INTERRUPTED)");
   out << line;
   return out.str();
 }
