@@ -459,7 +459,7 @@ Page ScorecardPage(const std::string& dir, const ReportOptions& options, const f
     page.figures_html.push_back(
         PngFigure(dir + "/scorecard.png", "scorecard.png: the headline figures per controller"));
   page.columns = RunColumns();
-  page.columns.push_back({"pictures", "outputs", true, "the run's folder and pictures (score --runs-out)"});
+  page.columns.push_back({"pictures", "outputs", false, "the run's folder and pictures (score --runs-out)"});
   for (const json& entry : scorecard.at("runs")) {
     const std::string run = entry.at("run").get<std::string>();
     // A run <base>.v<k> counts for its base scenario, as the scorecard's by-scenario table does.
@@ -496,7 +496,7 @@ Page SuitePage(const std::string& dir, const fs::path& page_dir) {
                      {"jobs", JsonText(suite.value("jobs", json(1)))}});
   page.columns = RunColumns();
   page.columns.erase(page.columns.begin());  // a suite's run is its scenario
-  page.columns.push_back({"pictures", "outputs", true, "the scenario's folder and its plots"});
+  page.columns.push_back({"pictures", "outputs", false, "the scenario's folder and its plots"});
   for (const json& entry : suite.at("runs")) {
     const std::string scenario = entry.at("scenario").get<std::string>();
     const bool has_summary = entry.contains("metrics") || entry.contains("expectations");
@@ -658,9 +658,10 @@ std::string RunsTable(const Page& page) {
     for (const Column& column : page.columns) {
       const auto found = row.cells.find(column.key);
       const Cell cell = found != row.cells.end() ? found->second : Cell{"-", std::nullopt};
-      html += cell.sort_value && std::isfinite(*cell.sort_value)
-                  ? "<td data-v=\"" + Format(*cell.sort_value, "%.17g") + "\">"
-                  : std::string("<td>");
+      html += std::string(column.numeric ? "<td class=\"n\"" : "<td");
+      if (cell.sort_value && std::isfinite(*cell.sort_value))
+        html += " data-v=\"" + Format(*cell.sort_value, "%.17g") + "\"";
+      html += ">";
       html += cell.html + "</td>";
     }
     html += "</tr>";
@@ -677,7 +678,7 @@ table.totals th,table.figures tbody th,table.counts tbody th{font-weight:normal;
 table.figures td,table.counts td{text-align:right}
 #runs thead th{position:sticky;top:0;background:#f4f4f4;cursor:pointer;user-select:none;white-space:nowrap}
 #runs th[aria-sort=ascending]::after{content:" \25B2"}#runs th[aria-sort=descending]::after{content:" \25BC"}
-#runs td[data-v]{text-align:right;font-variant-numeric:tabular-nums}
+#runs td.n{text-align:right;font-variant-numeric:tabular-nums}
 #runs tr.run:hover{background:#f8f8ff}
 .verdict{font-weight:600}.verdict.passed{color:#1a7f37}.verdict.failed{color:#c62828}
 .verdict.error,.verdict.interrupted,.verdict.skipped{color:#8a5a00}
