@@ -13,6 +13,7 @@
 #include "app/command_registry.h"
 #include "app/stop_signal.h"
 #include "controller/plugin_loader.h"
+#include "testbed/report.h"
 #include "testbed/runner.h"
 #include "testbed/scenario_config.h"
 #include "testbed/show/video.h"
@@ -261,6 +262,7 @@ struct SuiteCommandOptions {
   std::vector<std::string> sets;
   bool json = false;
   bool no_plots = false;
+  bool report = false;
   VideoCommandOptions video;
 };
 
@@ -298,6 +300,10 @@ void SuiteCommand(const SuiteCommandOptions& options) {
     std::cout << testbed::SuiteTable(result);
     std::cout << "  outputs: " << options.out_dir << "/ (suite.json, one directory per scenario)\n";
   }
+  if (options.report) {  // on stderr beside --json, whose stdout is the JSON alone
+    (options.json ? std::cerr : std::cout)
+        << "  " << testbed::DescribeReport(testbed::WriteReport(options.out_dir)) << '\n';
+  }
   if (!result.completed) ExitWith(kExitInterrupted);
   ExitWith(result.failed == 0 ? kExitOk : kExitFailed);
 }
@@ -317,6 +323,7 @@ void AddSuiteCommand(CLI::App& root) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   command->add_flag("--json", options->json, "print the combined JSON instead of the table");
   command->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  command->add_flag("--report", options->report, "also write OUT/report.html (graspbed report)");
   options->video.Add(command, "each scenario's OUT/<name>/video.mp4");
   command->callback([options] { SuiteCommand(*options); });
 }

@@ -12,6 +12,7 @@
 #include "app/stop_signal.h"
 #include "common/data_dir.h"
 #include "controller/plugin_loader.h"
+#include "testbed/report.h"
 #include "testbed/scorecard.h"
 
 namespace graspbed::app {
@@ -30,6 +31,7 @@ struct ScoreCommandOptions {
   std::string out_dir = "out/scorecard";
   std::string runs_dir;  ///< empty: no per-run outputs
   std::vector<std::string> sets;
+  bool report = false;  ///< also OUT/report.html (graspbed report)
 };
 
 void ScoreCommand(const ScoreCommandOptions& options) {
@@ -66,6 +68,10 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   std::cout << "  by sensor (profile/sensitivities):\n" << testbed::ScorecardBySensorTable(scorecard);
   std::cout << "  by scenario (base and its variations):\n" << testbed::ScorecardByScenarioTable(scorecard);
   std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
+  if (options.report) {
+    const testbed::ReportOptions report{.runs_dir = options.runs_dir, .out_path = ""};
+    std::cout << "  " << testbed::DescribeReport(testbed::WriteReport(options.out_dir, report)) << '\n';
+  }
   if (!scorecard.completed) throw CLI::RuntimeError(kExitInterrupted);
 }
 
@@ -117,6 +123,8 @@ void AddScoreCommand(CLI::App& root) {
                    "not the set's)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  command->add_flag("--report", options->report,
+                    "also write OUT/report.html, the HTML page of `graspbed report` (rows link --runs-out)");
   command->callback([options] { ScoreCommand(*options); });
 }
 

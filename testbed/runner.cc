@@ -153,6 +153,11 @@ RunResult RunScenario(const ScenarioConfig& config, const RunOptions& options) {
 
 namespace {
 
+// The sensor a run read, as the scorecard groups runs by it: "<profile>/<sensitivities>".
+std::string SensorLabel(const ScenarioConfig& config) {
+  return config.sensor.profile + "/" + config.sensor.sensitivities;
+}
+
 // summary.json of a serial or replay run: no ground truth, so the bench's own record instead of the
 // simulation's metrics, and the expectations listed, not scored.
 nlohmann::json BenchSummaryJson(const RunResult& result) {
@@ -173,6 +178,7 @@ nlohmann::json BenchSummaryJson(const RunResult& result) {
   return {{"scenario", result.config.name},
           {"source_file", result.config.source_file},
           {"controller", result.config.controller.name},
+          {"sensor", SensorLabel(result.config)},
           {"backend", BackendName(result.config.backend)},
           {"completed", result.completed},
           {"passed", result.passed},
@@ -296,6 +302,7 @@ nlohmann::json SimSummaryJson(const RunResult& result) {
       {"scenario", result.config.name},
       {"source_file", result.config.source_file},
       {"controller", result.config.controller.name},
+      {"sensor", SensorLabel(result.config)},
       {"seed", result.config.seed},
       {"completed", result.completed},
       {"passed", result.passed},
