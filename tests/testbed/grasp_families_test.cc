@@ -99,7 +99,9 @@ TEST(GraspFamilyTest, UsersStlPartsAreLiftedAndHeldOnThePad) {
     EXPECT_TRUE(run.passed);
     EXPECT_FALSE(m.dropped);
     for (const ExpectationOutcome& outcome : run.outcomes) {
-      if (outcome.name == "grasped_on_sensor") EXPECT_TRUE(outcome.passed) << outcome.note;
+      if (outcome.name == "grasped_on_sensor") {
+        EXPECT_TRUE(outcome.passed) << outcome.note;
+      }
     }
   }
 }
@@ -160,8 +162,12 @@ TEST(GraspFamilyTest, TheShippedObjectScenariosOraclesAgainstTheirLoadBoundsAndS
     const bool wrap = scenario.scene.hand.grasp == sim::GraspType::kWrap;
     std::printf("[ measure ] %-18s %-5s  %8.2f  %12.2f  %5.2f  %12.2f\n", name, wrap ? "wrap" : "pinch",
                 *oracle.grip.grip_n, m.peak_load_bound_grip_n, ratio, m.sensed_grip_share.value_or(0.0));
-    if (!ratio_exceptions.contains(name)) EXPECT_LE(ratio, 4.0);
-    if (!wrap && !share_exceptions.contains(name)) EXPECT_GE(m.sensed_grip_share.value_or(0.0), 0.6);
+    if (!ratio_exceptions.contains(name)) {
+      EXPECT_LE(ratio, 4.0);
+    }
+    if (!wrap && !share_exceptions.contains(name)) {
+      EXPECT_GE(m.sensed_grip_share.value_or(0.0), 0.6);
+    }
   }
   for (const auto& [name, why] : ratio_exceptions) std::printf("[ not yet ] ratio of %s: %s\n", name.c_str(), why.c_str());
   for (const auto& [name, why] : share_exceptions) std::printf("[ not yet ] share of %s: %s\n", name.c_str(), why.c_str());
@@ -196,7 +202,9 @@ TEST(GraspFamilyTest, TheDefaultLiftOfEachLibraryObjectByNameHasAnOracleGripOfAt
                 oracle.grip.grip_n ? std::to_string(*oracle.grip.grip_n).substr(0, 5).c_str() : "none", bound);
     const bool ok = oracle.grip.grip_n && *oracle.grip.grip_n <= 10.0;
     within += ok ? 1 : 0;
-    if (!not_yet.contains(name)) EXPECT_TRUE(ok) << oracle.grip.reason;
+    if (!not_yet.contains(name)) {
+      EXPECT_TRUE(ok) << oracle.grip.reason;
+    }
   }
   std::printf("[ measure ] %d of 13 with an oracle grip of at most 10 N\n", within);
   for (const auto& [name, why] : not_yet) std::printf("[ not yet ] %s: %s\n", name.c_str(), why.c_str());

@@ -65,7 +65,7 @@ TEST(HwSessionTest, SummaryLineNamesTheDisconnectAndTheLogError) {
   EXPECT_EQ(
       HwSummaryText(result),
       "hw /dev/ttyACM0: 2.5 s, 2500 frames, 1 corrupt, 2 dropped, 0 reordered, 0 unknown, 0 reconnects, "
-      "0 stale periods, 1 sessions; peak grip 4.5 N (sensed); device DISCONNECTED at the end; log: disk "
+      "0 stale periods, 1 sessions; peak grip 4.50 N (sensed); device DISCONNECTED at the end; log: disk "
       "full\n");
 }
 
