@@ -270,5 +270,126 @@ TEST(ReadablePlotsTest, ScorecardHasNoLegendOverTheBars) {
   }
 }
 
+// forces.png of a held box: the chart the runner draws, rebuilt from the same signals (its first
+// panel lays out alone: a titled one-column figure of the default panel size, as sim_run.cc writes).
+struct ForcesPicture {
+  plot::Figure figure;
+  image::RgbImage png;
+  std::vector<int> loaded;  // units that carried load (kCarriedLoadShare of the largest peak)
+  std::vector<std::pair<double, double>> peaks;  // (time [s], Fn [N]) of each loaded unit's peak
+  sensor::Layout layout;
+};
+
+ForcesPicture RunHeldBox(const TempDir& dir) {
+  ForcesPicture picture;
+  const ScenarioConfig config = LoadScenario(dir.Write("held.yaml", HeldBoxScenario(0.6)));
+  picture.layout = sensor::LoadLayout(ResolveLayoutPath(config));
+  RunOptions options;
+  options.out_dir = dir.Path("out");
+  options.on_signals = [&](const common::SignalLog& log) {
+    const std::vector<double> time = log.ColumnValues("time_s");
+    picture.figure.title = "forces";
+    picture.figure.columns = 1;
+    picture.figure.panels = {internal::PerUnitFnChart(log, time, picture.layout)};
+    std::vector<double> peak_n;
+    std::vector<double> peak_s;
+    for (int u = 0; u < picture.layout.unit_count(); ++u) {
+      const std::vector<double> fn = log.ColumnValues("fn_est_n_" + std::to_string(u));
+      size_t at = 0;
+      for (size_t i = 0; i < fn.size(); ++i) {
+        if (std::isfinite(fn[i]) && fn[i] > fn[at]) at = i;
+      }
+      peak_n.push_back(fn.empty() ? 0.0 : fn[at]);
+      peak_s.push_back(fn.empty() ? 0.0 : time[at]);
+    }
+    const double largest = *std::max_element(peak_n.begin(), peak_n.end());
+    for (int u = 0; u < picture.layout.unit_count(); ++u) {
+      if (peak_n[static_cast<size_t>(u)] > 0.0 &&
+          peak_n[static_cast<size_t>(u)] >= internal::kCarriedLoadShare * largest) {
+        picture.loaded.push_back(u);
+        picture.peaks.emplace_back(peak_s[static_cast<size_t>(u)], peak_n[static_cast<size_t>(u)]);
+      }
+    }
+  };
+  EXPECT_TRUE(RunScenario(config, options).completed);
+  picture.png = image::ReadPng(options.out_dir + "/forces.png");
+  return picture;
+}
+
+// The colour drawn nearest (x, y) among `colours`, within 2 px: its index, -1 for none.
+int ColourNear(const image::RgbImage& png, double x, double y, const std::vector<plot::Colour>& colours) {
+  for (int radius = 0; radius <= 2; ++radius) {
+    for (int dy = -radius; dy <= radius; ++dy) {
+      for (int dx = -radius; dx <= radius; ++dx) {
+        const std::array<int, 3> rgb = At(png, static_cast<int>(x) + dx, static_cast<int>(y) + dy);
+        for (size_t c = 0; c < colours.size(); ++c) {
+          if (Near(rgb, colours[c], 12)) return static_cast<int>(c);
+        }
+      }
+    }
+  }
+  return -1;
+}
+
+TEST(ReadablePlotsTest, ForcesColourEachLoadedUnitApartAndNameItAsTheLayoutPictureDoes) {
+  const TempDir dir("readable_plots");
+  const ForcesPicture picture = RunHeldBox(dir);
+  ASSERT_GE(picture.loaded.size(), 2u) << "a held box loads several units";
+  ASSERT_LE(picture.loaded.size(), static_cast<size_t>(plot::kPaletteSize));
+  const plot::Chart& chart = picture.figure.panels[0];
+  for (size_t i = 0; i < picture.loaded.size(); ++i) {
+    const int unit = picture.loaded[i];
+    const sensor::UnitPose& pose = picture.layout.units[static_cast<size_t>(unit)];
+    const std::string name = "unit " + std::to_string(unit) + " (row " + std::to_string(pose.row) +
+                             ", column " + std::to_string(pose.column) + ")";
+    EXPECT_TRUE(std::any_of(chart.series.begin(), chart.series.end(),
+                            [&](const plot::Series& s) { return s.name == name; }))
+        << name << " in the legend";
+  }
+  // Read back: where the loaded units' lines run (above 0.5 N, after the close), one palette colour
+  // per loaded unit, none shared (eight colours cycled over 20 units gave units 2, 10 and 18 one green).
+  const double x0 = plot::ChartPointPx(picture.figure, 0, kAfterCloseS, 0.0).first;
+  const double x1 = plot::ChartPointPx(picture.figure, 0, chart.series[0].x.back(), 0.0).first;
+  const double y0 = plot::ChartPointPx(picture.figure, 0, 0.0, kLoadedN).second;
+  double largest_n = 0.0;
+  for (const auto& peak : picture.peaks) largest_n = std::max(largest_n, peak.second);
+  const double y_top = plot::ChartPointPx(picture.figure, 0, 0.0, largest_n).second - 3.0;
+  std::set<int> shown;
+  for (int c = 0; c < plot::kPaletteSize; ++c) {
+    int pixels = 0;
+    for (int x = static_cast<int>(x0); x < x1; ++x) {
+      for (int y = static_cast<int>(y_top); y < y0; ++y)
+        pixels += Near(At(picture.png, x, y), plot::PaletteColour(c), 12);
+    }
+    if (pixels >= kShownPixels) shown.insert(c);
+  }
+  std::set<int> expected;
+  for (size_t i = 0; i < picture.loaded.size(); ++i) expected.insert(static_cast<int>(i));
+  EXPECT_EQ(shown, expected) << "palette colours drawn where " << picture.loaded.size()
+                             << " loaded units run";
+}
+
+TEST(ReadablePlotsTest, ForcesLegendCoversNoLine) {
+  const TempDir dir("readable_plots");
+  const ForcesPicture picture = RunHeldBox(dir);
+  const plot::Chart& chart = picture.figure.panels[0];
+  std::vector<plot::Colour> colours;
+  for (const plot::Series& series : chart.series) colours.push_back(*series.colour);
+  // Every point of every line, a few pixels apart, shows a line's colour: none lies under a legend.
+  int checked = 0;
+  for (const plot::Series& series : chart.series) {
+    double last_x = -1e9;
+    for (size_t i = 0; i < series.x.size(); ++i) {
+      const auto [x, y] = plot::ChartPointPx(picture.figure, 0, series.x[i], series.y[i]);
+      if (!std::isfinite(series.y[i]) || x - last_x < 4.0) continue;
+      last_x = x;
+      ++checked;
+      ASSERT_GE(ColourNear(picture.png, x, y, colours), 0)
+          << series.name << " at " << series.x[i] << " s, " << series.y[i] << " N is hidden";
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
 }  // namespace
 }  // namespace graspbed::testbed
