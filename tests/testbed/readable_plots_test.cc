@@ -391,5 +391,42 @@ TEST(ReadablePlotsTest, ForcesLegendCoversNoLine) {
   EXPECT_GT(checked, 1000);
 }
 
+TEST(ReadablePlotsTest, CompareDrawsOneBarPerUnitAndJoinsNone) {
+  const TempDir dir("readable_plots");
+  RunComparison comparison;
+  comparison.run_a = "a";
+  comparison.run_b = "b";
+  comparison.aligned_on = "start";
+  comparison.time_s = {0.0, 1.0};
+  comparison.grip_a_n = {0.0, 1.0};
+  comparison.grip_b_n = {0.0, 1.1};
+  for (int u = 0; u < 20; ++u) {
+    UnitResidual unit;
+    unit.unit = u;
+    unit.fn_rms_n = u % 2 == 0 ? 0.4 : 0.05;  // neighbours far apart: a line between them would cross the gap
+    comparison.units.push_back(unit);
+  }
+  const plot::Figure figure = ComparisonFigure(comparison);
+  WriteComparisonPlot(comparison, dir.Path("compare.png"));
+  const image::RgbImage png = image::ReadPng(dir.Path("compare.png"));
+  constexpr size_t kUnitsPanel = 2;
+  for (size_t k = 0; k + 1 < comparison.units.size(); ++k) {
+    // Between two bars, from the lower bar's value to the higher's: background and grid only.
+    const double gap_x = plot::ChartPointPx(figure, kUnitsPanel, k + 1.5, 0.0).first;
+    const double low = plot::ChartPointPx(figure, kUnitsPanel, k + 1.5, 0.07).second;
+    const double high = plot::ChartPointPx(figure, kUnitsPanel, k + 1.5, 0.38).second;
+    for (int y = static_cast<int>(high); y < low; ++y) {
+      const std::array<int, 3> rgb = At(png, static_cast<int>(gap_x), y);
+      ASSERT_TRUE(IsBackground(rgb)) << "between units " << k << " and " << k + 1 << " at y " << y << ": "
+                                     << rgb[0] << "," << rgb[1] << "," << rgb[2];
+    }
+    // The bar itself, filled.
+    const auto [x, y] = plot::ChartPointPx(figure, kUnitsPanel, k + 1.0, 0.5 * comparison.units[k].fn_rms_n);
+    EXPECT_TRUE(
+        Near(At(png, static_cast<int>(x), static_cast<int>(y)), *figure.panels[kUnitsPanel].bar_colour))
+        << k;
+  }
+}
+
 }  // namespace
 }  // namespace graspbed::testbed
