@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "common/rgb_image.h"
@@ -21,14 +22,14 @@ struct Rgb {
 };
 
 // Colour-blind friendly palette (Okabe-Ito), cycled.
-constexpr std::array<Rgb, 8> kPalette{{{0.00, 0.45, 0.70},
-                                       {0.84, 0.37, 0.00},
-                                       {0.00, 0.62, 0.45},
-                                       {0.80, 0.47, 0.65},
-                                       {0.90, 0.62, 0.00},
-                                       {0.34, 0.71, 0.91},
-                                       {0.10, 0.10, 0.10},
-                                       {0.94, 0.89, 0.26}}};
+constexpr std::array<Rgb, kPaletteSize> kPalette{{{0.00, 0.45, 0.70},
+                                                  {0.84, 0.37, 0.00},
+                                                  {0.00, 0.62, 0.45},
+                                                  {0.80, 0.47, 0.65},
+                                                  {0.90, 0.62, 0.00},
+                                                  {0.34, 0.71, 0.91},
+                                                  {0.10, 0.10, 0.10},
+                                                  {0.94, 0.89, 0.26}}};
 
 constexpr double kMarginLeft = 90.0;
 constexpr double kMarginRight = 20.0;
@@ -148,8 +149,97 @@ void AddPolyline(cairo_t* cr, const Series& series, ToPxX to_px_x, ToPxY to_px_y
   flush();
 }
 
-// Draws one chart into the rectangle (x0, y0, width, height) of the surface.
-void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
+// ---- charts ---------------------------------------------------------------------------------------
+
+constexpr double kLegendRowPx = 18.0;
+constexpr double kLegendSwatchPx = 26.0;
+constexpr double kLegendInsetPx = 10.0;  // from the plot area's edges
+constexpr double kBarHalfWidth = 0.3;    // of a category's slot of 1 [x units]
+constexpr double kBarLabelGapPx = 4.0;   // between a bar's end and its value
+constexpr double kSmallestFontPx = 8.0;  // category names and values shrink to fit, down to this
+constexpr Rgb kMissingNoteColour{0.35, 0.35, 0.35};
+
+struct Box {
+  double x, y, w, h;  // [px]
+  bool Overlaps(const Box& o) const { return x < o.x + o.w && o.x < x + w && y < o.y + o.h && o.y < y + h; }
+};
+
+// Where the parts of a chart land in its rectangle of the surface.
+struct ChartLayout {
+  double x0, y0, width, height;     // the chart's rectangle [px]
+  double left, right, top, bottom;  // plot area [px]
+  Range x_range, y_range;
+  std::vector<size_t> listed;  // series named in the legend
+  Box legend{0, 0, 0, 0};      // the legend's box [px]; empty when nothing is listed
+  double ToPxX(double x) const {
+    return left + (x - x_range.lo) / (x_range.hi - x_range.lo) * (right - left);
+  }
+  double ToPxY(double y) const {
+    return bottom - (y - y_range.lo) / (y_range.hi - y_range.lo) * (bottom - top);
+  }
+  double SlotPx() const { return ToPxX(1.0) - ToPxX(0.0); }  // one category's width in a bar chart
+};
+
+void SetRgb(cairo_t* cr, const Rgb& colour) { cairo_set_source_rgb(cr, colour.r, colour.g, colour.b); }
+
+Rgb SeriesColour(const Chart& chart, size_t s) {
+  const std::optional<Colour>& own = chart.series[s].colour;
+  return own ? Rgb{own->r, own->g, own->b} : kPalette[s % kPalette.size()];
+}
+
+void UseChartFont(cairo_t* cr, double size_px, bool italic = false) {
+  cairo_select_font_face(cr, "sans-serif", italic ? CAIRO_FONT_SLANT_ITALIC : CAIRO_FONT_SLANT_NORMAL,
+                         CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, size_px);
+}
+
+// The font size (kFontSize, or smaller down to kSmallestFontPx) at which `text` fits `width_px`.
+double FittingFontSize(cairo_t* cr, const std::string& text, double width_px) {
+  cairo_set_font_size(cr, kFontSize);
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  if (extents.width <= width_px) return kFontSize;
+  return std::max(kSmallestFontPx, kFontSize * width_px / extents.width);
+}
+
+Box TextBox(cairo_t* cr, const std::string& text, double x, double y, double align_x, double align_y) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  return {x - align_x * extents.width, y - align_y * extents.height, extents.width, extents.height};
+}
+
+std::string BarValueText(const Chart& chart, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, chart.bar_value_format.c_str(), value);
+  return text;
+}
+
+// A bar's value, written above its end (below it for a negative value), at `*size_px`.
+Box BarValueBox(cairo_t* cr, const Chart& chart, const ChartLayout& layout, size_t k, double* size_px) {
+  const double value = *chart.bars[k].value;
+  const std::string text = BarValueText(chart, value);
+  *size_px = FittingFontSize(cr, text, layout.SlotPx() - 2.0);
+  cairo_set_font_size(cr, *size_px);
+  const double end = layout.ToPxY(value);
+  return value >= 0.0 ? TextBox(cr, text, layout.ToPxX(k + 1.0), end - kBarLabelGapPx, 0.5, 1.0)
+                      : TextBox(cr, text, layout.ToPxX(k + 1.0), end + kBarLabelGapPx, 0.5, 0.0);
+}
+
+// The note where a bar without a value would stand, just above the baseline, at `*size_px`.
+Box MissingNoteBox(cairo_t* cr, const Chart& chart, const ChartLayout& layout, size_t k, double* size_px) {
+  UseChartFont(cr, kFontSize, /*italic=*/true);
+  *size_px = FittingFontSize(cr, chart.bars[k].missing_note, layout.SlotPx() - 2.0);
+  cairo_set_font_size(cr, *size_px);
+  const double baseline = layout.ToPxY(std::clamp(0.0, layout.y_range.lo, layout.y_range.hi));
+  const Box box =
+      TextBox(cr, chart.bars[k].missing_note, layout.ToPxX(k + 1.0), baseline - kBarLabelGapPx, 0.5, 1.0);
+  UseChartFont(cr, kFontSize);
+  return box;
+}
+
+// Data ranges of the chart, padded, with head room: 5 % of the span for lines, and for bars room for
+// the tallest bar's value inside the plot area of `plot_height_px`.
+void FitRanges(const Chart& chart, double plot_height_px, ChartLayout& layout) {
   Range x_range;
   Range y_range;
   for (const Series& series : chart.series) {
@@ -165,107 +255,279 @@ void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double wid
     x_range.Add(band.x_min);
     x_range.Add(band.x_max);
   }
-  if (chart.include_zero_y) y_range.Add(0.0);
-  x_range = Padded(x_range);
-  y_range = Padded(y_range);
-  // A little head room so lines do not run along the frame.
-  const double y_pad = 0.05 * (y_range.hi - y_range.lo);
-  y_range = {y_range.lo - y_pad, y_range.hi + y_pad};
+  if (chart.bars.empty()) {
+    if (chart.include_zero_y) y_range.Add(0.0);
+    x_range = Padded(x_range);
+    y_range = Padded(y_range);
+    // A little head room so lines do not run along the frame.
+    const double y_pad = 0.05 * (y_range.hi - y_range.lo);
+    layout.x_range = x_range;
+    layout.y_range = {y_range.lo - y_pad, y_range.hi + y_pad};
+    return;
+  }
+  // Bars: categories 1..N in slots of 1, standing on 0.
+  x_range.Add(0.5);
+  x_range.Add(static_cast<double>(chart.bars.size()) + 0.5);
+  for (const Bar& bar : chart.bars) {
+    if (bar.value) y_range.Add(*bar.value);
+  }
+  y_range.Add(0.0);
+  if (!(y_range.hi > y_range.lo)) y_range.hi = y_range.lo + 1.0;
+  // Room for a value line (and a gap) above the tallest bar and below the deepest.
+  const double text_px = kFontSize + 3.0 * kBarLabelGapPx;
+  const double share = std::min(0.5, text_px / std::max(1.0, plot_height_px));
+  const double span =
+      (y_range.hi - y_range.lo) / (1.0 - (y_range.hi > 0.0) * share - (y_range.lo < 0.0) * share);
+  layout.x_range = x_range;
+  layout.y_range = {y_range.lo < 0.0 ? y_range.lo - share * span : y_range.lo,
+                    y_range.hi > 0.0 ? y_range.hi + share * span : y_range.hi};
+}
 
-  const double left = x0 + kMarginLeft;
-  const double right = x0 + width - kMarginRight;
-  const double top = y0 + kMarginTop;
-  const double bottom = y0 + height - kMarginBottom;
-  auto to_px_x = [&](double x) {
-    return left + (x - x_range.lo) / (x_range.hi - x_range.lo) * (right - left);
-  };
-  auto to_px_y = [&](double y) {
-    return bottom - (y - y_range.lo) / (y_range.hi - y_range.lo) * (bottom - top);
-  };
+// Whether the segment (ax, ay)-(bx, by) crosses `box` (Liang-Barsky clipping).
+bool SegmentCrosses(const Box& box, double ax, double ay, double bx, double by) {
+  double t0 = 0.0;
+  double t1 = 1.0;
+  const double dx = bx - ax;
+  const double dy = by - ay;
+  const double p[] = {-dx, dx, -dy, dy};
+  const double q[] = {ax - box.x, box.x + box.w - ax, ay - box.y, box.y + box.h - ay};
+  for (int i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return false;
+      continue;
+    }
+    const double t = q[i] / p[i];
+    if (p[i] < 0.0) {
+      t0 = std::max(t0, t);
+    } else {
+      t1 = std::min(t1, t);
+    }
+    if (t0 > t1) return false;
+  }
+  return true;
+}
 
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(cr, kFontSize);
-
-  // Bands under everything else.
+// Whether `box` would hide any drawn data: a line, a dot, a bar, a bar's value or note, a marker
+// (its line or label) or a band's label.
+bool CoversData(cairo_t* cr, const Chart& chart, const ChartLayout& layout, const Box& box) {
+  for (const Series& series : chart.series) {
+    bool have_previous = false;
+    double px0 = 0.0;
+    double py0 = 0.0;
+    for (size_t i = 0; i < series.x.size(); ++i) {
+      if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) {
+        have_previous = false;
+        continue;
+      }
+      const double px = layout.ToPxX(series.x[i]);
+      const double py = layout.ToPxY(series.y[i]);
+      if (have_previous ? SegmentCrosses(box, px0, py0, px, py) : SegmentCrosses(box, px, py, px, py))
+        return true;
+      have_previous = true;
+      px0 = px;
+      py0 = py;
+    }
+  }
+  for (size_t k = 0; k < chart.bars.size(); ++k) {
+    double size_px = kFontSize;
+    if (chart.bars[k].value) {
+      const double centre = layout.ToPxX(k + 1.0);
+      const double end = layout.ToPxY(*chart.bars[k].value);
+      const double base = layout.ToPxY(0.0);
+      const double half = kBarHalfWidth * layout.SlotPx();
+      if (box.Overlaps({centre - half, std::min(end, base), 2.0 * half, std::abs(base - end)})) return true;
+      if (box.Overlaps(BarValueBox(cr, chart, layout, k, &size_px))) return true;
+    } else if (box.Overlaps(MissingNoteBox(cr, chart, layout, k, &size_px))) {
+      return true;
+    }
+  }
+  UseChartFont(cr, kFontSize);
+  for (const Marker& marker : chart.markers) {
+    const double px = layout.ToPxX(marker.x);
+    if (SegmentCrosses(box, px, layout.top, px, layout.bottom)) return true;
+    if (!marker.label.empty() && box.Overlaps(TextBox(cr, marker.label, px + 3, layout.top + 20, 0.0, 0.0))) {
+      return true;
+    }
+  }
   for (const Band& band : chart.bands) {
-    const double a = to_px_x(std::min(band.x_min, band.x_max));
-    const double b = to_px_x(std::max(band.x_min, band.x_max));
+    const double middle = 0.5 * (layout.ToPxX(band.x_min) + layout.ToPxX(band.x_max));
+    if (!band.label.empty() && box.Overlaps(TextBox(cr, band.label, middle, layout.top + 4, 0.5, 0.0)))
+      return true;
+  }
+  return false;
+}
+
+// The legend's size, and its place: a free corner of the plot area, or right of it (which narrows it).
+void PlaceLegend(cairo_t* cr, const Chart& chart, ChartLayout& layout) {
+  double text_width = 0.0;
+  UseChartFont(cr, kFontSize);
+  for (size_t s = 0; s < chart.series.size(); ++s) {
+    if (chart.series[s].name.empty()) continue;
+    layout.listed.push_back(s);
+    cairo_text_extents_t extents;
+    cairo_text_extents(cr, chart.series[s].name.c_str(), &extents);
+    text_width = std::max(text_width, extents.x_advance);
+  }
+  if (layout.listed.empty()) return;
+  const double w = text_width + kLegendSwatchPx + 20;
+  const double h = kLegendRowPx * static_cast<double>(layout.listed.size()) + 8;
+  if (chart.legend == LegendPlacement::kAuto) {
+    const double near_x = layout.left + kLegendInsetPx;
+    const double far_x = layout.right - kLegendInsetPx - w;
+    const double near_y = layout.top + kLegendInsetPx;
+    const double far_y = layout.bottom - kLegendInsetPx - h;
+    for (const Box& corner : {Box{near_x, near_y, w, h}, Box{far_x, near_y, w, h}, Box{far_x, far_y, w, h},
+                              Box{near_x, far_y, w, h}}) {
+      const bool fits = corner.x >= layout.left && corner.y >= layout.top;
+      if (fits && !CoversData(cr, chart, layout, corner)) {
+        layout.legend = corner;
+        return;
+      }
+    }
+  }
+  layout.right -= w + kLegendInsetPx;
+  layout.legend = {layout.right + kLegendInsetPx, layout.top, w, h};
+}
+
+// Plot area, ranges and legend of `chart` in the rectangle (x0, y0, width, height) of the surface.
+ChartLayout LayOutChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
+  ChartLayout layout;
+  layout.x0 = x0;
+  layout.y0 = y0;
+  layout.width = width;
+  layout.height = height;
+  layout.left = x0 + kMarginLeft;
+  layout.right = x0 + width - kMarginRight;
+  layout.top = y0 + kMarginTop;
+  layout.bottom = y0 + height - kMarginBottom;
+  FitRanges(chart, layout.bottom - layout.top, layout);
+  PlaceLegend(cr, chart, layout);
+  return layout;
+}
+
+void DrawBands(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
+  for (const Band& band : chart.bands) {
+    const double a = layout.ToPxX(std::min(band.x_min, band.x_max));
+    const double b = layout.ToPxX(std::max(band.x_min, band.x_max));
     cairo_set_source_rgba(cr, 0.2, 0.4, 0.9, 0.12);
-    cairo_rectangle(cr, a, top, b - a, bottom - top);
+    cairo_rectangle(cr, a, layout.top, b - a, layout.bottom - layout.top);
     cairo_fill(cr);
     if (!band.label.empty()) {
       cairo_set_source_rgb(cr, 0.15, 0.3, 0.7);
-      ShowText(cr, band.label, 0.5 * (a + b), top + 4, 0.5, 0.0);
+      ShowText(cr, band.label, 0.5 * (a + b), layout.top + 4, 0.5, 0.0);
     }
   }
+}
 
-  // Grid and ticks.
+void DrawTick(cairo_t* cr, double x0, double y0, double x1, double y1) {
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_move_to(cr, x0, y0);
+  cairo_line_to(cr, x1, y1);
+  cairo_stroke(cr);
+}
+
+void DrawGridLine(cairo_t* cr, double x0, double y0, double x1, double y1) {
+  cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+  cairo_move_to(cr, x0, y0);
+  cairo_line_to(cr, x1, y1);
+  cairo_stroke(cr);
+}
+
+// Grid, ticks and their labels (numbers, or the bars' names under a categorical axis), the zero line,
+// the frame, the axis labels and the title.
+void DrawAxes(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
   cairo_set_line_width(cr, 1.0);
-  const std::vector<double> x_ticks = NiceTicks(x_range.lo, x_range.hi);
-  const std::vector<double> y_ticks = NiceTicks(y_range.lo, y_range.hi);
-  const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0;
-  const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : 1.0;
-  for (double tick : x_ticks) {
-    const double px = to_px_x(tick);
-    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
-    cairo_move_to(cr, px, top);
-    cairo_line_to(cr, px, bottom);
-    cairo_stroke(cr);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_move_to(cr, px, bottom);
-    cairo_line_to(cr, px, bottom + 5);
-    cairo_stroke(cr);
-    ShowText(cr, FormatTick(tick, x_step), px, bottom + 8, 0.5, 0.0);
+  if (chart.bars.empty()) {
+    const std::vector<double> x_ticks = NiceTicks(layout.x_range.lo, layout.x_range.hi);
+    const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : 1.0;
+    for (double tick : x_ticks) {
+      const double px = layout.ToPxX(tick);
+      DrawGridLine(cr, px, layout.top, px, layout.bottom);
+      DrawTick(cr, px, layout.bottom, px, layout.bottom + 5);
+      ShowText(cr, FormatTick(tick, x_step), px, layout.bottom + 8, 0.5, 0.0);
+    }
+  } else {
+    for (size_t k = 0; k < chart.bars.size(); ++k) {
+      const double px = layout.ToPxX(k + 1.0);
+      DrawTick(cr, px, layout.bottom, px, layout.bottom + 5);
+      cairo_set_font_size(cr, FittingFontSize(cr, chart.bars[k].label, layout.SlotPx() - 4.0));
+      ShowText(cr, chart.bars[k].label, px, layout.bottom + 8, 0.5, 0.0);
+      cairo_set_font_size(cr, kFontSize);
+    }
   }
+  const std::vector<double> y_ticks = NiceTicks(layout.y_range.lo, layout.y_range.hi);
+  const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : 1.0;
   for (double tick : y_ticks) {
-    const double py = to_px_y(tick);
-    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
-    cairo_move_to(cr, left, py);
-    cairo_line_to(cr, right, py);
-    cairo_stroke(cr);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_move_to(cr, left - 5, py);
-    cairo_line_to(cr, left, py);
-    cairo_stroke(cr);
-    ShowText(cr, FormatTick(tick, y_step), left - 8, py, 1.0, 0.5);
+    const double py = layout.ToPxY(tick);
+    DrawGridLine(cr, layout.left, py, layout.right, py);
+    DrawTick(cr, layout.left - 5, py, layout.left, py);
+    ShowText(cr, FormatTick(tick, y_step), layout.left - 8, py, 1.0, 0.5);
   }
   // Zero line when zero is inside the y range: strain plots change sign.
-  if (y_range.lo < 0.0 && y_range.hi > 0.0) {
+  if (layout.y_range.lo < 0.0 && layout.y_range.hi > 0.0) {
     cairo_set_source_rgb(cr, 0.55, 0.55, 0.55);
-    cairo_move_to(cr, left, to_px_y(0.0));
-    cairo_line_to(cr, right, to_px_y(0.0));
+    cairo_move_to(cr, layout.left, layout.ToPxY(0.0));
+    cairo_line_to(cr, layout.right, layout.ToPxY(0.0));
     cairo_stroke(cr);
   }
-
-  // Frame and labels.
   cairo_set_source_rgb(cr, 0, 0, 0);
-  cairo_rectangle(cr, left, top, right - left, bottom - top);
+  cairo_rectangle(cr, layout.left, layout.top, layout.right - layout.left, layout.bottom - layout.top);
   cairo_stroke(cr);
-  ShowText(cr, chart.x_label, 0.5 * (left + right), y0 + height - 6, 0.5, 1.0);
-  ShowUpwardText(cr, chart.y_label, x0 + 14, 0.5 * (top + bottom));
+  ShowText(cr, chart.x_label, 0.5 * (layout.left + layout.right), layout.y0 + layout.height - 6, 0.5, 1.0);
+  ShowUpwardText(cr, chart.y_label, layout.x0 + 14, 0.5 * (layout.top + layout.bottom));
   cairo_set_font_size(cr, kTitleFontSize);
-  ShowText(cr, chart.title, 0.5 * (left + right), y0 + 10, 0.5, 0.0);
+  ShowText(cr, chart.title, 0.5 * (layout.left + layout.right), layout.y0 + 10, 0.5, 0.0);
   cairo_set_font_size(cr, kFontSize);
+}
 
-  // Series, clipped to the plot area.
-  cairo_save(cr);
-  cairo_rectangle(cr, left, top, right - left, bottom - top);
-  cairo_clip(cr);
+void DrawMarkers(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
   for (const Marker& marker : chart.markers) {
-    const double px = to_px_x(marker.x);
+    const double px = layout.ToPxX(marker.x);
     cairo_set_source_rgb(cr, 0.4, 0.4, 0.4);
     const double dash[] = {3.0, 3.0};
     cairo_set_dash(cr, dash, 2, 0);
-    cairo_move_to(cr, px, top);
-    cairo_line_to(cr, px, bottom);
+    cairo_move_to(cr, px, layout.top);
+    cairo_line_to(cr, px, layout.bottom);
     cairo_stroke(cr);
     cairo_set_dash(cr, nullptr, 0, 0);
-    if (!marker.label.empty()) ShowText(cr, marker.label, px + 3, top + 20, 0.0, 0.0);
+    if (!marker.label.empty()) ShowText(cr, marker.label, px + 3, layout.top + 20, 0.0, 0.0);
   }
+}
+
+// Filled bars with their values; where a value is missing, no bar but the chart's note (a missing
+// figure drawn as 0 would read as a perfect score).
+void DrawBars(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
+  const double half = kBarHalfWidth * layout.SlotPx();
+  for (size_t k = 0; k < chart.bars.size(); ++k) {
+    const double centre = layout.ToPxX(k + 1.0);
+    double size_px = kFontSize;
+    if (!chart.bars[k].value) {
+      const Box note = MissingNoteBox(cr, chart, layout, k, &size_px);
+      UseChartFont(cr, size_px, /*italic=*/true);
+      SetRgb(cr, kMissingNoteColour);
+      ShowText(cr, chart.bars[k].missing_note, note.x, note.y, 0.0, 0.0);
+      UseChartFont(cr, kFontSize);
+      continue;
+    }
+    const double end = layout.ToPxY(*chart.bars[k].value);
+    const double base = layout.ToPxY(0.0);
+    const Colour colour = chart.bar_colour.value_or(PaletteColour(static_cast<int>(k)));
+    cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
+    cairo_rectangle(cr, centre - half, std::min(end, base), 2.0 * half, std::abs(base - end));
+    cairo_fill(cr);
+    const Box label = BarValueBox(cr, chart, layout, k, &size_px);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    ShowText(cr, BarValueText(chart, *chart.bars[k].value), label.x, label.y, 0.0, 0.0);
+    cairo_set_font_size(cr, kFontSize);
+  }
+}
+
+void DrawSeries(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
+  const auto to_px_x = [&](double x) { return layout.ToPxX(x); };
+  const auto to_px_y = [&](double y) { return layout.ToPxY(y); };
   for (size_t s = 0; s < chart.series.size(); ++s) {
     const Series& series = chart.series[s];
-    const Rgb colour = kPalette[s % kPalette.size()];
-    cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
+    SetRgb(cr, SeriesColour(chart, s));
     cairo_set_line_width(cr, 2.0);
     const double dash[] = {7.0, 4.0};
     cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
@@ -275,52 +537,53 @@ void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double wid
     if (series.markers) {
       for (size_t i = 0; i < series.x.size(); ++i) {
         if (!std::isfinite(series.x[i]) || !std::isfinite(series.y[i])) continue;
-        cairo_arc(cr, to_px_x(series.x[i]), to_px_y(series.y[i]), 3.0, 0, 2 * M_PI);
+        cairo_arc(cr, layout.ToPxX(series.x[i]), layout.ToPxY(series.y[i]), 3.0, 0, 2 * M_PI);
         cairo_fill(cr);
       }
     }
   }
-  cairo_restore(cr);
+}
 
-  // Legend in the top-left corner of the plot area.
-  std::vector<size_t> listed;
-  double legend_width = 0.0;
-  for (size_t s = 0; s < chart.series.size(); ++s) {
-    if (chart.series[s].name.empty()) continue;
-    listed.push_back(s);
-    cairo_text_extents_t extents;
-    cairo_text_extents(cr, chart.series[s].name.c_str(), &extents);
-    legend_width = std::max(legend_width, extents.x_advance);
-  }
-  if (!listed.empty()) {
-    constexpr double kRow = 18.0;
-    constexpr double kSwatch = 26.0;
-    const double box_x = left + 10;
-    const double box_y = top + (chart.bands.empty() ? 10 : 24);
-    const double box_w = legend_width + kSwatch + 20;
-    const double box_h = kRow * static_cast<double>(listed.size()) + 8;
-    cairo_set_source_rgba(cr, 1, 1, 1, 0.85);
-    cairo_rectangle(cr, box_x, box_y, box_w, box_h);
-    cairo_fill_preserve(cr);
-    cairo_set_source_rgb(cr, 0.6, 0.6, 0.6);
-    cairo_set_line_width(cr, 1.0);
+void DrawLegend(cairo_t* cr, const Chart& chart, const ChartLayout& layout) {
+  if (layout.listed.empty()) return;
+  const Box& box = layout.legend;
+  cairo_set_source_rgba(cr, 1, 1, 1, 0.85);
+  cairo_rectangle(cr, box.x, box.y, box.w, box.h);
+  cairo_fill_preserve(cr);
+  cairo_set_source_rgb(cr, 0.6, 0.6, 0.6);
+  cairo_set_line_width(cr, 1.0);
+  cairo_stroke(cr);
+  for (size_t row = 0; row < layout.listed.size(); ++row) {
+    const Series& series = chart.series[layout.listed[row]];
+    const double cy = box.y + 4 + kLegendRowPx * (static_cast<double>(row) + 0.5);
+    SetRgb(cr, SeriesColour(chart, layout.listed[row]));
+    cairo_set_line_width(cr, 2.0);
+    const double dash[] = {7.0, 4.0};
+    cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
+    cairo_move_to(cr, box.x + 6, cy);
+    cairo_line_to(cr, box.x + kLegendSwatchPx, cy);
     cairo_stroke(cr);
-    for (size_t row = 0; row < listed.size(); ++row) {
-      const Series& series = chart.series[listed[row]];
-      const Rgb colour = kPalette[listed[row] % kPalette.size()];
-      const double cy = box_y + 4 + kRow * (static_cast<double>(row) + 0.5);
-      cairo_set_source_rgb(cr, colour.r, colour.g, colour.b);
-      cairo_set_line_width(cr, 2.0);
-      const double dash[] = {7.0, 4.0};
-      cairo_set_dash(cr, dash, series.dashed ? 2 : 0, 0);
-      cairo_move_to(cr, box_x + 6, cy);
-      cairo_line_to(cr, box_x + kSwatch, cy);
-      cairo_stroke(cr);
-      cairo_set_dash(cr, nullptr, 0, 0);
-      cairo_set_source_rgb(cr, 0, 0, 0);
-      ShowText(cr, series.name, box_x + kSwatch + 8, cy, 0.0, 0.5);
-    }
+    cairo_set_dash(cr, nullptr, 0, 0);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    ShowText(cr, series.name, box.x + kLegendSwatchPx + 8, cy, 0.0, 0.5);
   }
+}
+
+// Draws one chart into the rectangle (x0, y0, width, height) of the surface.
+void DrawChart(cairo_t* cr, const Chart& chart, double x0, double y0, double width, double height) {
+  UseChartFont(cr, kFontSize);
+  const ChartLayout layout = LayOutChart(cr, chart, x0, y0, width, height);
+  DrawBands(cr, chart, layout);
+  DrawAxes(cr, chart, layout);
+  // Data clipped to the plot area.
+  cairo_save(cr);
+  cairo_rectangle(cr, layout.left, layout.top, layout.right - layout.left, layout.bottom - layout.top);
+  cairo_clip(cr);
+  DrawMarkers(cr, chart, layout);
+  DrawBars(cr, chart, layout);
+  DrawSeries(cr, chart, layout);
+  cairo_restore(cr);
+  DrawLegend(cr, chart, layout);
 }
 
 struct SurfaceDeleter {
@@ -455,12 +718,42 @@ double ScaleOf(const Heatmap& heatmap) {
   return largest > 0.0 ? largest : 1.0;
 }
 
-void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
-  const HeatmapGeometry g = GeometryOf(heatmap);
-  const double scale = ScaleOf(heatmap);
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+// The value one pixel column of a row shows: the mean of its finite samples (samples [*first, end)
+// fall in it; *first moves on to end), the nearest sample when none falls in it, NaN when all are missing.
+double ColumnValue(const Heatmap& heatmap, const HeatmapGeometry& g, int row, int column, int columns,
+                   size_t* first) {
+  const std::vector<double>& x = heatmap.x;
+  const std::vector<double>& values = heatmap.values[static_cast<size_t>(row)];
+  const double bin_hi = g.x_lo + (g.x_hi - g.x_lo) * (column + 1) / columns;
+  size_t end = *first;
+  while (end < x.size() && (x[end] < bin_hi || column == columns - 1)) ++end;
+  double sum = 0.0;
+  int count = 0;
+  bool missing = false;
+  for (size_t i = *first; i < end; ++i) {
+    if (std::isfinite(values[i])) {
+      sum += values[i];
+      ++count;
+    } else {
+      missing = true;
+    }
+  }
+  double value = std::numeric_limits<double>::quiet_NaN();
+  if (count > 0) {
+    value = sum / count;
+  } else if (!missing && !x.empty()) {
+    // No sample in this pixel column (sparse data): the nearest one.
+    const double centre = g.x_lo + (g.x_hi - g.x_lo) * (column + 0.5) / columns;
+    const size_t after = std::min(*first, x.size() - 1);
+    const size_t before = after > 0 ? after - 1 : 0;
+    value = values[std::abs(x[before] - centre) <= std::abs(x[after] - centre) ? before : after];
+  }
+  *first = end;
+  return value;
+}
 
-  // Cells: one image pixel per (row, pixel column), scaled up without smoothing.
+// Cells: one image pixel per (row, pixel column), scaled up without smoothing.
+void DrawHeatmapCells(cairo_t* cr, const Heatmap& heatmap, const HeatmapGeometry& g, double scale) {
   const int columns = std::max(1, static_cast<int>(std::lround(g.right - g.left)));
   const int rows = std::max(1, g.rows);
   std::unique_ptr<cairo_surface_t, void (*)(cairo_surface_t*)> cells(
@@ -468,42 +761,16 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
   cairo_surface_flush(cells.get());
   unsigned char* data = cairo_image_surface_get_data(cells.get());
   const int stride = cairo_image_surface_get_stride(cells.get());
-  const std::vector<double>& x = heatmap.x;
+  const auto channel = [](double c) {
+    return static_cast<uint32_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
+  };
   for (int row = 0; row < g.rows; ++row) {
-    const std::vector<double>& values = heatmap.values[static_cast<size_t>(row)];
     size_t first = 0;
     for (int column = 0; column < columns; ++column) {
-      const double bin_hi = g.x_lo + (g.x_hi - g.x_lo) * (column + 1) / columns;
-      size_t end = first;
-      while (end < x.size() && (x[end] < bin_hi || column == columns - 1)) ++end;
-      double sum = 0.0;
-      int count = 0;
-      bool missing = false;
-      for (size_t i = first; i < end; ++i) {
-        if (std::isfinite(values[i])) {
-          sum += values[i];
-          ++count;
-        } else {
-          missing = true;
-        }
-      }
-      double value = std::numeric_limits<double>::quiet_NaN();
-      if (count > 0) {
-        value = sum / count;
-      } else if (!missing && !x.empty()) {
-        // No sample in this pixel column (sparse data): the nearest one.
-        const double centre = g.x_lo + (g.x_hi - g.x_lo) * (column + 0.5) / columns;
-        const size_t after = std::min(first, x.size() - 1);
-        const size_t before = after > 0 ? after - 1 : 0;
-        value = values[std::abs(x[before] - centre) <= std::abs(x[after] - centre) ? before : after];
-      }
-      const Rgb colour = ColourOf(value, scale, heatmap.signed_scale);
-      const auto channel = [](double c) {
-        return static_cast<uint32_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
-      };
+      const Rgb colour =
+          ColourOf(ColumnValue(heatmap, g, row, column, columns, &first), scale, heatmap.signed_scale);
       *reinterpret_cast<uint32_t*>(data + row * stride + 4 * column) =
           (channel(colour.r) << 16) | (channel(colour.g) << 8) | channel(colour.b);
-      first = end;
     }
   }
   cairo_surface_mark_dirty(cells.get());
@@ -515,8 +782,10 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
   cairo_rectangle(cr, 0, 0, columns, rows);
   cairo_fill(cr);
   cairo_restore(cr);
+}
 
-  // Thin separators between rows, so neighbouring units stay apart.
+// Thin separators between rows, so neighbouring units stay apart.
+void DrawRowSeparators(cairo_t* cr, const HeatmapGeometry& g) {
   cairo_set_line_width(cr, 1.0);
   cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
   for (int row = 1; row < g.rows; ++row) {
@@ -525,8 +794,10 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
     cairo_line_to(cr, g.right, y);
     cairo_stroke(cr);
   }
+}
 
-  // Frame, x ticks, row labels (every k-th when rows are thin).
+// Frame, x ticks, row labels (every k-th when rows are thin).
+void DrawHeatmapAxes(cairo_t* cr, const Heatmap& heatmap, const HeatmapGeometry& g) {
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_rectangle(cr, g.left, g.top, g.right - g.left, g.bottom - g.top);
   cairo_stroke(cr);
@@ -550,8 +821,10 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
   }
   cairo_set_font_size(cr, kFontSize);
   ShowUpwardText(cr, heatmap.row_label, 14, 0.5 * (g.top + g.bottom));
+}
 
-  // Markers: dashed lines over the cells, labels above them.
+// Markers: dashed lines over the cells, labels above them.
+void DrawHeatmapMarkers(cairo_t* cr, const Heatmap& heatmap, const HeatmapGeometry& g) {
   for (const Marker& marker : heatmap.markers) {
     if (!(marker.x >= g.x_lo && marker.x <= g.x_hi)) continue;
     const double px = g.ToPxX(marker.x);
@@ -564,8 +837,10 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
     cairo_set_dash(cr, nullptr, 0, 0);
     if (!marker.label.empty()) ShowText(cr, marker.label, px, g.top - 3, 0.0, 1.0);
   }
+}
 
-  // Colour bar with its scale.
+// Colour bar with its scale.
+void DrawColourBar(cairo_t* cr, const Heatmap& heatmap, const HeatmapGeometry& g, double scale) {
   const double bar_left = g.right + 16;
   const double value_lo = heatmap.signed_scale ? -scale : 0.0;
   const auto bar_y = [&](double value) {
@@ -591,7 +866,17 @@ void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
     ShowText(cr, FormatTick(tick, value_step), bar_left + kColourBarWidth + 6, py, 0.0, 0.5);
   }
   ShowUpwardText(cr, heatmap.value_label, heatmap.width_px - 12, 0.5 * (g.top + g.bottom));
+}
 
+void DrawHeatmap(cairo_t* cr, const Heatmap& heatmap) {
+  const HeatmapGeometry g = GeometryOf(heatmap);
+  const double scale = ScaleOf(heatmap);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  DrawHeatmapCells(cr, heatmap, g, scale);
+  DrawRowSeparators(cr, g);
+  DrawHeatmapAxes(cr, heatmap, g);
+  DrawHeatmapMarkers(cr, heatmap, g);
+  DrawColourBar(cr, heatmap, g, scale);
   cairo_set_font_size(cr, kTitleFontSize);
   ShowText(cr, heatmap.title, 0.5 * heatmap.width_px, 8.0, 0.5, 0.0);
 }
@@ -629,35 +914,77 @@ void WritePng(const Chart& chart, const std::string& path, int width_px, int hei
          [&](cairo_t* cr) { DrawChart(cr, chart, 0.0, 0.0, width_px, height_px); });
 }
 
+namespace {
+
+// A figure's grid of panels: its size and where each panel's rectangle starts [px].
+struct FigureGeometry {
+  int columns = 1;
+  int title_px = 0;
+  int width = 0;
+  int height = 0;
+  std::pair<double, double> PanelOrigin(const Figure& figure, size_t i) const {
+    const int row = static_cast<int>(i) / columns;
+    const int column = static_cast<int>(i) % columns;
+    return {static_cast<double>(column * figure.panel_width_px),
+            static_cast<double>(title_px + row * figure.panel_height_px)};
+  }
+};
+
+FigureGeometry GeometryOf(const Figure& figure) {
+  FigureGeometry g;
+  const int count = std::max<int>(1, static_cast<int>(figure.panels.size()));
+  g.columns = std::min(std::max(1, figure.columns), count);
+  const int rows = (count + g.columns - 1) / g.columns;
+  g.title_px = figure.title.empty() ? 0 : 34;
+  g.width = g.columns * figure.panel_width_px;
+  g.height = rows * figure.panel_height_px + g.title_px;
+  return g;
+}
+
+}  // namespace
+
 void WritePng(const Figure& figure, const std::string& path) {
   for (const Chart& chart : figure.panels) ValidateChart(chart);
   if (figure.columns <= 0) {
     throw std::invalid_argument("plot: figure for " + path + " has " + std::to_string(figure.columns) +
                                 " columns: must be positive");
   }
-  const int count = std::max<int>(1, static_cast<int>(figure.panels.size()));
-  const int columns = std::min(figure.columns, count);
-  const int rows = (count + columns - 1) / columns;
-  const int title_px = figure.title.empty() ? 0 : 34;
-  const int width = columns * figure.panel_width_px;
-  const int height = rows * figure.panel_height_px + title_px;
   if (figure.panel_width_px <= 0 || figure.panel_height_px <= 0) {
     throw std::invalid_argument("plot: panel size for " + path + " must be positive");
   }
-  Render(width, height, path, [&](cairo_t* cr) {
+  const FigureGeometry g = GeometryOf(figure);
+  Render(g.width, g.height, path, [&](cairo_t* cr) {
     if (!figure.title.empty()) {
       cairo_set_source_rgb(cr, 0, 0, 0);
       cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
       cairo_set_font_size(cr, 17.0);
-      ShowText(cr, figure.title, 0.5 * width, 8.0, 0.5, 0.0);
+      ShowText(cr, figure.title, 0.5 * g.width, 8.0, 0.5, 0.0);
     }
     for (size_t i = 0; i < figure.panels.size(); ++i) {
-      const int row = static_cast<int>(i) / columns;
-      const int column = static_cast<int>(i) % columns;
-      DrawChart(cr, figure.panels[i], column * figure.panel_width_px, title_px + row * figure.panel_height_px,
-                figure.panel_width_px, figure.panel_height_px);
+      const auto [x0, y0] = g.PanelOrigin(figure, i);
+      DrawChart(cr, figure.panels[i], x0, y0, figure.panel_width_px, figure.panel_height_px);
     }
   });
+}
+
+std::pair<double, double> ChartPointPx(const Figure& figure, size_t panel, double x, double y) {
+  const Chart& chart = figure.panels.at(panel);
+  const FigureGeometry g = GeometryOf(figure);
+  const auto [x0, y0] = g.PanelOrigin(figure, panel);
+  // The layout measures texts (the legend's width decides whether it fits inside): a scratch surface.
+  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(
+      cairo_image_surface_create(CAIRO_FORMAT_RGB24, 1, 1));
+  std::unique_ptr<cairo_t, ContextDeleter> cr(cairo_create(surface.get()));
+  UseChartFont(cr.get(), kFontSize);
+  const ChartLayout layout =
+      LayOutChart(cr.get(), chart, x0, y0, figure.panel_width_px, figure.panel_height_px);
+  return {layout.ToPxX(x), layout.ToPxY(y)};
+}
+
+Colour PaletteColour(int index) {
+  const int size = static_cast<int>(kPalette.size());
+  const Rgb& colour = kPalette[static_cast<size_t>(((index % size) + size) % size)];
+  return {colour.r, colour.g, colour.b};
 }
 
 namespace {

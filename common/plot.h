@@ -1,15 +1,31 @@
 #pragma once
-/// Small PNG line-chart writer (cairo): named series, axes with ticks and labels, a title, a legend,
-/// optional vertical markers and shaded x-bands; several charts can share one image as panels. Also
+/// Small PNG chart writer (cairo): named series, axes with ticks and labels, a title, a legend that
+/// never covers data, optional vertical markers and shaded x-bands, or bar charts over named categories;
+/// several charts can share one image as panels. Also
 /// heat maps (rows x time colour maps with a colour bar) and scale drawings (polygons, arrows and texts in
 /// data units, e.g. a sensor layout in millimetres).
 /// Files are written atomically (temporary file + rename), so a reader never sees half a PNG.
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace graspbed::plot {
+
+/// A colour, each channel 0..1.
+struct Colour {
+  double r = 0.0;
+  double g = 0.0;
+  double b = 0.0;
+};
+
+/// Number of distinct colours charts give their series before they repeat (an Okabe-Ito palette).
+inline constexpr int kPaletteSize = 8;
+
+/// The `index`-th colour of the charts' palette (index modulo kPaletteSize): the colour a series
+/// without its own colour gets from its position in Chart::series, and bar `index` of a bar chart.
+Colour PaletteColour(int index);
 
 /// One named line. x and y have the same length; non-finite points break the line.
 struct Series {
@@ -18,6 +34,8 @@ struct Series {
   std::vector<double> y;  ///< ordinates, in the chart's y unit
   bool dashed = false;    ///< draw dashed instead of solid
   bool markers = false;   ///< draw a small dot at every point
+  std::optional<Colour> colour =
+      std::nullopt;  ///< nullopt: the palette colour of the series' position in the chart
 };
 
 /// A vertical line across the plot area at `x`, labelled at its top.
@@ -33,15 +51,40 @@ struct Band {
   std::string label;
 };
 
+/// One bar of a bar chart: a named category on the x axis and its value.
+struct Bar {
+  std::string label;  ///< the category's name, written under the axis (e.g. a controller)
+  std::optional<double> value =
+      std::nullopt;  ///< height [chart's y unit]; nullopt: no value (no bar: missing_note)
+  /// Written where the bar would stand when it has no value: why there is none (e.g. "no events").
+  std::string missing_note = "no value";
+};
+
+/// Where a chart's legend (one line per named series) goes; it never covers data.
+enum class LegendPlacement {
+  kAuto,     ///< inside the plot area, in the first corner (top left, top right, bottom right, bottom
+             ///< left) where it covers no line, dot, bar or marker label; right of the plot area when none
+  kOutside,  ///< right of the plot area, which narrows to make room
+};
+
 /// One chart: axes, series and decorations. Axis ranges come from the data unless fixed here.
+/// A chart with bars is a bar chart: its x axis is categorical, bar k (0-based) centred on x = k + 1
+/// and named by its label; each bar is filled (in PaletteColour(k) unless bar_colour is set) and has its
+/// value written above it.
+/// Series, markers and bands may be added in the same x coordinates.
 struct Chart {
   std::string title;
-  std::string x_label;  ///< with its unit, e.g. "x [mm]"
+  std::string x_label;  ///< with its unit, e.g. "x [mm]"; for bars, what the categories are
   std::string y_label;  ///< with its unit
   std::vector<Series> series;
   std::vector<Marker> markers;
   std::vector<Band> bands;
-  bool include_zero_y = false;  ///< stretch the y range to contain 0
+  std::vector<Bar> bars;
+  std::string bar_value_format = "%.3g";  ///< printf format of a bar's value, e.g. "%.1f ms"
+  std::optional<Colour> bar_colour =
+      std::nullopt;             ///< one colour for every bar; nullopt: PaletteColour(k) for bar k
+  bool include_zero_y = false;  ///< stretch the y range to contain 0 (bar charts always do)
+  LegendPlacement legend = LegendPlacement::kAuto;
 };
 
 /// Several charts laid out in a grid of `columns` columns, row by row, with an optional overall title.
@@ -90,12 +133,10 @@ void WritePng(const Chart& chart, const std::string& path, int width_px = 800, i
 /// Writes a multi-panel figure as one PNG at `path` (temp file + rename); same errors as above.
 void WritePng(const Figure& figure, const std::string& path);
 
-/// A colour, each channel 0..1.
-struct Colour {
-  double r = 0.0;
-  double g = 0.0;
-  double b = 0.0;
-};
+/// The pixel (column from the left, row from the top) where WritePng(figure) puts the data point
+/// (x, y) of panel `panel` (bar k of a bar chart stands at x = k + 1). For tests that read the image
+/// back. Throws std::out_of_range for a panel the figure does not have.
+std::pair<double, double> ChartPointPx(const Figure& figure, size_t panel, double x, double y);
 
 /// A polygon or polyline of a Drawing, in its data units.
 struct Shape {

@@ -198,19 +198,21 @@ void VideoWriter::Finish() {
   }
 }
 
-void WriteVideoStrip(const std::string& video_path, int video_frames, int count, int tile_width_px,
-                     const std::string& png_path, const std::string& ffmpeg) {
-  if (count < 1 || video_frames < 1 || tile_width_px < 2) {
+void WriteVideoStrip(const std::string& video_path, int video_frames, int count, int columns,
+                     int tile_width_px, const std::string& png_path, const std::string& ffmpeg) {
+  if (count < 1 || video_frames < 1 || columns < 1 || tile_width_px < 0 || tile_width_px == 1) {
     throw std::invalid_argument("video strip: " + std::to_string(count) + " tiles of " +
-                                std::to_string(video_frames) + " frames, " + std::to_string(tile_width_px) +
-                                " px wide");
+                                std::to_string(video_frames) + " frames in rows of " +
+                                std::to_string(columns) + ", " + std::to_string(tile_width_px) + " px wide");
   }
   count = std::min(count, video_frames);
+  columns = std::min(columns, count);
+  const int rows = (count + columns - 1) / columns;
   // Frames 0, step, 2 step, ...: the first and (about) the last of the video.
   const int step = count > 1 ? std::max(1, (video_frames - 1) / (count - 1)) : video_frames;
-  const std::string filter = "select='not(mod(n\\," + std::to_string(step) +
-                             "))',scale=" + std::to_string(tile_width_px) +
-                             ":-2,tile=" + std::to_string(count) + "x1";
+  const std::string scale = tile_width_px > 0 ? "scale=" + std::to_string(tile_width_px) + ":-2," : "";
+  const std::string filter = "select='not(mod(n\\," + std::to_string(step) + "))'," + scale +
+                             "tile=" + std::to_string(columns) + "x" + std::to_string(rows);
   const std::string temp = png_path + UniqueSuffix();
   const std::string log = temp + ".log";
   const std::vector<std::string> argv = {RequireFfmpeg(ffmpeg),

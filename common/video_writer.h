@@ -57,9 +57,11 @@ class VideoWriter {
 };
 
 /// A PNG of `count` frames evenly spaced through the video at `video_path` (of `video_frames`
-/// frames), side by side, each scaled to `tile_width_px` wide, made by ffmpeg (its select, scale and
-/// tile filters). Written atomically. Throws std::runtime_error with ffmpeg's message.
-void WriteVideoStrip(const std::string& video_path, int video_frames, int count, int tile_width_px,
-                     const std::string& png_path, const std::string& ffmpeg = "ffmpeg");
+/// frames), in rows of `columns` tiles, each scaled to `tile_width_px` wide (0: the frames' own size,
+/// so their text stays as legible as in the video), made by ffmpeg (its select, scale and tile
+/// filters). Written atomically. Throws std::invalid_argument for a bad count, column count or width,
+/// std::runtime_error with ffmpeg's message.
+void WriteVideoStrip(const std::string& video_path, int video_frames, int count, int columns,
+                     int tile_width_px, const std::string& png_path, const std::string& ffmpeg = "ffmpeg");
 
 }  // namespace graspbed::image

@@ -135,13 +135,12 @@ void WriteBenchPlots(const RunResult& result, const common::SignalLog& log, cons
                      const std::string& dir) {
   if (log.rows() < 2) return;
   const std::vector<double> time = log.ColumnValues("time_s");
-  const int units = layout.unit_count();
   const std::string title = result.config.name + " (" + result.config.controller.name + ", " +
                             BackendName(result.config.backend) + ")";
   plot::Figure forces;
   forces.title = title + ": forces";
   forces.columns = 1;
-  const plot::Chart per_unit = PerUnitFnChart(log, time, units);
+  const plot::Chart per_unit = PerUnitFnChart(log, time, layout);
   plot::Chart totals = MakeChart("Total normal force (sensed)", "time [s]", "force [N]");
   totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
   totals.markers = ScriptMarkers(result);

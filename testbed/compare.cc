@@ -343,7 +343,7 @@ std::string ComparisonTable(const RunComparison& c) {
   return out.str();
 }
 
-void WriteComparisonPlot(const RunComparison& c, const std::string& path) {
+plot::Figure ComparisonFigure(const RunComparison& c) {
   plot::Figure figure;
   // The run directories' own names: whole paths do not fit a title.
   const auto name = [](const std::string& dir) {
@@ -373,20 +373,20 @@ void WriteComparisonPlot(const RunComparison& c, const std::string& path) {
   for (size_t i = 0; i < c.time_s.size(); ++i) d.y.push_back(c.grip_b_n[i] - c.grip_a_n[i]);
   diff.series = {d};
   diff.include_zero_y = true;
+  // One bar per unit: units are categories, and a line from one to the next would join unrelated units.
   plot::Chart units;
   units.title = "Per-unit Fn residual (RMS)";
-  units.x_label = "unit";
+  units.x_label = "unit (numbers as in the layout picture)";
   units.y_label = "RMS [N]";
-  plot::Series rms{"Fn RMS", {}, {}};
-  rms.markers = true;
-  for (const UnitResidual& u : c.units) {
-    rms.x.push_back(u.unit);
-    rms.y.push_back(u.fn_rms_n);
-  }
-  units.series = {rms};
-  units.include_zero_y = true;
+  units.bar_value_format = "%.2g";
+  units.bar_colour = plot::PaletteColour(0);  // one colour: a colour per unit would repeat every eight
+  for (const UnitResidual& u : c.units) units.bars.push_back({std::to_string(u.unit), u.fn_rms_n});
   figure.panels = {grip, diff, units};
-  plot::WritePng(figure, path);
+  return figure;
+}
+
+void WriteComparisonPlot(const RunComparison& c, const std::string& path) {
+  plot::WritePng(ComparisonFigure(c), path);
 }
 
 }  // namespace graspbed::testbed

@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/plot.h"
+
 namespace graspbed::testbed {
 
 /// Per-unit residual of B's estimate against A's over the aligned overlap [N].
@@ -75,8 +77,10 @@ RunComparison CompareRuns(const std::string& run_a, const std::string& run_b);
 nlohmann::json ComparisonJson(const RunComparison& comparison);
 /// A short table for the terminal.
 std::string ComparisonTable(const RunComparison& comparison);
-/// compare.png: the sensed grip of both runs on A's clock, their difference, and the per-unit RMS
-/// residuals of Fn.
+/// The figure of compare.png: the sensed grip of both runs on A's clock, their difference, and the
+/// per-unit RMS residuals of Fn as one bar per unit (panel 2; bar k is c.units[k]).
+plot::Figure ComparisonFigure(const RunComparison& comparison);
+/// Writes ComparisonFigure(comparison) as a PNG at `path`.
 void WriteComparisonPlot(const RunComparison& comparison, const std::string& path);
 
 }  // namespace graspbed::testbed

@@ -187,10 +187,55 @@ plot::Series Line(const common::SignalLog& log, const std::vector<double>& time,
   return series;
 }
 
-plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time, int units) {
-  plot::Chart chart = MakeChart("Estimated normal force per unit", "time [s]", "Fn [N]");
+std::string UnitName(const sensor::Layout& layout, int unit) {
+  const sensor::UnitPose& pose = layout.units.at(static_cast<size_t>(unit));
+  return "unit " + std::to_string(unit) + " (row " + std::to_string(pose.row) + ", column " +
+         std::to_string(pose.column) + ")";
+}
+
+plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time,
+                           const sensor::Layout& layout) {
+  // Twenty lines in eight colours cannot show which unit carries the load: colour only the units
+  // that did, grey for the rest.
+  constexpr plot::Colour kUnloadedGrey{0.78, 0.78, 0.78};
+  const int units = layout.unit_count();
+  std::vector<plot::Series> lines;
+  std::vector<std::pair<double, int>> peaks;  // (peak estimated Fn [N], unit)
   for (int u = 0; u < units; ++u) {
-    chart.series.push_back(Line(log, time, "fn_est_n_" + std::to_string(u), "unit " + std::to_string(u)));
+    lines.push_back(Line(log, time, "fn_est_n_" + std::to_string(u), UnitName(layout, u)));
+    double peak = 0.0;
+    for (double value : lines.back().y) {
+      if (std::isfinite(value)) peak = std::max(peak, value);
+    }
+    peaks.emplace_back(peak, u);
+  }
+  std::sort(peaks.begin(), peaks.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<bool> loaded(static_cast<size_t>(units), false);
+  int loaded_count = 0;
+  for (const auto& [peak, unit] : peaks) {
+    if (loaded_count == plot::kPaletteSize ||
+        !(peak > 0.0 && peak >= kCarriedLoadShare * peaks.front().first))
+      break;
+    loaded[static_cast<size_t>(unit)] = true;
+    ++loaded_count;
+  }
+  plot::Chart chart =
+      MakeChart("Estimated normal force per unit (numbers as in the layout picture)", "time [s]", "Fn [N]");
+  bool grey_named = false;
+  for (int u = 0; u < units; ++u) {
+    if (loaded[static_cast<size_t>(u)]) continue;
+    plot::Series& line = lines[static_cast<size_t>(u)];
+    line.colour = kUnloadedGrey;
+    line.name = grey_named ? "" : std::to_string(units - loaded_count) + " other units";
+    grey_named = true;
+    chart.series.push_back(std::move(line));
+  }
+  int colour = 0;
+  for (int u = 0; u < units; ++u) {
+    if (!loaded[static_cast<size_t>(u)]) continue;
+    plot::Series& line = lines[static_cast<size_t>(u)];
+    line.colour = plot::PaletteColour(colour++);
+    chart.series.push_back(std::move(line));
   }
   chart.include_zero_y = true;
   return chart;

@@ -107,8 +107,17 @@ plot::Series HorizontalLine(const std::string& name, double x0, double x1, doubl
 /// Column `column` of `log` against `time`, scaled.
 plot::Series Line(const common::SignalLog& log, const std::vector<double>& time, const std::string& column,
                   const std::string& name, double scale = 1.0, bool dashed = false);
-/// The estimated Fn of every unit against time (columns fn_est_n_K).
-plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time, int units);
+/// Unit `unit` of `layout` named as the layout picture (`graspbed sensor layout --picture`) names it:
+/// its number in layout order, its row and its column, e.g. "unit 7 (row 1, column 2)".
+std::string UnitName(const sensor::Layout& layout, int unit);
+/// A unit carried load when its peak estimated Fn is at least this share of the most loaded unit's [-].
+inline constexpr double kCarriedLoadShare = 0.1;
+/// The estimated Fn against time (columns fn_est_n_K) of every unit of `layout`: those that carried
+/// load (kCarriedLoadShare; at most plot::kPaletteSize, the most loaded) each in a colour of its own
+/// (plot::PaletteColour(0), (1), ... in unit order) and named by UnitName; the others as grey lines
+/// under them with one legend entry for all, so no colour repeats.
+plot::Chart PerUnitFnChart(const common::SignalLog& log, const std::vector<double>& time,
+                           const sensor::Layout& layout);
 /// One marker per script action that fired, at the time it fired.
 std::vector<plot::Marker> ScriptMarkers(const RunResult& result);
 /// taxels_fn.png and taxels_ft.png: units x time maps of the estimated Fn and Ft (columns

@@ -723,25 +723,38 @@ nlohmann::json ScorecardJson(const Scorecard& scorecard) {
   return json;
 }
 
-void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
+plot::Figure ScorecardFigure(const Scorecard& scorecard) {
+  // A figure a controller does not have (no event to detect, no time held) is a note, not a bar at 0:
+  // a latency of 0 ms would read as perfect where the table says "-".
   struct Panel {
     const char* title;
     const char* y_label;
+    const char* value_format;
     std::function<std::optional<double>(const ControllerScore&)> value;
+    std::function<std::string(const ControllerScore&)> missing_note;
   };
+  const auto no_events = [](const ControllerScore&) { return std::string("no events"); };
   const std::vector<Panel> panels = {
-      {"gross slips flagged", "flagged [%]", [](const ControllerScore& s) { return s.gross_detected_pct; }},
-      {"gross slip latency p95", "latency [ms]", [](const ControllerScore& s) { return s.gross_latency_p95_ms; }},
-      {"false flags per minute held", "false flags [1/min]",
-       [](const ControllerScore& s) { return s.false_per_min; }},
-      {"grip efficiency (mean / oracle), median", "ratio [-]",
-       [](const ControllerScore& s) { return s.grip_efficiency_median; }},
-      {"drops + crushes", "runs [-]",
-       [](const ControllerScore& s) { return std::optional<double>(s.drops + s.crushes); }},
-      {"runs passed", "passed [%]",
+      {"gross slips flagged", "flagged [%]", "%.0f %%",
+       [](const ControllerScore& s) { return s.gross_detected_pct; }, no_events},
+      {"gross slip latency p95", "latency [ms]", "%.1f ms",
+       [](const ControllerScore& s) { return s.gross_latency_p95_ms; },
+       [](const ControllerScore& s) {
+         return std::string(s.gross_slip_events > 0 ? "none flagged" : "no events");
+       }},
+      {"false flags per minute held", "false flags [1/min]", "%.2f/min",
+       [](const ControllerScore& s) { return s.false_per_min; },
+       [](const ControllerScore&) { return std::string("never held"); }},
+      {"grip efficiency (mean / oracle), median", "ratio [-]", "%.2f",
+       [](const ControllerScore& s) { return s.grip_efficiency_median; },
+       [](const ControllerScore&) { return std::string("no oracle grip"); }},
+      {"drops + crushes", "runs [-]", "%.0f",
+       [](const ControllerScore& s) { return std::optional<double>(s.drops + s.crushes); }, no_events},
+      {"runs passed", "passed [%]", "%.0f %%",
        [](const ControllerScore& s) {
          return s.runs > 0 ? std::optional<double>(100.0 * s.passed / s.runs) : std::nullopt;
-       }},
+       },
+       [](const ControllerScore&) { return std::string("no runs"); }},
   };
   plot::Figure figure;
   figure.title = "scorecard " + scorecard.set_name + " v" + std::to_string(scorecard.set_version) + ", " +
@@ -752,37 +765,19 @@ void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
   for (const Panel& panel : panels) {
     plot::Chart chart;
     chart.title = panel.title;
-    chart.x_label = "controller (legend)";
+    chart.x_label = "controller";
     chart.y_label = panel.y_label;
-    chart.include_zero_y = true;
-    double top = 0.0;
-    for (const ControllerScore& score : scorecard.scores)
-      top = std::max(top, panel.value(score).value_or(0.0));
-    // Unnamed padding: a baseline from 0.2 to N + 0.8 so the bars stand clear of the frame, and a
-    // lone point (drawn as nothing) 40 % above the tallest bar, so the legend sits above the bars.
-    const double count = static_cast<double>(scorecard.scores.size());
-    chart.series.push_back({"", {0.2, count + 0.8}, {0.0, 0.0}});
-    chart.series.push_back({"", {0.2}, {top > 0.0 ? 1.4 * top : 1.0}});
-    for (size_t i = 0; i < scorecard.scores.size(); ++i) {
-      // A bar as the outline of a rectangle centred on x = i + 1; a figure that does not exist
-      // (no slip event, nothing flagged) draws no bar.
-      plot::Series bar;
-      bar.name = scorecard.scores[i].controller;
-      const std::optional<double> value = panel.value(scorecard.scores[i]);
-      const double x = static_cast<double>(i) + 1.0;
-      if (value) {
-        bar.x = {x - 0.3, x - 0.3, x + 0.3, x + 0.3, x - 0.3};
-        bar.y = {0.0, *value, *value, 0.0, 0.0};
-      } else {
-        bar.x = {x};
-        bar.y = {0.0};
-        bar.markers = true;
-      }
-      chart.series.push_back(std::move(bar));
+    chart.bar_value_format = panel.value_format;
+    for (const ControllerScore& score : scorecard.scores) {
+      chart.bars.push_back({score.controller, panel.value(score), panel.missing_note(score)});
     }
     figure.panels.push_back(std::move(chart));
   }
-  plot::WritePng(figure, path);
+  return figure;
+}
+
+void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path) {
+  plot::WritePng(ScorecardFigure(scorecard), path);
 }
 
 void WriteScorecard(const Scorecard& scorecard, const std::string& out_dir) {

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/plot.h"
 #include "testbed/runner.h"
 #include "testbed/scenario_config.h"
 
@@ -196,8 +197,12 @@ std::string ScorecardCsv(const Scorecard& scorecard);
 /// JSON: set, controllers (one object each, with the same figures per sensor under "by_sensor") and
 /// runs.
 nlohmann::json ScorecardJson(const Scorecard& scorecard);
-/// Bars of the headline figures (gross slips detected, latency p95, false flags per minute, grip efficiency median,
-/// drops + crushes, runs passed) as one PNG, one colour per controller.
+/// Bars of the headline figures (gross slips detected, latency p95, false flags per minute, grip efficiency
+/// median, drops + crushes, runs passed), one panel each: a filled bar per controller, named under the axis,
+/// in the same colour in every panel, its value written above it; a figure a controller does not have (e.g.
+/// no gross slip event) is no bar but a note saying why.
+plot::Figure ScorecardFigure(const Scorecard& scorecard);
+/// Writes ScorecardFigure(scorecard) as a PNG at `path`.
 void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path);
 /// Writes scorecard.csv, scorecard.json and scorecard.png into `out_dir` (created; atomic writes).
 void WriteScorecard(const Scorecard& scorecard, const std::string& out_dir);

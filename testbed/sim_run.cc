@@ -102,7 +102,7 @@ void WritePlots(const RunResult& result, const common::SignalLog& log, const sen
   plot::Figure forces;
   forces.title = title + ": forces";
   forces.columns = 1;
-  const plot::Chart per_unit = PerUnitFnChart(log, time, units);
+  const plot::Chart per_unit = PerUnitFnChart(log, time, layout);
   plot::Chart totals = MakeChart("Total normal force", "time [s]", "force [N]");
   totals.series.push_back(Line(log, time, "est_total_fn_n", "estimated (valid units)"));
   totals.series.push_back(Line(log, time, "true_sensed_fn_n", "true, on the mesas", 1.0, true));

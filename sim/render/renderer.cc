@@ -167,15 +167,28 @@ std::array<float, 4> UnitColor(double fn_n, sensor::UnitValidity validity, doubl
   }
 }
 
+bool SensorStarting(const sensor::TactileState& state) {
+  if (state.valid_count > 0) return false;
+  for (int u = 0; u < state.unit_count; ++u) {
+    const sensor::UnitValidity validity = state.validity[static_cast<size_t>(u)];
+    if (validity != sensor::UnitValidity::kNotTared && validity != sensor::UnitValidity::kValid) return false;
+  }
+  return true;
+}
+
 std::string PanelText(const PanelInfo& info) {
   char line[160];
   std::string text;
   if (!info.title.empty()) text += info.title + "\t\n";
   std::snprintf(line, sizeof(line), "time\t%.3f s\n", info.time_s);
   text += line;
+  // A controller holds while the sensor tares, by design: said so, not flagged like a fault.
+  const bool taring = info.telemetry != nullptr && info.telemetry->safe_hold && info.state != nullptr &&
+                      SensorStarting(*info.state);
   if (info.telemetry != nullptr) {
     const controller::ControllerTelemetry& t = *info.telemetry;
-    std::snprintf(line, sizeof(line), "phase\t%s\ngrip target\t%.2f N\n", t.phase, t.grip_target_n);
+    std::snprintf(line, sizeof(line), "phase\t%s%s\ngrip target\t%.2f N\n", t.phase,
+                  taring ? " (sensor taring)" : "", t.grip_target_n);
     text += line;
   }
   if (info.state != nullptr) {
@@ -192,7 +205,7 @@ std::string PanelText(const PanelInfo& info) {
       if (t.slip_cues != nullptr && t.slip_cues[0] != '\0')
         flags.append("(").append(t.slip_cues).append(") ");
     }
-    if (t.safe_hold) flags.append("SAFE-HOLD ");
+    if (t.safe_hold) flags.append(taring ? "TARING " : "SAFE-HOLD ");
     if (stale) flags.append("STALE ");
     if (flags.empty()) flags.append("- ");
     flags.pop_back();

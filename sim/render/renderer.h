@@ -104,9 +104,15 @@ struct PanelInfo {
   std::string extra;  ///< more "name\tvalue" lines appended (e.g. the viewer's speed)
 };
 
+/// Whether `state` has no usable estimate yet without any unit having failed: no frame yet, or every
+/// unit still taring (valid_count 0, each unit valid-by-default or kNotTared).
+bool SensorStarting(const sensor::TactileState& state);
+
 /// The panel as Render()'s `label`: "name\tvalue" lines for time, controller phase, grip target,
 /// measured grip (estimated total Fn and units in contact), friction estimate, slip flags (the
-/// controller's slip flag, safe hold, stale data) and the last script action.
+/// controller's slip flag, safe hold, stale data) and the last script action. A safe hold while the
+/// sensor is starting (SensorStarting) is "TARING", its phase "<phase> (sensor taring)": the start of
+/// every run, not a fault.
 std::string PanelText(const PanelInfo& info);
 
 /// Renders one simulation's scene. Owns its model copy, mjvScene and mjrContext; not copyable, not

@@ -54,8 +54,8 @@ struct Recorder {
     renderer.reset();
     writer.Finish();
     if (!strip_path.empty() && options.strip_tiles > 0 && writer.frames() > 0) {
-      image::WriteVideoStrip(video_path, writer.frames(), options.strip_tiles, options.strip_tile_width_px,
-                             strip_path, options.ffmpeg);
+      image::WriteVideoStrip(video_path, writer.frames(), options.strip_tiles, options.strip_columns,
+                             options.strip_tile_width_px, strip_path, options.ffmpeg);
     }
     cost->encode_ms += MsSince(start);
   }
@@ -85,10 +85,12 @@ void VideoOptions::Validate() const {
     std::snprintf(text, sizeof(text), "--video-fps %g: must be in (0, %g]", fps, kMaxFps);
     throw std::invalid_argument(text);
   }
-  if (strip_tiles < 0 || (strip_tiles > 0 && strip_tile_width_px < 16)) {
+  if (strip_tiles < 0 ||
+      (strip_tiles > 0 && ((strip_tile_width_px != 0 && strip_tile_width_px < 16) || strip_columns < 1))) {
     throw std::invalid_argument("video strip: " + std::to_string(strip_tiles) + " tiles " +
-                                std::to_string(strip_tile_width_px) +
-                                " px wide: need >= 0 tiles of >= 16 px");
+                                std::to_string(strip_tile_width_px) + " px wide in rows of " +
+                                std::to_string(strip_columns) +
+                                ": need >= 0 tiles of >= 16 px (or 0: the frames' width), >= 1 per row");
   }
 }
 

@@ -38,7 +38,10 @@ struct VideoOptions {
   }();                            ///< size (even), overlays; contact-force arrows on by default
   sim::CameraSpec camera;         ///< grasp camera by default
   int strip_tiles = 6;            ///< frames in the PNG strip beside the video (0: no strip)
-  int strip_tile_width_px = 320;  ///< width of each strip tile [px]
+  int strip_columns = 3;          ///< tiles per row of the strip
+  /// Width of each strip tile [px]; 0: the frames' own width (a 640 px frame's panel text scaled to
+  /// half is unreadable).
+  int strip_tile_width_px = 0;
   std::string ffmpeg = "ffmpeg";  ///< the encoder program
 
   /// Throws std::invalid_argument naming the option and value.

@@ -8,11 +8,13 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "common/rgb_image.h"
 #include "common/video_writer.h"
+#include "sim/sim_rig.h"
 #include "testbed/runner.h"
 #include "testbed/scenario_config.h"
 #include "testbed/show/video.h"
@@ -71,10 +73,11 @@ TEST(VideoCliTest, DefaultScenarioVideoHasTheFrameCountAndSizeAskedFor) {
   EXPECT_EQ(Probe(out + "/video.mp4"), std::to_string(kWidthPx) + "," + std::to_string(kHeightPx) + "," +
                                            std::to_string(expected_frames));
   EXPECT_NE(result.err.find("ms/frame"), std::string::npos) << result.err;
-  // The strip: 6 tiles of 320 x 240 side by side.
+  // The strip: 6 frames at the video's own size (not scaled down: the panel text stays legible), in two
+  // rows of three.
   const image::RgbImage strip = image::ReadPng(out + "/video_strip.png");
-  EXPECT_EQ(strip.width_px, 6 * 320);
-  EXPECT_EQ(strip.height_px, 240);
+  EXPECT_EQ(strip.width_px, 3 * kWidthPx);
+  EXPECT_EQ(strip.height_px, 2 * kHeightPx);
   for (const auto& entry : fs::directory_iterator(out)) {
     EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path() << " left behind";
   }
@@ -123,6 +126,25 @@ TEST(VideoCliTest, RefusesBadVideoOptionsBeforeRunning) {
     EXPECT_NE(result.err.find(c.message), std::string::npos) << c.arguments << "\n" << result.err;
     EXPECT_FALSE(fs::exists(dir.Path("run/summary.json"))) << c.arguments;
   }
+}
+
+// The default scenario passes; its first frames come while the sensor tares, when the controller holds
+// by design: the panel says so instead of flagging SAFE-HOLD like a fault. No rendering needed: the
+// panel text of each frame as the video composes it.
+TEST(VideoTest, FramesOfAPassingRunSayTaringWhileTheSensorTaresNotSafeHold) {
+  const testbed::ScenarioConfig config = testbed::LoadScenario(SourcePath("scenarios/default.yaml"));
+  testbed::RunOptions run;
+  run.frame_period_s = 1.0 / kFps;
+  std::vector<std::string> panels;
+  run.on_frame = [&](const testbed::FrameContext& frame) {
+    const controller::ControllerTelemetry telemetry = frame.rig.controller().telemetry();
+    panels.push_back(sim::PanelText(show::LivePanel(config, "default", frame, telemetry)));
+  };
+  const testbed::RunResult result = testbed::RunScenario(config, run);
+  ASSERT_TRUE(result.passed);
+  ASSERT_EQ(static_cast<int>(panels.size()), show::VideoFrameCount(config.duration_s, kFps));
+  EXPECT_NE(panels.front().find("slip flags\tTARING"), std::string::npos) << panels.front();
+  for (const std::string& panel : panels) EXPECT_EQ(panel.find("SAFE-HOLD"), std::string::npos) << panel;
 }
 
 TEST(VideoTest, RecordingLeavesTheRunsResultsUnchanged) {
