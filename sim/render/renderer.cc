@@ -192,8 +192,8 @@ std::string PanelText(const PanelInfo& info) {
     text += line;
   }
   if (info.state != nullptr) {
-    std::snprintf(line, sizeof(line), "measured grip\t%.2f N on %d units (%d valid)\n",
-                  info.state->total_fn_n, info.state->contact_count, info.state->valid_count);
+    std::snprintf(line, sizeof(line), "measured grip\t%.2f N on %d unit%s (%d valid)\n", info.state->total_fn_n,
+                  info.state->contact_count, info.state->contact_count == 1 ? "" : "s", info.state->valid_count);
     text += line;
   }
   if (info.telemetry != nullptr) {
