@@ -294,7 +294,18 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
 
   // The lift: the object rode with the wrist as in the simulation.
   EXPECT_LE(hw_slip_mm, kMaxSlipMm);
-  EXPECT_NEAR(device.at("object_lift_m").get<double>(), sim_lift_m,
+  // At the same simulated instant: the device's outcome is its state when the host stopped, which on
+  // a busy machine comes before the scenario's end (its clock lags the host's), while the object still
+  // settles on the wrist after the lift (tens of um).
+  const double device_time_s = device.at("sim_time_s").get<double>();
+  const std::vector<double>& sim_time = signals["time_s"];
+  const size_t at = static_cast<size_t>(
+      std::min<std::ptrdiff_t>(std::lower_bound(sim_time.begin(), sim_time.end(), device_time_s) - sim_time.begin(),
+                               static_cast<std::ptrdiff_t>(sim_time.size()) - 1));
+  const double sim_lift_then_m = signals["object_z_m"][at] - signals["object_z_m"].front();
+  std::printf("[ measure ] lift at %.3f s: %.4f mm over the wire, %.4f mm simulated (%.4f mm at its end)\n",
+              device_time_s, 1e3 * device.at("object_lift_m").get<double>(), 1e3 * sim_lift_then_m, 1e3 * sim_lift_m);
+  EXPECT_NEAR(device.at("object_lift_m").get<double>(), sim_lift_then_m,
               1e-3 * (hw_slip_mm + sim_slip_mm) + kGraspComplianceM);
 
   // The settled hold: the share of the squeeze the host sensed, as in the simulation.
