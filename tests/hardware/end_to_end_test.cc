@@ -250,7 +250,7 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   ASSERT_TRUE(csv.good()) << log;
   std::string header;
   std::getline(csv, header);
-  std::string expected = "seq,device_sim_s";
+  std::string expected = "seq,device_time_s";
   for (int k = 0; k < kUnits; ++k) {
     const std::string n = std::to_string(k);
     expected += ",r1_" + n + ",r2_" + n + ",fn_" + n + ",ft_" + n + ",valid_" + n;
