@@ -7,9 +7,9 @@ as written, N times in a row on a pseudo-terminal:
 
 Each time: both exit 0, the host prints PASSED, the device is still connected when the host ends its
 session, the device ends because the host stopped the stream (not by its own clock), and the frame
-counts agree: every frame the device took (sent, or lost to its full send queue) was decoded by the
-host or counted dropped by it (a gap in the sequence numbers), but for
-the frames still in the link's buffers when the host closed (at most MAX_IN_FLIGHT, what they hold).
+counts agree: every frame the device sent was decoded by the host, but for those still in the
+link's buffers when the host closed (at most MAX_IN_FLIGHT, what they hold), and the host's dropped
+frames are frames the device could not send (its queue full).
 
   rehearsal_test.py GRASPBED_BINARY SOURCE_DIR [RUNS]
 """
@@ -62,11 +62,12 @@ def rehearse(work, index):
         return problems, ""
     bench = json.loads((out / "summary.json").read_text())["bench"]
     device = json.loads(device_out)
-    # A frame the device took but could not queue (its send queue full: the host lagging) is a gap in
-    # the sequence numbers, which the host counts as dropped (docs/protocol.md).
-    taken = device["frames_sent"] + device["frames_overflowed"]
-    in_flight = taken - (bench["frames"] + bench["dropped"])
-    figures = ("host %d frames + %d dropped, device %d sent + %d overflowed (%d in flight at the end), ended by "
+    # A pty loses nothing: every frame the device sent was decoded by the host or was still unread in
+    # the link's buffers when the host ended. A frame the device took but could not queue (its send
+    # queue full: the host lagging) is a gap in the sequence numbers, which the host counts as dropped
+    # once it reads a later frame (docs/protocol.md): the host's drops are some of those.
+    in_flight = device["frames_sent"] - bench["frames"]
+    figures = ("host %d frames + %d dropped, device %d sent + %d overflowed (%d sent and unread at the end), ended by "
                "%s, %d stale periods, %d watchdog trips" % (bench["frames"], bench["dropped"], device["frames_sent"],
                                                             device["frames_overflowed"], in_flight, device["ended_by"],
                                                             bench["stale_periods"], device["watchdog_trips"]))
@@ -75,7 +76,9 @@ def rehearse(work, index):
     if device["ended_by"] != "host_stopped":
         problems.append("the device ended by " + device["ended_by"] + ", not by the host's stop")
     if not 0 <= in_flight <= MAX_IN_FLIGHT:
-        problems.append("frame counts disagree beyond what the link's buffers hold (%d frames)" % MAX_IN_FLIGHT)
+        problems.append("frames sent and not decoded beyond what the link's buffers hold (%d frames)" % MAX_IN_FLIGHT)
+    if bench["dropped"] > device["frames_overflowed"]:
+        problems.append("the host counted more frames dropped than the device could not send")
     return problems, figures
 
 
