@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/signal_log.h"
+#include "testbed/sweep_columns.h"
 
 namespace graspbed::testbed {
 
@@ -524,23 +525,12 @@ Page SweepPage(const std::string& dir) {
        {"shard", StringOr(manifest, "shard", "-")},
        {"completed", manifest.value("completed", false) ? "yes" : "no"}});
   // Swept keys: every column of a row that is not one of the sweep's own (docs/scenarios.md, "Sweeps").
-  static const std::set<std::string> kOwn = {"run",
-                                             "scenario",
-                                             "passed",
-                                             "completed",
-                                             "dropped",
-                                             "max_slip_mm",
-                                             "peak_grip_n",
-                                             "crushed",
-                                             "slip_detect_latency_ms",
-                                             "false_slip_per_min",
-                                             "fn_rmse_n",
-                                             "ft_rmse_n",
-                                             "time_to_stable_s",
-                                             "sim_s",
-                                             "wall_s",
-                                             "failed_expectations",
-                                             "error"};
+  static const std::set<std::string> kOwn = [] {
+    std::set<std::string> own(kSweepMetricColumns.begin(), kSweepMetricColumns.end());
+    own.insert(kSweepRowColumns.begin(), kSweepRowColumns.end());
+    own.insert(kSweepErrorKey);
+    return own;
+  }();
   std::vector<std::string> swept;
   if (!results.empty()) {
     for (const auto& [key, value] : results.front().items())

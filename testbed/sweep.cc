@@ -16,6 +16,7 @@
 
 #include "common/yaml_map.h"
 #include "testbed/schedule.h"
+#include "testbed/sweep_columns.h"
 
 namespace graspbed::testbed {
 namespace {
@@ -27,20 +28,7 @@ using common::YamlMap;
 
 constexpr int kMaxRuns = 1000000;
 // Columns every row has, in CSV order; parameter columns go between "scenario" and "passed".
-const std::vector<std::string> kMetricColumns = {"passed",
-                                                 "completed",
-                                                 "dropped",
-                                                 "max_slip_mm",
-                                                 "peak_grip_n",
-                                                 "crushed",
-                                                 "slip_detect_latency_ms",
-                                                 "false_slip_per_min",
-                                                 "fn_rmse_n",
-                                                 "ft_rmse_n",
-                                                 "time_to_stable_s",
-                                                 "sim_s",
-                                                 "wall_s",
-                                                 "failed_expectations"};
+const std::vector<std::string> kMetricColumns(kSweepMetricColumns.begin(), kSweepMetricColumns.end());
 
 std::string ReadText(const std::string& path) {
   std::ifstream stream(path);
@@ -100,7 +88,7 @@ std::string CsvCell(const nlohmann::json& value) {
 }
 
 std::vector<std::string> Columns(const std::vector<std::string>& parameter_keys) {
-  std::vector<std::string> columns = {"run", "scenario"};
+  std::vector<std::string> columns(kSweepRowColumns.begin(), kSweepRowColumns.end());
   columns.insert(columns.end(), parameter_keys.begin(), parameter_keys.end());
   columns.insert(columns.end(), kMetricColumns.begin(), kMetricColumns.end());
   return columns;
@@ -346,7 +334,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options) {
       }
       if (!result.completed && error.empty()) return;  // interrupted: the row would not be a result
       nlohmann::json row = SweepRow(spec, runs[i], result);
-      if (!error.empty()) row["error"] = error;
+      if (!error.empty()) row[kSweepErrorKey] = error;
       std::lock_guard<std::mutex> lock(mutex);
       partial_stream << row.dump() << '\n' << std::flush;
       rows.push_back(row);
