@@ -71,9 +71,21 @@ void BM_ReadoutInversionController(benchmark::State& bench) {
   controller.SetIntent(controller::GraspIntent::kClose);
   uint32_t sequence = 0;
   double time_s = 0.0;
+  // The hand as the realistic proprioception reports a held pinch: both digits still, at stall.
+  hand::HandState hand;
+  hand.time_s = 0.0;
+  hand.digit_count = 2;
+  for (hand::DigitState& digit : hand.digits) {
+    digit.joint_count = 1;
+    digit.position_known = digit.velocity_known = digit.current_known = digit.stops_known = true;
+    digit.joint_position[0] = 0.3;
+    digit.motor_current_a = 0.3;
+    digit.stall_current_a = 1.0;
+  }
   for (auto _ : bench) {
     time_s += 1e-3;  // a new frame every 1 ms tick, as the loop delivers them
-    benchmark::DoNotOptimize(controller.Update(path.Next(++sequence), time_s));
+    hand.time_s = time_s;
+    benchmark::DoNotOptimize(controller.Update(path.Next(++sequence), hand, time_s));
   }
   bench.SetItemsProcessed(bench.iterations());
   bench.SetLabel("20 units, grip_slip holding, ns per frame");

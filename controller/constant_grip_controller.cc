@@ -138,7 +138,8 @@ void ConstantGripController::ReadDiagnostics(std::span<double> values) const {
   if (!values.empty()) values[0] = measured_grip_n_;
 }
 
-hand::HandCommand ConstantGripController::Update(const sensor::TactileState& state, double time_s) {
+hand::HandCommand ConstantGripController::Update(const sensor::TactileState& state,
+                                                 const hand::HandState& /*hand*/, double time_s) {
   const double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxStepS) : 0.0;
   have_time_ = true;
   last_time_s_ = time_s;

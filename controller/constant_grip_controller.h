@@ -40,7 +40,8 @@ class ConstantGripController final : public GraspController {
 
   void Reset() override;
   void SetIntent(GraspIntent intent) override;
-  hand::HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                           double time_s) override;
   /// The held grip is min(grip_n, ceiling); <= 0 or +inf removes the task ceiling.
   void SetGripCeiling(double ceiling_n) override;
   ControllerTelemetry telemetry() const override { return telemetry_; }

@@ -18,7 +18,13 @@ void ControlLoopConfig::Validate() const {
 ControlLoop::ControlLoop(sensor::TactileBackend& backend, GraspController& controller,
                          hand::HandActuator& actuator, const sensor::Layout& layout,
                          const sensor::Calibration& calibration, const ControlLoopConfig& config)
+    : ControlLoop(backend, no_hand_sensor_, controller, actuator, layout, calibration, config) {}
+
+ControlLoop::ControlLoop(sensor::TactileBackend& backend, hand::HandSensor& hand_sensor,
+                         GraspController& controller, hand::HandActuator& actuator, const sensor::Layout& layout,
+                         const sensor::Calibration& calibration, const ControlLoopConfig& config)
     : backend_(backend),
+      hand_sensor_(hand_sensor),
       controller_(controller),
       actuator_(actuator),
       config_(config),
@@ -65,7 +71,13 @@ sensor::ReadStatus ControlLoop::Tick(double time_s) {
   state_.stale = stale;
   if (stale) ++counters_.stale_ticks;
 
-  command_ = controller_.Update(state_, time_s);
+  if (hand_sensor_.Read(time_s, &hand_state_)) ++counters_.hand_readings;
+  if (hand_state_.digit_count > 0) {
+    hand_state_.stale = hand_state_.time_s < 0.0 || time_s - hand_state_.time_s > config_.stale_timeout_s;
+    if (hand_state_.stale) ++counters_.hand_stale_ticks;
+  }
+
+  command_ = controller_.Update(state_, hand_state_, time_s);
   if (actuator_.Write(command_) != hand::WriteStatus::kOk) ++counters_.actuator_failures;
   return status;
 }

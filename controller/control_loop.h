@@ -7,6 +7,7 @@
 
 #include "controller/grasp_controller.h"
 #include "hand/hand_command.h"
+#include "hand/hand_state.h"
 #include "sensor/calibration.h"
 #include "sensor/inversion.h"
 #include "sensor/layout.h"
@@ -36,12 +37,19 @@ struct LoopCounters {
   uint64_t disconnected_ticks = 0;
   uint64_t actuator_failures = 0;  ///< Write() that did not reach the motor
   uint64_t retares = 0;            ///< baselines restarted after a device session change
+  uint64_t hand_readings = 0;      ///< new hand states (proprioception) taken
+  uint64_t hand_stale_ticks = 0;   ///< ticks with a stale hand state (its backend reports one)
 };
 
-/// Ties one backend, one controller and one actuator together. Not copyable; holds references
-/// that must outlive it. Tick() allocates nothing and does no I/O of its own.
+/// Ties one tactile backend, one hand sensor (proprioception), one controller and one actuator
+/// together. Not copyable; holds references that must outlive it. Tick() allocates nothing and does
+/// no I/O of its own.
 class ControlLoop {
  public:
+  ControlLoop(sensor::TactileBackend& backend, hand::HandSensor& hand_sensor, GraspController& controller,
+              hand::HandActuator& actuator, const sensor::Layout& layout, const sensor::Calibration& calibration,
+              const ControlLoopConfig& config);
+  /// A loop whose hand reports no proprioception (every HandState field unknown).
   ControlLoop(sensor::TactileBackend& backend, GraspController& controller, hand::HandActuator& actuator,
               const sensor::Layout& layout, const sensor::Calibration& calibration,
               const ControlLoopConfig& config);
@@ -55,6 +63,8 @@ class ControlLoop {
 
   /// Newest tactile state (forces per unit, validity, totals, stale flag).
   const sensor::TactileState& state() const { return state_; }
+  /// Newest hand state (proprioception; stale after stale_timeout_s without a reading).
+  const hand::HandState& hand_state() const { return hand_state_; }
   /// Newest raw frame taken from the backend.
   const sensor::RawFrame& frame() const { return frame_; }
   /// dR/R of the newest frame.
@@ -73,6 +83,8 @@ class ControlLoop {
 
  private:
   sensor::TactileBackend& backend_;
+  hand::NoHandSensor no_hand_sensor_;
+  hand::HandSensor& hand_sensor_;
   GraspController& controller_;
   hand::HandActuator& actuator_;
   ControlLoopConfig config_;
@@ -82,6 +94,7 @@ class ControlLoop {
   sensor::RawFrame frame_;
   sensor::ReadoutFrame readout_frame_;
   sensor::TactileState state_;
+  hand::HandState hand_state_;
   hand::HandCommand command_;
   LoopCounters counters_;
   double last_frame_time_s_ = -1.0;  ///< loop time of the newest frame; < 0 before the first

@@ -4,9 +4,10 @@
 /// exports so that `controller: {plugin: libmine.so}` or `--controller plugin:libmine.so` loads it.
 ///
 /// Stability: the headers a controller sees (this one, controller/grasp_controller.h,
-/// hand/hand_command.h, sensor/tactile_state.h, sensor/raw_frame.h) form the controller API.
+/// hand/hand_command.h, hand/hand_state.h, sensor/tactile_state.h, sensor/raw_frame.h) form the
+/// controller API.
 /// Any change a compiled plugin could notice (a virtual added to GraspController, a field added to
-/// TactileState, HandCommand or ControllerTelemetry, a change to GraspbedControllerPlugin after its
+/// TactileState, HandState, HandCommand or ControllerTelemetry, a change to GraspbedControllerPlugin after its
 /// first field) raises GRASPBED_CONTROLLER_API_VERSION, and graspbed refuses a plugin built against
 /// another version instead of calling into it. `api_version` stays the first field of the
 /// descriptor in every version, so that check is always safe. A plugin must be built with the same
@@ -64,8 +65,9 @@ class ParameterError : public std::invalid_argument {
 
 /// Version of the controller API these headers describe (an integer, raised on every change a
 /// compiled plugin could notice; see above). Version 1: graspbed 0.1; 2: GraspController's
-/// diagnostic_channels() and ReadDiagnostics().
-#define GRASPBED_CONTROLLER_API_VERSION 2
+/// diagnostic_channels() and ReadDiagnostics(); 3: Update() takes the hand's HandState
+/// (proprioception) beside the TactileState.
+#define GRASPBED_CONTROLLER_API_VERSION 3
 
 /// Name of the symbol every plugin exports (extern "C", returns const GraspbedControllerPlugin*).
 #define GRASPBED_CONTROLLER_PLUGIN_SYMBOL "graspbed_controller_plugin"

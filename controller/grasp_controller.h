@@ -1,7 +1,7 @@
 #pragma once
-/// GraspController: the pluggable decision maker. It sees only TactileState, time and the user's
-/// intent (close / open), never MuJoCo, serial ports or ground truth, so the same controller runs in
-/// simulation and on the hand. Part of the controller API (controller/controller_api.h: its
+/// GraspController: the pluggable decision maker. It sees only TactileState, the hand's own state
+/// (HandState: joint positions, motor currents), time and the user's intent (close / open), never
+/// MuJoCo, serial ports or ground truth, so the same controller runs in simulation and on the hand. Part of the controller API (controller/controller_api.h: its
 /// version, GRASPBED_CONTROLLER_API_VERSION, and how a plugin exports a controller).
 
 #include <functional>
@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hand/hand_command.h"
+#include "hand/hand_state.h"
 #include "sensor/tactile_state.h"
 
 namespace graspbed::controller {
@@ -93,9 +94,11 @@ class GraspController {
   virtual void Reset() = 0;
   /// Sets the user's intent; takes effect at the next Update().
   virtual void SetIntent(GraspIntent intent) = 0;
-  /// One control tick at `time_s` [s] with the newest state; returns the motor command.
-  /// Must not allocate.
-  virtual hand::HandCommand Update(const sensor::TactileState& state, double time_s) = 0;
+  /// One control tick at `time_s` [s] with the newest tactile state and the newest hand state
+  /// (check its `known` flags: a backend without proprioception leaves them false); returns the
+  /// motor command. Must not allocate.
+  virtual hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                                   double time_s) = 0;
   /// Grip force ceiling for this task [N] (fragile objects); never exceeded on purpose.
   virtual void SetGripCeiling(double ceiling_n) = 0;
   virtual ControllerTelemetry telemetry() const = 0;

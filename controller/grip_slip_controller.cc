@@ -514,7 +514,8 @@ void GripSlipController::RespondToSlip(double time_s) {
   Enter(Phase::kSlip, time_s);
 }
 
-hand::HandCommand GripSlipController::Update(const TactileState& state, double time_s) {
+hand::HandCommand GripSlipController::Update(const TactileState& state, const hand::HandState& /*hand*/,
+                                             double time_s) {
   const double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxStepS) : 0.0;
   have_time_ = true;
   last_time_s_ = time_s;

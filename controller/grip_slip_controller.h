@@ -135,7 +135,8 @@ class GripSlipController final : public GraspController {
 
   void Reset() override;
   void SetIntent(GraspIntent intent) override;
-  hand::HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                           double time_s) override;
   /// Per-task ceiling [N]; the effective ceiling is min(this, max_grip_n). A value <= 0 or +inf
   /// removes the task ceiling; NaN throws std::invalid_argument. Survives Reset().
   void SetGripCeiling(double ceiling_n) override;

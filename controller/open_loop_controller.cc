@@ -21,7 +21,8 @@ void OpenLoopController::SetIntent(GraspIntent intent) { intent_ = intent; }
 
 void OpenLoopController::SetGripCeiling(double /*ceiling_n*/) {}
 
-hand::HandCommand OpenLoopController::Update(const sensor::TactileState& /*state*/, double /*time_s*/) {
+hand::HandCommand OpenLoopController::Update(const sensor::TactileState& /*state*/,
+                                             const hand::HandState& /*hand*/, double /*time_s*/) {
   hand::HandCommand command;
   switch (intent_) {
     case GraspIntent::kIdle:

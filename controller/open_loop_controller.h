@@ -22,7 +22,8 @@ class OpenLoopController final : public GraspController {
 
   void Reset() override;
   void SetIntent(GraspIntent intent) override;
-  hand::HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                           double time_s) override;
   /// The baseline cannot measure grip force, so a ceiling only caps nothing; kept for the interface.
   void SetGripCeiling(double ceiling_n) override;
   ControllerTelemetry telemetry() const override { return telemetry_; }

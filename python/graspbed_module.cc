@@ -250,7 +250,7 @@ double TimeControllerUpdate(const py::object& controller, int ticks) {
     const auto start = std::chrono::steady_clock::now();
     for (int tick = 0; tick < ticks; ++tick) {
       state.time_s = 1e-3 * tick;
-      sink += made->Update(state, state.time_s).grip_effort;
+      sink += made->Update(state, {}, state.time_s).grip_effort;
     }
     elapsed = std::chrono::steady_clock::now() - start;
   }

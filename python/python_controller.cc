@@ -214,7 +214,8 @@ void PythonController::ReadDiagnostics(std::span<double> values) const {
   std::copy_n(diagnostic_values_.begin(), std::min(values.size(), diagnostic_values_.size()), values.begin());
 }
 
-controller::HandCommand PythonController::Update(const sensor::TactileState& state, double time_s) {
+controller::HandCommand PythonController::Update(const sensor::TactileState& state,
+                                                 const hand::HandState& /*hand*/, double time_s) {
   py::gil_scoped_acquire gil;
   *view_->state = state;
   controller::HandCommand command;

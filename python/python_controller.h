@@ -51,7 +51,8 @@ class PythonController final : public controller::GraspController {
 
   void Reset() override;
   void SetIntent(controller::GraspIntent intent) override;
-  controller::HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  controller::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                                 double time_s) override;
   void SetGripCeiling(double ceiling_n) override;
   controller::ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return label_; }

@@ -14,6 +14,7 @@ namespace graspbed::sim {
 void SimRigConfig::Validate() const {
   scene.Validate();
   backend.Validate();
+  proprioception.Validate();
   loop.Validate();
   common::Require(control_rate_hz > 0.0 && std::isfinite(control_rate_hz), "control_rate_hz", control_rate_hz,
                   "must be > 0");
@@ -24,10 +25,11 @@ SimRig::SimRig(const sensor::Layout& layout, const sensor::Calibration& calibrat
     : config_((config.Validate(), config)),
       simulation_(layout, config_.scene),
       backend_(simulation_, config_.backend, config_.seed),
+      hand_sensor_(simulation_, config_.proprioception, config_.seed),
       actuator_(simulation_),
       controller_(controller ? std::move(controller)
                              : throw std::invalid_argument("SimRig needs a controller")),
-      loop_(backend_, *controller_, actuator_, layout, calibration, config_.loop) {
+      loop_(backend_, hand_sensor_, *controller_, actuator_, layout, calibration, config_.loop) {
   // Bodies that start inside each other make a result out of bad input (a pinch of hundreds of N).
   CheckInitialPenetration(simulation_);
 }
@@ -45,6 +47,7 @@ bool SimRig::Step() {
     clock_s_ = simulation_.time_s();
   }
   backend_.Poll(clock_s_);
+  hand_sensor_.Poll(clock_s_);
   if (next_tick_s > clock_s_ + slack) return false;
   while (static_cast<double>(control_index_) * period <= clock_s_ + slack) ++control_index_;
   loop_.Tick(clock_s_);

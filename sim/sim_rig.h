@@ -10,6 +10,7 @@
 #include "controller/grasp_controller.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
+#include "sim/proprioception.h"
 #include "sim/scene_config.h"
 #include "sim/sim_actuator.h"
 #include "sim/sim_backend.h"
@@ -21,6 +22,7 @@ namespace graspbed::sim {
 struct SimRigConfig {
   SceneConfig scene;
   SimBackendConfig backend;
+  ProprioceptionConfig proprioception;  ///< the hand's encoders and current sensing
   controller::ControlLoopConfig loop;
   double control_rate_hz = 1000.0;  ///< ControlLoop::Tick() rate on the simulated clock [Hz]
   uint64_t seed = 1;                ///< seeds the sensor model and frame drops
@@ -54,6 +56,8 @@ class SimRig {
   double time_s() const { return clock_s_; }
   Simulation& simulation() { return simulation_; }
   SimBackend& backend() { return backend_; }
+  /// The hand's simulated proprioception (fault injection: SetEncoderStuck).
+  SimHandSensor& hand_sensor() { return hand_sensor_; }
   SimActuator& actuator() { return actuator_; }
   controller::GraspController& controller() { return *controller_; }
   controller::ControlLoop& loop() { return loop_; }
@@ -63,6 +67,7 @@ class SimRig {
   SimRigConfig config_;
   Simulation simulation_;
   SimBackend backend_;
+  SimHandSensor hand_sensor_;
   SimActuator actuator_;
   std::unique_ptr<controller::GraspController> controller_;
   controller::ControlLoop loop_;

@@ -220,6 +220,14 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
     drive.lever_arm_m = place.lever_arm_m[k];
     grip_drives_.push_back(drive);
   }
+  if (scene_.hand.model == HandModel::kJaw) {
+    digit_joints_ = {{{RequireId(m, mjOBJ_JOINT, "finger_slide"), -1}, {RequireId(m, mjOBJ_JOINT, "thumb_slide"), -1}}};
+    digit_drive_ = {0, -1};
+  } else {
+    digit_joints_ = {{{RequireId(m, mjOBJ_JOINT, "index_mcp"), RequireId(m, mjOBJ_JOINT, "index_pip")},
+                      {RequireId(m, mjOBJ_JOINT, "thumb_flexion"), -1}}};
+    digit_drive_ = {0, 1};
+  }
   const char* servo_names[3] = {"wrist_x_servo", "wrist_y_servo", "wrist_z_servo"};
   const char* joint_names[3] = {"wrist_x", "wrist_y", "wrist_z"};
   for (int k = 0; k < 3; ++k) {
@@ -486,6 +494,41 @@ void Simulation::ComputeUnitLoads(std::span<sensor::UnitLoad> loads) const {
   for (int i = 0; i < n_units; ++i) {
     if (loads[i].fn_n > 1e-9) loads[i].offset_along_beam_m = moment[i] / loads[i].fn_n;
   }
+}
+
+std::array<DigitTruth, 2> Simulation::ReadDigits() const {
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
+  std::array<DigitTruth, 2> digits{};
+  for (int k = 0; k < 2; ++k) {
+    DigitTruth& digit = digits[k];
+    for (const int joint : digit_joints_[k]) {
+      if (joint < 0) continue;
+      const int qpos = m->jnt_qposadr[joint];
+      const int dof = m->jnt_dofadr[joint];
+      digit.linear = m->jnt_type[joint] == mjJNT_SLIDE;
+      digit.position[digit.joint_count] = d->qpos[qpos] - m->qpos0[qpos];
+      digit.velocity[digit.joint_count] = d->qvel[dof];
+      if (digit.joint_count == 0) {
+        const bool limited = m->jnt_limited[joint] != 0;
+        const double inf = std::numeric_limits<double>::infinity();
+        digit.open_stop = limited ? m->jnt_range[2 * joint] - m->qpos0[qpos] : -inf;
+        digit.closed_stop = limited ? m->jnt_range[2 * joint + 1] - m->qpos0[qpos] : inf;
+      }
+      ++digit.joint_count;
+    }
+    if (digit_drive_[k] < 0) continue;
+    const GripDrive& drive = grip_drives_[digit_drive_[k]];
+    // Torque at the driven joint: stall x effort (the actuator) less the back-EMF term the joint's
+    // damping carries, over the stall torque: the winding current's share of its stall current.
+    digit.has_motor = true;
+    digit.motor_torque_share = (drive.transmission * d->actuator_force[drive.actuator] -
+                                drive.stall * d->actuator_velocity[drive.actuator] /
+                                    (drive.transmission * drive.no_load_speed)) /
+                               drive.stall;
+    if (brake_engaged_) digit.motor_torque_share = 0.0;
+  }
+  return digits;
 }
 
 double Simulation::LowestObjectPointM() const {

@@ -114,6 +114,26 @@ struct GroundTruth {
   int thumb_contacts = 0;   ///< contacts between the object and the thumb
 };
 
+/// One digit's joints and motor as the physics has them, for the simulated proprioception
+/// (sim/proprioception.h). Joints proximal first: prosthetic index MCP, PIP; thumb flexion; jaw
+/// fixture one slide per digit.
+struct DigitTruth {
+  int joint_count = 0;
+  bool linear = false;  ///< slides (the jaw fixture) [m], else hinges [rad]
+  /// Flexion since the model's start pose (the pre-shape): qpos - qpos0, + closing [rad] or [m].
+  std::array<double, 2> position{};
+  std::array<double, 2> velocity{};  ///< [rad/s] or [m/s]
+  /// The first joint's travel from the start pose to its open and closed end stops [rad] or [m]
+  /// (open <= 0 <= closed); +-inf for a joint without limits.
+  double open_stop = 0.0;
+  double closed_stop = 0.0;
+  /// Whether a grip motor drives this digit (the jaw's one motor drives both: it is counted on the
+  /// finger), and its torque as a share of its stall torque: effort minus the back-EMF term, so
+  /// proportional to the winding current; 0 while braked (the motor is off) [-].
+  bool has_motor = false;
+  double motor_torque_share = 0.0;
+};
+
 /// Compiles MJCF text (e.g. GenerateMjcf's) with MuJoCo's XML loader, one load at a time
 /// process-wide. The caller owns the model (mj_deleteModel). Simulation compiles through a
 /// per-process cache on top of it; tests and tools that need a model compiled directly call it.
@@ -177,6 +197,8 @@ class Simulation {
   GroundTruth truth() const;
   /// World height of the lowest point of the object's colliding geoms [m] (compound objects).
   double LowestObjectPointM() const;
+  /// The digits' joints and motors now (index or finger first, then the thumb). Allocates nothing.
+  std::array<DigitTruth, 2> ReadDigits() const;
   /// First physics fault (NaN, MuJoCo warning), if any.
   const PhysicsFault& fault() const { return fault_; }
 
@@ -235,6 +257,9 @@ class Simulation {
     double lever_arm_m = 1.0;    ///< drive -> pinch force [m] (1 for the jaw)
   };
   std::vector<GripDrive> grip_drives_;
+  /// Per digit (finger, thumb): joint ids, proximal first (-1: none); the drive index (-1: none).
+  std::array<std::array<int, 2>, 2> digit_joints_{{{-1, -1}, {-1, -1}}};
+  std::array<int, 2> digit_drive_{-1, -1};
   std::array<int, 3> wrist_actuators_{-1, -1, -1};
   std::array<int, 3> wrist_joint_qpos_{-1, -1, -1};
   /// geom id -> unit index (-1 for non-mesa geoms); built once.

@@ -45,7 +45,28 @@ const char* const kLoopColumnNames[kLoopColumnCount] = {"time_s",
                                                         "frame_seq",
                                                         "frame_time_s",
                                                         "frame_flags",
-                                                        "session"};
+                                                        "session",
+                                                        "hand_time_s",
+                                                        "hand_stale",
+                                                        "hand_linear",
+                                                        "finger_q1",
+                                                        "finger_q2",
+                                                        "finger_dq1",
+                                                        "finger_dq2",
+                                                        "finger_current_a",
+                                                        "finger_stall_current_a",
+                                                        "finger_at_open_stop",
+                                                        "finger_at_closed_stop",
+                                                        "finger_encoder_fault",
+                                                        "thumb_q1",
+                                                        "thumb_q2",
+                                                        "thumb_dq1",
+                                                        "thumb_dq2",
+                                                        "thumb_current_a",
+                                                        "thumb_stall_current_a",
+                                                        "thumb_at_open_stop",
+                                                        "thumb_at_closed_stop",
+                                                        "thumb_encoder_fault"};
 
 std::vector<std::string> DiagnosticColumns(const controller::GraspController& controller) {
   const std::span<const controller::DiagnosticChannel> channels = controller.diagnostic_channels();
@@ -71,6 +92,37 @@ std::vector<std::string> DiagnosticColumns(const controller::GraspController& co
   return columns;
 }
 
+namespace {
+
+constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+
+double Flag(bool known, bool value) { return known ? (value ? 1.0 : 0.0) : kUnknown; }
+
+/// The hand columns of `row` from `hand` (unknown fields NaN).
+void WriteHandCells(double* row, const hand::HandState& hand) {
+  const bool any = hand.digit_count > 0 && hand.time_s >= 0.0;
+  row[kHandTime] = any ? hand.time_s : kUnknown;
+  row[kHandStale] = Flag(any, hand.stale);
+  row[kHandLinear] = Flag(any, hand.digits[0].linear);
+  for (int d = 0; d < hand::kMaxDigits; ++d) {
+    double* cells = row + kHandDigits + d * kHandDigitColumnCount;
+    const hand::DigitState& digit = hand.digits[d];
+    const bool present = any && d < hand.digit_count;
+    for (int j = 0; j < hand::kMaxDigitJoints; ++j) {
+      const bool joint = present && j < digit.joint_count;
+      cells[kDigitQ1 + j] = joint && digit.position_known ? digit.joint_position[j] : kUnknown;
+      cells[kDigitDq1 + j] = joint && digit.velocity_known ? digit.joint_velocity[j] : kUnknown;
+    }
+    cells[kDigitCurrent] = present && digit.current_known ? digit.motor_current_a : kUnknown;
+    cells[kDigitStallCurrent] = present && digit.stall_current_a > 0.0 ? digit.stall_current_a : kUnknown;
+    cells[kDigitAtOpenStop] = Flag(present && digit.stops_known, digit.at_open_stop);
+    cells[kDigitAtClosedStop] = Flag(present && digit.stops_known, digit.at_closed_stop);
+    cells[kDigitEncoderFault] = Flag(present, digit.encoder_fault);
+  }
+}
+
+}  // namespace
+
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry) {
   const hand::HandCommand& command = loop.command();
@@ -95,6 +147,35 @@ void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& l
   row[kFrameTime] = frame.time_s;
   row[kFrameFlags] = frame.flags;
   row[kSession] = static_cast<double>(loop.session());
+  WriteHandCells(row, loop.hand_state());
+}
+
+hand::HandState ReadHandCells(const double* row, bool has_columns) {
+  hand::HandState hand;
+  if (!has_columns || std::isnan(row[kHandTime])) return hand;
+  hand.time_s = row[kHandTime];
+  hand.stale = row[kHandStale] != 0.0;
+  hand.digit_count = hand::kMaxDigits;
+  for (int d = 0; d < hand::kMaxDigits; ++d) {
+    const double* cells = row + kHandDigits + d * kHandDigitColumnCount;
+    hand::DigitState& digit = hand.digits[d];
+    digit.linear = row[kHandLinear] == 1.0;
+    digit.joint_count = std::isnan(cells[kDigitQ2]) ? 1 : 2;
+    digit.position_known = !std::isnan(cells[kDigitQ1]);
+    digit.velocity_known = !std::isnan(cells[kDigitDq1]);
+    digit.current_known = !std::isnan(cells[kDigitCurrent]);
+    digit.stops_known = !std::isnan(cells[kDigitAtOpenStop]);
+    digit.encoder_fault = cells[kDigitEncoderFault] == 1.0;
+    for (int j = 0; j < digit.joint_count; ++j) {
+      digit.joint_position[j] = digit.position_known ? cells[kDigitQ1 + j] : 0.0;
+      digit.joint_velocity[j] = digit.velocity_known ? cells[kDigitDq1 + j] : 0.0;
+    }
+    digit.motor_current_a = digit.current_known ? cells[kDigitCurrent] : 0.0;
+    digit.stall_current_a = std::isnan(cells[kDigitStallCurrent]) ? 0.0 : cells[kDigitStallCurrent];
+    digit.at_open_stop = digit.stops_known && cells[kDigitAtOpenStop] == 1.0;
+    digit.at_closed_stop = digit.stops_known && cells[kDigitAtClosedStop] == 1.0;
+  }
+  return hand;
 }
 
 namespace {

@@ -37,7 +37,11 @@ void PrepareOutputDir(const std::string& dir);
 /// The columns of signals.csv every backend writes, in this order from time_s on: the command
 /// written, the controller's telemetry, the estimate's totals, and the tick's read: read_status
 /// (sensor::ReadStatus as 0..3), frame_seq, frame_time_s [s], frame_flags and session of the frame
-/// the loop holds. Everything a replay needs to feed the loop the same input again.
+/// the loop holds; then the hand state the controller saw (hand::HandState): its sample time [s],
+/// stale flag and joint kind (hand_linear: 1 slides [m], 0 hinges [rad]), and per digit (finger, then
+/// thumb) joint positions q1, q2 [rad or m], velocities dq1, dq2 [rad/s or m/s], motor current and
+/// stall current [A], the end-stop flags and the encoder fault. An unknown value is an empty cell
+/// (NaN), never 0. Everything a replay needs to feed the loop the same input again.
 enum LoopColumn : size_t {
   kTime,
   kGripEffort,
@@ -58,13 +62,35 @@ enum LoopColumn : size_t {
   kFrameTime,
   kFrameFlags,
   kSession,
-  kLoopColumnCount
+  kHandTime,
+  kHandStale,
+  kHandLinear,
+  kHandDigits,  ///< first of kHandDigitColumnCount columns per digit, finger then thumb
+  kLoopColumnCount = kHandDigits + 2 * 9
 };
+/// The hand columns of one digit, from kHandDigits + digit x kHandDigitColumnCount on.
+enum HandDigitColumn : size_t {
+  kDigitQ1,
+  kDigitQ2,
+  kDigitDq1,
+  kDigitDq2,
+  kDigitCurrent,
+  kDigitStallCurrent,
+  kDigitAtOpenStop,
+  kDigitAtClosedStop,
+  kDigitEncoderFault,
+  kHandDigitColumnCount
+};
+static_assert(kLoopColumnCount == kHandDigits + hand::kMaxDigits * kHandDigitColumnCount);
 extern const char* const kLoopColumnNames[kLoopColumnCount];
 
 /// Fills the kLoopColumnCount loop cells of `row` for the tick at `time_s` [s] that just ran.
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry);
+/// The hand state the hand columns of `row` (a signals.csv row, loop columns first) hold: what
+/// WriteLoopCells wrote, empty cells unknown. A row without them (`has_columns` false: a recording
+/// made before they existed) gives a hand with no proprioception.
+hand::HandState ReadHandCells(const double* row, bool has_columns);
 
 /// The per-unit columns of signals.csv, declared once for every backend: r1_ohm, r2_ohm, fn_est_n,
 /// ft_est_n, then (`with_truth`: the simulation only) fn_true_n and ft_true_n, then validity; "_K"

@@ -629,6 +629,9 @@ ScenarioConfig LoadFromRoot(const YAML::Node& root, const std::string& file) {
     YAML::Node empty(YAML::NodeType::Map);
     config.sensor = LoadSensorOptions(YamlMap(empty, file, "sensor"), file, &unit_count);
   }
+  if (auto proprioception_map = map.GetMap("proprioception")) {
+    config.proprioception = sim::LoadProprioceptionConfig(*proprioception_map);
+  }
   if (auto controller_map = map.GetMap("controller")) {
     config.controller = LoadControllerOptions(*controller_map);
   } else {
@@ -930,6 +933,7 @@ void ScenarioConfig::Validate() const {
   in_section("sensor.strain_model", [&] { sensor.strain_model.Validate(); });
   in_section("sensor.readout", [&] { sensor.readout.Validate(); });
   in_section("sensor.inversion", [&] { sensor.inversion.Validate(); });
+  in_section("proprioception", [&] { proprioception.Validate(); });
   if (controller.stale_timeout_s < 1.0 / sensor.sample_rate_hz) {
     throw ConfigError("", 0, "controller.stale_timeout_s", FormatNumber(controller.stale_timeout_s),
                       "must be >= one sensor period (1 / sensor.sample_rate_hz = " +
@@ -1118,6 +1122,9 @@ std::string EmitScenarioYaml(const ScenarioConfig& config) {
   if (!config.log.empty()) out << YAML::Key << "log" << YAML::Value << config.log;
   sim::EmitSceneConfig(config.scene, out);
   EmitSensor(out, config.sensor);
+  out << YAML::Key << "proprioception" << YAML::Value << YAML::BeginMap;
+  sim::ProprioceptionConfigFields().Emit(config.proprioception, out);
+  out << YAML::EndMap;
 
   out << YAML::Key << "controller" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "name" << YAML::Value << config.controller.name;

@@ -23,6 +23,7 @@
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
+#include "sim/proprioception.h"
 #include "sim/scene_config.h"
 
 namespace graspbed::testbed {
@@ -75,7 +76,7 @@ inline constexpr double kEventConfirmS = 0.02;
 /// kSignalBoundFixedColumns before and after the per-unit ones (the loop's, the truth and scoring,
 /// a replay's recorded command), kSignalBoundColumnsPerUnit per unit, and
 /// controller::kMaxDiagnosticChannels. Each backend asserts at compile time that its columns fit.
-inline constexpr size_t kSignalBoundFixedColumns = 50;
+inline constexpr size_t kSignalBoundFixedColumns = 80;
 inline constexpr size_t kSignalBoundColumnsPerUnit = 7;
 
 /// Name of an event in scenario files ("grasped", "stable", "slip_flagged", "released"; "" for kNone).
@@ -296,6 +297,10 @@ struct ScenarioConfig {
   double duration_s = 3.0;  ///< simulated time [s]
   sim::SceneConfig scene;
   SensorOptions sensor;
+  /// The hand's joint encoders and motor current sensing in simulation (`proprioception:`; a
+  /// profile and overrides, sim/proprioception.h). The serial and replay backends report what the
+  /// device or the recording carries instead.
+  sim::ProprioceptionConfig proprioception;
   ControllerOptions controller;
   /// Fixed-time actions sorted by at_s (stable); an event action right after the action it follows
   /// in the file (so "the action before it" is the same in the file and here).

@@ -404,6 +404,7 @@ sim::SimRigConfig RigConfigFor(const ScenarioConfig& config) {
   rig.backend.max_latency_s = MaxLatencyS(config);
   rig.backend.drop_probability = config.sensor.drop_probability;
   rig.backend.strain_model = config.sensor.strain_model;
+  rig.proprioception = config.proprioception;
   rig.loop.stale_timeout_s = config.controller.stale_timeout_s;
   rig.loop.readout = config.sensor.readout;
   rig.loop.inversion = config.sensor.inversion;

@@ -47,7 +47,8 @@ class ThresholdGripController final : public GraspController {
   void SetGripCeiling(double ceiling_n) override { ceiling_n_ = ceiling_n; }
 
   // Allocation-free: plain arithmetic on the state and members.
-  HandCommand Update(const TactileState& state, double time_s) override {
+  HandCommand Update(const TactileState& state, const graspbed::hand::HandState& /*hand*/,
+                     double time_s) override {
     const double dt_s = last_time_s_ < 0.0 ? 0.0 : std::clamp(time_s - last_time_s_, 0.0, 0.01);
     last_time_s_ = time_s;
     const double target_n =

@@ -48,7 +48,7 @@ double Drive(ConstantGripController& controller, SyntheticHand& hand, double sec
   sensor::TactileState state;
   for (double end = time_s + seconds; time_s < end; time_s += kTickS) {
     state = hand.Step(command, stale);
-    command = controller.Update(state, time_s);
+    command = controller.Update(state, {}, time_s);
   }
   return state.total_fn_n;
 }

@@ -71,7 +71,7 @@ class RecordingController final : public GraspController {
  public:
   void Reset() override {}
   void SetIntent(GraspIntent) override {}
-  hand::HandCommand Update(const sensor::TactileState& state, double) override {
+  hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState&, double) override {
     last_stale = state.stale;
     last_total_fn_n = state.total_fn_n;
     ++updates;

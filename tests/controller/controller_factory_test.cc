@@ -135,7 +135,7 @@ TEST(ControllerFactoryTest, GripSlipUpdateAllocatesNothing) {
     sensor::TactileState state = sensor.Frame(plant.Contact(), t);
     if (i >= 2500 && i < 2600) state.stale = true;
     const long before = graspbed::test_support::AllocationCount();
-    command = controller->Update(state, t);
+    command = controller->Update(state, {}, t);
     allocations += graspbed::test_support::AllocationCount() - before;
   }
   EXPECT_GT(controller->telemetry().slip_events, 0) << "the run should have exercised the slip path";
@@ -148,12 +148,12 @@ TEST(OpenLoopControllerTest, FixedEffortsBlindToTheSensor) {
   test_support::SyntheticContact contact;
   contact.grip_n = 5.0;
   contact.load_axial_n = 4.0;  // slipping by any measure; the baseline cannot tell
-  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.001), 0.001).grip_effort, 0.0);
+  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.001), {}, 0.001).grip_effort, 0.0);
   controller->SetIntent(GraspIntent::kClose);
-  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.002), 0.002).grip_effort, 0.4);
+  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.002), {}, 0.002).grip_effort, 0.4);
   EXPECT_FALSE(controller->telemetry().slip_detected);
   controller->SetIntent(GraspIntent::kOpen);
-  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.003), 0.003).grip_effort, -0.5);
+  EXPECT_DOUBLE_EQ(controller->Update(sensor.Frame(contact, 0.003), {}, 0.003).grip_effort, -0.5);
 }
 
 }  // namespace

@@ -49,7 +49,7 @@ class ClosedLoop {
       time_s += kPeriodS;
       plant.Step(command, load_n(time_s), kPeriodS);
       const sensor::TactileState state = sensor.Frame(plant.Contact(), time_s);
-      command = controller.Update(state, time_s);
+      command = controller.Update(state, {}, time_s);
       max_grip_n = std::max(max_grip_n, plant.grip_n());
       if (controller.telemetry().slip_detected && first_slip_s < 0.0) first_slip_s = time_s;
       if (controller.telemetry().slip_events > events_seen) {
@@ -734,7 +734,7 @@ TEST(GripSlipControllerTest, AJoltTeachesNoFrictionASlipAtTheLimitDoes) {
       contact.grip_n = kGripN;
       contact.load_axial_n = load_ratio * kGripN;
       contact.vibration_n = burst_n * (std::fmod(t * 120.0, 1.0) - 0.5);  // 120 Hz sawtooth
-      controller.Update(sensor.Frame(contact, t), t);
+      controller.Update(sensor.Frame(contact, t), {}, t);
     }
   };
   const double initial = controller.config().friction_initial;
@@ -768,7 +768,7 @@ TEST(GripSlipControllerTest, SafeHoldOnStaleDataKeepsCommandAndNeverOpens) {
   stale.stale = true;
   for (int i = 0; i < 300; ++i) {
     loop.time_s += kPeriodS;
-    const hand::HandCommand command = loop.controller.Update(stale, loop.time_s);
+    const hand::HandCommand command = loop.controller.Update(stale, {}, loop.time_s);
     ASSERT_DOUBLE_EQ(command.grip_effort, before.grip_effort) << "tick " << i;
     ASSERT_GE(command.grip_effort, 0.0);
     ASSERT_TRUE(command.enable);
@@ -844,7 +844,7 @@ TEST(GripSlipControllerTest, SaturatedUnitStopsTheEffortFromRising) {
     loop.time_s += kPeriodS;
     const sensor::TactileState state = loop.sensor.Frame(contact, loop.time_s);
     ASSERT_EQ(state.validity[9], sensor::UnitValidity::kOutOfRange);
-    max_effort = std::max(max_effort, loop.controller.Update(state, loop.time_s).grip_effort);
+    max_effort = std::max(max_effort, loop.controller.Update(state, {}, loop.time_s).grip_effort);
   }
   EXPECT_GE(loop.controller.diagnostics().saturated_units, 1);
   EXPECT_LE(max_effort, effort_before + 1e-12);

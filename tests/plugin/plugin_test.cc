@@ -90,17 +90,17 @@ TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
   state.unit_count = 20;
   state.valid_count = 20;
   const long before = graspbed::test_support::AllocationCount();
-  EXPECT_DOUBLE_EQ(controller->Update(state, 0.0).grip_effort, 0.3);  // closing at the approach effort
+  EXPECT_DOUBLE_EQ(controller->Update(state, {}, 0.0).grip_effort, 0.3);  // closing at the approach effort
   state.total_fn_n = 1.0;  // in contact, below the 3 N target: the effort rises
   double effort = 0.0;
-  for (int tick = 1; tick <= 100; ++tick) effort = controller->Update(state, 1e-3 * tick).grip_effort;
+  for (int tick = 1; tick <= 100; ++tick) effort = controller->Update(state, {}, 1e-3 * tick).grip_effort;
   EXPECT_NEAR(effort, 0.3 + 0.3 * (3.0 - 1.0) * 0.1, 1e-9);  // gain x error x 100 ms
   state.stale = true;                                        // data not to be trusted: hold, never open
-  const HandCommand hold = controller->Update(state, 0.2);
+  const HandCommand hold = controller->Update(state, {}, 0.2);
   EXPECT_TRUE(hold.brake);
   EXPECT_TRUE(controller->telemetry().safe_hold);
   controller->SetIntent(GraspIntent::kOpen);
-  EXPECT_LT(controller->Update(state, 0.3).grip_effort, 0.0);
+  EXPECT_LT(controller->Update(state, {}, 0.3).grip_effort, 0.0);
   EXPECT_EQ(graspbed::test_support::AllocationCount(), before) << "Update allocated";
 }
 

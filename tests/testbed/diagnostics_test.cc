@@ -31,7 +31,9 @@ class ChannelsOnly final : public controller::GraspController {
       : channels_(std::move(channels)) {}
   void Reset() override {}
   void SetIntent(controller::GraspIntent) override {}
-  hand::HandCommand Update(const sensor::TactileState&, double) override { return {}; }
+  hand::HandCommand Update(const sensor::TactileState&, const hand::HandState&, double) override {
+    return {};
+  }
   void SetGripCeiling(double) override {}
   controller::ControllerTelemetry telemetry() const override { return {}; }
   std::string name() const override { return "channels_only"; }
