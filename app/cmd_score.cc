@@ -81,10 +81,10 @@ void AddScoreCommand(CLI::App& root) {
       "score",
       "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
       "base scenarios plus seeded variations): gross slips flagged and their latency (micro-slips and all "
-      "events beside them; the misses with no unit loaded or where only the thumb slid), false flags (also "
-      "by the controller's own cue label), drops, crushes, grip efficiency and peak grip against each "
-      "run's oracle grip (`graspbed oracle`), Fn RMSE, passes, overall and per sensor profile; writes "
-      "DIR/scorecard.csv, scorecard.json and scorecard.png");
+      "events beside them; the misses with no unit loaded or where only the thumb slid), false flags (per "
+      "minute held and per lift; also by the controller's own cue label), drops, crushes, grip efficiency "
+      "and peak grip against each run's oracle grip (`graspbed oracle`), Fn RMSE, passes, overall and per "
+      "sensor profile; writes DIR/scorecard.csv, scorecard.json and scorecard.png");
   command
       ->add_option("--controller", options->controllers,
                    "controller to score: a built-in name or plugin:LIBRARY (repeatable; default grip_slip "
