@@ -22,6 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// ScorecardRow::error of a run that did not finish (stopped, or never started).
+constexpr char kInterrupted[] = "interrupted";
+
 using internal::OptionalJson;
 using internal::OptionalText;
 
@@ -362,7 +365,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
     if (!run.error.empty()) {
       row.error = run.error;
     } else if (!run.started || !row.result.completed) {
-      row.error = "interrupted";
+      row.error = kInterrupted;
     }
   }
   for (const std::string& controller : options.controllers) {
@@ -584,6 +587,40 @@ std::string ScorecardTable(const Scorecard& scorecard) {
         out << "  held off the sensor: " << row.run << "@" << row.controller << ": " << o.note << "\n";
     }
   }
+  return out.str();
+}
+
+std::string ScorecardFailedRuns(const Scorecard& scorecard) {
+  std::ostringstream out;
+  int listed = 0;
+  int interrupted = 0;
+  const auto header = [&] {
+    if (listed++ == 0) out << "  failed runs (run@controller: first failed expectation: got, limit):\n";
+  };
+  for (const ScorecardRow& row : scorecard.rows) {
+    if (row.error == kInterrupted) {
+      ++interrupted;
+    } else if (!row.error.empty()) {
+      header();
+      out << "    " << row.run << "@" << row.controller << ": error: " << row.error << "\n";
+    } else if (!row.result.passed) {
+      // The first outcome the run recorded as failed, as summary.json and the report give it.
+      const auto failed = std::find_if(row.result.outcomes.begin(), row.result.outcomes.end(),
+                                       [](const ExpectationOutcome& o) { return !o.passed; });
+      header();
+      out << "    " << row.run << "@" << row.controller << ": ";
+      if (failed == row.result.outcomes.end()) {
+        out << "no expectation recorded as failed\n";
+        continue;
+      }
+      out << failed->name << ": got " << failed->value_text << ", limit " << failed->limit;
+      if (!failed->note.empty()) out << " (" << failed->note << ")";
+      out << "\n";
+    }
+  }
+  if (listed == 0) out << "  failed runs: none\n";
+  if (interrupted > 0)
+    out << "  not finished (interrupted): " << interrupted << (interrupted == 1 ? " run\n" : " runs\n");
   return out.str();
 }
 

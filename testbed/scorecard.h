@@ -199,6 +199,12 @@ std::string ScorecardByScenarioTable(const Scorecard& scorecard);
 
 /// Side-by-side table: one column per controller, one line per figure.
 std::string ScorecardTable(const Scorecard& scorecard);
+/// Which runs failed and why, for under the table: a line per (run, controller) that finished and
+/// did not pass, in the scorecard's row order, with its first failed expectation as its result
+/// records it (RunResult::outcomes: name, measured value, limit and note), and a line per run that
+/// threw (its error); runs that passed are not listed, runs that did not finish (interrupted) are
+/// counted in one line. "  failed runs: none" when every finished run passed.
+std::string ScorecardFailedRuns(const Scorecard& scorecard);
 /// CSV: a header and one row per controller ("" for a figure that does not exist).
 std::string ScorecardCsv(const Scorecard& scorecard);
 /// JSON: set, controllers (one object each, with the same figures per sensor under "by_sensor") and

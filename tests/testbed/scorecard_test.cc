@@ -214,6 +214,52 @@ TEST(ScorecardTest, FalseFlagsPerLiftCountOneLiftPerRunThatHeldItsObject) {
   EXPECT_NEAR(*panel->bars[0].value, kFalsePerLift, kTol);
 }
 
+ExpectationOutcome Outcome(const std::string& name, bool passed, const std::string& value_text,
+                           const std::string& limit, const std::string& note = "") {
+  ExpectationOutcome outcome;
+  outcome.name = name;
+  outcome.passed = passed;
+  outcome.value_text = value_text;
+  outcome.limit = limit;
+  outcome.note = note;
+  return outcome;
+}
+
+TEST(ScorecardTest, FailedRunsNameTheirFirstFailedExpectationAndNoPassingRun) {
+  RunResult passed = FinishedRun(0, 0, {}, 0, 30.0);
+  passed.outcomes = {Outcome("not_dropped", true, "held", "true"),
+                     Outcome("max_slip_mm", true, "0.1 mm", "<= 2 mm")};
+  // Fails two expectations: only the first it recorded is named, with its value and limit.
+  RunResult slipped = FinishedRun(0, 0, {}, 0, 30.0);
+  slipped.passed = false;
+  slipped.outcomes = {Outcome("not_dropped", true, "held", "true"),
+                      Outcome("max_slip_mm", false, "3.2 mm", "<= 2 mm"),
+                      Outcome("max_grip_n", false, "12.5 N", "<= 10 N")};
+  RunResult crushed = FinishedRun(0, 0, {}, 0, 30.0);
+  crushed.passed = false;
+  crushed.outcomes = {Outcome("not_crushed", false, "crushed (9.1 N)", "true", "limit 8 N")};
+  Scorecard scorecard;
+  scorecard.rows = {{"grip_slip", "passing.v0", {}, "", passed},
+                    {"grip_slip", "slipping.v1", {}, "", slipped},
+                    {"open_loop", "passing.v0", {}, "", passed},
+                    {"open_loop", "crushing.v0", {}, "", crushed},
+                    {"open_loop", "broken.v2", {}, "scenario broken.yaml: no such file", {}},
+                    {"open_loop", "late.v3", {}, "interrupted", {}}};
+  const std::string listing = ScorecardFailedRuns(scorecard);
+  EXPECT_EQ(listing,
+            "  failed runs (run@controller: first failed expectation: got, limit):\n"
+            "    slipping.v1@grip_slip: max_slip_mm: got 3.2 mm, limit <= 2 mm\n"
+            "    crushing.v0@open_loop: not_crushed: got crushed (9.1 N), limit true (limit 8 N)\n"
+            "    broken.v2@open_loop: error: scenario broken.yaml: no such file\n"
+            "  not finished (interrupted): 1 run\n");
+  EXPECT_EQ(listing.find("passing"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find("max_grip_n"), std::string::npos) << listing;
+
+  // Every run passed: said so, nothing listed.
+  scorecard.rows = {{"grip_slip", "passing.v0", {}, "", passed}};
+  EXPECT_EQ(ScorecardFailedRuns(scorecard), "  failed runs: none\n");
+}
+
 TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
   const ScorecardSet set = LoadScorecardSet(kShippedSet);
   EXPECT_FALSE(set.name.empty());
@@ -450,6 +496,30 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
     EXPECT_EQ(metrics.at("dropped").get<bool>(), run.at("run") == "added_mass_step.v1") << run.at("run");
   }
   EXPECT_EQ(grip_slip_runs, 4);
+  // Under the table, each run that failed with the first expectation its summary records as failed,
+  // and no run that passed.
+  const size_t failed_at = result.out.find("  failed runs");
+  ASSERT_NE(failed_at, std::string::npos) << result.out;
+  const std::string failed = result.out.substr(failed_at, result.out.find("by sensor") - failed_at);
+  int failures = 0;
+  for (const nlohmann::json& run : json.at("runs")) {
+    const std::string name = run.at("run").get<std::string>() + "@" + run.at("controller").get<std::string>();
+    const nlohmann::json& summary = run.at("summary");
+    if (summary.at("passed").get<bool>()) {
+      EXPECT_EQ(failed.find("    " + name + ":"), std::string::npos) << name << " passed\n" << failed;
+      continue;
+    }
+    ++failures;
+    for (const nlohmann::json& outcome : summary.at("expectations")) {
+      if (outcome.at("passed").get<bool>()) continue;
+      const std::string line = "    " + name + ": " + outcome.at("name").get<std::string>() + ": got " +
+                               outcome.at("value_text").get<std::string>() + ", limit " +
+                               outcome.at("limit").get<std::string>();
+      EXPECT_NE(failed.find(line), std::string::npos) << line << "\n" << failed;
+      break;
+    }
+  }
+  EXPECT_GE(failures, 1) << "the premise: the reference drops added_mass_step.v1";
   // The false flags by cue add up to the false flags, and the table names them when there are any;
   // the misses with no unit loaded, and those where only the thumb slid, are some of the misses.
   int by_cue = 0;
