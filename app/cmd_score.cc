@@ -65,6 +65,7 @@ void ScoreCommand(const ScoreCommandOptions& options) {
   if (terminal) std::fprintf(stderr, "\r\033[K");
   testbed::WriteScorecard(scorecard, options.out_dir);
   std::cout << testbed::ScorecardTable(scorecard);
+  std::cout << testbed::ScorecardFailedRuns(scorecard);
   std::cout << "  by sensor (profile/sensitivities):\n" << testbed::ScorecardBySensorTable(scorecard);
   std::cout << "  by scenario (base and its variations):\n" << testbed::ScorecardByScenarioTable(scorecard);
   std::cout << "  outputs: " << options.out_dir << "/ (scorecard.csv, scorecard.json, scorecard.png)\n";
@@ -81,10 +82,11 @@ void AddScoreCommand(CLI::App& root) {
       "score",
       "Score controllers side by side over the versioned benchmark set (scenarios/scorecard/set.yaml: "
       "base scenarios plus seeded variations): gross slips flagged and their latency (micro-slips and all "
-      "events beside them; the misses with no unit loaded or where only the thumb slid), false flags (also "
-      "by the controller's own cue label), drops, crushes, grip efficiency and peak grip against each "
-      "run's oracle grip (`graspbed oracle`), Fn RMSE, passes, overall and per sensor profile; writes "
-      "DIR/scorecard.csv, scorecard.json and scorecard.png");
+      "events beside them; the misses with no unit loaded or where only the thumb slid), false flags (per "
+      "minute held and per lift; also by the controller's own cue label), drops, crushes, grip efficiency "
+      "and peak grip against each run's oracle grip (`graspbed oracle`), Fn RMSE, passes, overall and per "
+      "sensor profile, and each failed run with its first failed expectation; writes DIR/scorecard.csv, "
+      "scorecard.json and scorecard.png");
   command
       ->add_option("--controller", options->controllers,
                    "controller to score: a built-in name or plugin:LIBRARY (repeatable; default grip_slip "

@@ -22,6 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// ScorecardRow::error of a run that did not finish (stopped, or never started).
+constexpr char kInterrupted[] = "interrupted";
+
 using internal::OptionalJson;
 using internal::OptionalText;
 
@@ -261,6 +264,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     for (const auto& [cues, count] : metrics.false_slip_flags_by_cue) score.false_flags_by_cue[cues] += count;
     score.incipient_flags += metrics.incipient_slip_flags;
     score.held_min += metrics.held_s / 60.0;
+    if (metrics.held_s > 0.0) ++score.lifts;
     score.false_flag_min += metrics.false_slip_flag_s / 60.0;
     if (metrics.dropped) ++score.drops;
     if (metrics.crushed) ++score.crushes;
@@ -291,6 +295,7 @@ ControllerScore ScoreRuns(const std::string& controller, const std::vector<const
     score.incipient_per_min = score.incipient_flags / score.held_min;
     score.false_flag_pct = 100.0 * score.false_flag_min / score.held_min;
   }
+  if (score.lifts > 0) score.false_per_lift = static_cast<double>(score.false_flags) / score.lifts;
   score.grip_efficiency_median = Percentile(efficiencies, 50.0);
   score.grip_efficiency_p95 = Percentile(efficiencies, 95.0);
   score.peak_grip_ratio_median = Percentile(peak_ratios, 50.0);
@@ -360,7 +365,7 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
     if (!run.error.empty()) {
       row.error = run.error;
     } else if (!run.started || !row.result.completed) {
-      row.error = "interrupted";
+      row.error = kInterrupted;
     }
   }
   for (const std::string& controller : options.controllers) {
@@ -460,6 +465,13 @@ const std::vector<Figure>& Figures() {
          return OptionalText(s.false_per_min, "%.2f") + " (" + Int(s.false_flags) + ")";
        },
        [](const ControllerScore& s) { return OptionalJson(s.false_per_min); }},
+      {"false flags / lift", "false_flags_per_lift",
+       [](const ControllerScore& s) {
+         return OptionalText(s.false_per_lift, "%.2f") + " (" + Int(s.false_flags) + "/" + Int(s.lifts) + ")";
+       },
+       [](const ControllerScore& s) { return OptionalJson(s.false_per_lift); }},
+      {"lifts", "lifts", [](const ControllerScore& s) { return Int(s.lifts); },
+       [](const ControllerScore& s) { return nlohmann::json(s.lifts); }},
       {"false flags", "false_flags", [](const ControllerScore& s) { return Int(s.false_flags); },
        [](const ControllerScore& s) { return nlohmann::json(s.false_flags); }},
       {"incipient flags / min", "incipient_flags_per_min",
@@ -513,8 +525,9 @@ const std::vector<Figure>& Figures() {
 bool InTable(const Figure& figure) {
   const std::string column = figure.column;
   return column != "errors" && column != "slip_events" && column != "slip_detected" &&
-         column != "false_flags" && column != "incipient_flags" && column != "gross_slip_events" &&
-         column != "gross_slip_detected" && column != "micro_slip_events" && column != "micro_slip_detected";
+         column != "false_flags" && column != "lifts" && column != "incipient_flags" &&
+         column != "gross_slip_events" && column != "gross_slip_detected" && column != "micro_slip_events" &&
+         column != "micro_slip_detected";
 }
 
 }  // namespace
@@ -577,6 +590,40 @@ std::string ScorecardTable(const Scorecard& scorecard) {
   return out.str();
 }
 
+std::string ScorecardFailedRuns(const Scorecard& scorecard) {
+  std::ostringstream out;
+  int listed = 0;
+  int interrupted = 0;
+  const auto header = [&] {
+    if (listed++ == 0) out << "  failed runs (run@controller: first failed expectation: got, limit):\n";
+  };
+  for (const ScorecardRow& row : scorecard.rows) {
+    if (row.error == kInterrupted) {
+      ++interrupted;
+    } else if (!row.error.empty()) {
+      header();
+      out << "    " << row.run << "@" << row.controller << ": error: " << row.error << "\n";
+    } else if (!row.result.passed) {
+      // The first outcome the run recorded as failed, as summary.json and the report give it.
+      const auto failed = std::find_if(row.result.outcomes.begin(), row.result.outcomes.end(),
+                                       [](const ExpectationOutcome& o) { return !o.passed; });
+      header();
+      out << "    " << row.run << "@" << row.controller << ": ";
+      if (failed == row.result.outcomes.end()) {
+        out << "no expectation recorded as failed\n";
+        continue;
+      }
+      out << failed->name << ": got " << failed->value_text << ", limit " << failed->limit;
+      if (!failed->note.empty()) out << " (" << failed->note << ")";
+      out << "\n";
+    }
+  }
+  if (listed == 0) out << "  failed runs: none\n";
+  if (interrupted > 0)
+    out << "  not finished (interrupted): " << interrupted << (interrupted == 1 ? " run\n" : " runs\n");
+  return out.str();
+}
+
 namespace {
 
 /// The runs of each group (`group_of` a row's group name), groups sorted by name, scored per
@@ -622,19 +669,21 @@ std::string SensorOf(const ScorecardRow& row) {
 std::string GroupTable(const char* group_label, const std::vector<GroupScore>& groups) {
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "  %-22s %-13s %4s %14s %11s %16s %8s %5s %10s\n", group_label,
-                "controller", "runs", "gross flagged", "latency p95", "false flags/min", "flag up", "drops",
-                "efficiency");
+  std::snprintf(line, sizeof(line), "  %-22s %-13s %4s %14s %11s %16s %17s %8s %5s %10s\n", group_label,
+                "controller", "runs", "gross flagged", "latency p95", "false flags/min", "false flags/lift",
+                "flag up", "drops", "efficiency");
   out << line;
   for (const GroupScore& group : groups) {
     for (const ControllerScore& score : group.scores) {
       const std::string detected = OptionalText(score.gross_detected_pct, "%.0f %%") + " (" +
                                    Int(score.gross_slip_detected) + "/" + Int(score.gross_slip_events) + ")";
-      std::snprintf(line, sizeof(line), "  %-22s %-13s %4d %14s %11s %16s %8s %5d %10s\n",
+      const std::string per_lift = OptionalText(score.false_per_lift, "%.2f") + " (" + Int(score.lifts) +
+                                   (score.lifts == 1 ? " lift)" : " lifts)");
+      std::snprintf(line, sizeof(line), "  %-22s %-13s %4d %14s %11s %16s %17s %8s %5d %10s\n",
                     group.group.c_str(), score.controller.c_str(), score.runs, detected.c_str(),
                     OptionalText(score.gross_latency_p95_ms, "%.1f ms").c_str(),
                     (OptionalText(score.false_per_min, "%.1f") + " (" + Int(score.false_flags) + ")").c_str(),
-                    OptionalText(score.false_flag_pct, "%.1f %%").c_str(), score.drops,
+                    per_lift.c_str(), OptionalText(score.false_flag_pct, "%.1f %%").c_str(), score.drops,
                     OptionalText(score.grip_efficiency_median, "%.2f").c_str());
       out << line;
     }
@@ -745,6 +794,9 @@ plot::Figure ScorecardFigure(const Scorecard& scorecard) {
       {"false flags per minute held", "false flags [1/min]", "%.2f/min",
        [](const ControllerScore& s) { return s.false_per_min; },
        [](const ControllerScore&) { return std::string("never held"); }},
+      {"false flags per lift", "false flags [1/lift]", "%.2f/lift",
+       [](const ControllerScore& s) { return s.false_per_lift; },
+       [](const ControllerScore&) { return std::string("never held"); }},
       {"grip efficiency (mean / oracle), median", "ratio [-]", "%.2f",
        [](const ControllerScore& s) { return s.grip_efficiency_median; },
        [](const ControllerScore&) { return std::string("no oracle grip"); }},
@@ -759,7 +811,7 @@ plot::Figure ScorecardFigure(const Scorecard& scorecard) {
   plot::Figure figure;
   figure.title = "scorecard " + scorecard.set_name + " v" + std::to_string(scorecard.set_version) + ", " +
                  std::to_string(scorecard.runs_per_controller) + " runs per controller";
-  figure.columns = 3;
+  figure.columns = 4;  // the slip figures in the first row, grip and outcomes in the second
   figure.panel_width_px = 420;
   figure.panel_height_px = 320;
   for (const Panel& panel : panels) {

@@ -102,6 +102,12 @@ struct ControllerScore {
   std::map<std::string, int> false_flags_by_cue;
   double held_min = 0.0;                    ///< time held, all runs [min]
   std::optional<double> false_per_min;      ///< false_flags / held_min [1/min]
+  /// Lifts: the runs that held their object (Metrics::held_s > 0), one lift each [-]. Every shipped
+  /// scenario lifts its object once; a regrasp's first pinch or a put-down and pick-up within a run
+  /// is not a lift of its own (Metrics records the time held, not each grasp). False flags are only
+  /// counted while held, so a run that never held has neither a lift nor a false flag.
+  int lifts = 0;
+  std::optional<double> false_per_lift;     ///< false_flags / lifts; nullopt with no lift [1/lift]
   int incipient_flags = 0;                  ///< flags near a contact sliding below the event speed
   std::optional<double> incipient_per_min;  ///< incipient_flags / held_min [1/min]
   double false_flag_min = 0.0;              ///< time the flag was up outside slip events, all runs [min]
@@ -183,7 +189,8 @@ Scorecard RunScorecard(const ScorecardSet& set, const ScorecardOptions& options)
 
 /// The same figures per sensor (profile and sensitivity source of each run's resolved config): one
 /// line per (sensor, controller) with runs, slip events detected, latency p95, false flags per
-/// minute held, flag-up share, drops and median grip efficiency: the reference's targets hold per profile.
+/// minute held and per lift, flag-up share, drops and median grip efficiency: the reference's
+/// targets hold per profile.
 std::string ScorecardBySensorTable(const Scorecard& scorecard);
 
 /// The same figures per base scenario of the set (a run `pull_ramp.v3` counts for `pull_ramp`), to
@@ -192,15 +199,21 @@ std::string ScorecardByScenarioTable(const Scorecard& scorecard);
 
 /// Side-by-side table: one column per controller, one line per figure.
 std::string ScorecardTable(const Scorecard& scorecard);
+/// Which runs failed and why, for under the table: a line per (run, controller) that finished and
+/// did not pass, in the scorecard's row order, with its first failed expectation as its result
+/// records it (RunResult::outcomes: name, measured value, limit and note), and a line per run that
+/// threw (its error); runs that passed are not listed, runs that did not finish (interrupted) are
+/// counted in one line. "  failed runs: none" when every finished run passed.
+std::string ScorecardFailedRuns(const Scorecard& scorecard);
 /// CSV: a header and one row per controller ("" for a figure that does not exist).
 std::string ScorecardCsv(const Scorecard& scorecard);
 /// JSON: set, controllers (one object each, with the same figures per sensor under "by_sensor") and
 /// runs.
 nlohmann::json ScorecardJson(const Scorecard& scorecard);
-/// Bars of the headline figures (gross slips detected, latency p95, false flags per minute, grip efficiency
-/// median, drops + crushes, runs passed), one panel each: a filled bar per controller, named under the axis,
-/// in the same colour in every panel, its value written above it; a figure a controller does not have (e.g.
-/// no gross slip event) is no bar but a note saying why.
+/// Bars of the headline figures (gross slips detected, latency p95, false flags per minute held and
+/// per lift, grip efficiency median, drops + crushes, runs passed), one panel each: a filled bar per
+/// controller, named under the axis, in the same colour in every panel, its value written above it; a
+/// figure a controller does not have (e.g. no gross slip event) is no bar but a note saying why.
 plot::Figure ScorecardFigure(const Scorecard& scorecard);
 /// Writes ScorecardFigure(scorecard) as a PNG at `path`.
 void WriteScorecardPlot(const Scorecard& scorecard, const std::string& path);

@@ -42,7 +42,7 @@ constexpr int kWhiteTol = 30;           // background and grid lines (224) are l
 // The scorecard's panels, in order (testbed/scorecard.cc).
 constexpr size_t kFlaggedPanel = 0;
 constexpr size_t kLatencyPanel = 1;
-constexpr size_t kScorecardPanels = 6;
+constexpr size_t kScorecardPanels = 7;
 // HeldBoxScenario: the hand has closed by this time [s]; a loaded unit then carries more than this [N].
 constexpr double kAfterCloseS = 0.2;
 constexpr double kLoadedN = 0.5;
@@ -116,6 +116,7 @@ Scorecard ThreeControllers() {
   catches.gross_detected_pct = 100.0;
   catches.gross_latency_p95_ms = 42.5;
   catches.false_per_min = 9.47;
+  catches.false_per_lift = 0.39;
   catches.grip_efficiency_median = 1.31;
   ControllerScore some = catches;
   some.controller = "open_loop";
@@ -124,6 +125,7 @@ Scorecard ThreeControllers() {
   some.gross_detected_pct = 25.0;
   some.gross_latency_p95_ms = 80.0;
   some.false_per_min = 0.5;
+  some.false_per_lift = 0.05;
   some.grip_efficiency_median = 2.1;
   some.drops = 1;
   ControllerScore quiet = catches;
@@ -134,6 +136,7 @@ Scorecard ThreeControllers() {
   quiet.gross_detected_pct = std::nullopt;
   quiet.gross_latency_p95_ms = std::nullopt;
   quiet.false_per_min = 1.25;
+  quiet.false_per_lift = 0.12;
   quiet.grip_efficiency_median = 1.05;
   scorecard.scores = {catches, some, quiet};
   return scorecard;

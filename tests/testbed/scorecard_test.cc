@@ -134,6 +134,130 @@ TEST(ScorecardTest, ScoreOfNoRunHasNoRatesRatherThanZeros) {
   EXPECT_FALSE(score.grip_efficiency_median.has_value());
   EXPECT_FALSE(score.gross_detected_pct.has_value());
   EXPECT_FALSE(score.fn_rmse_n.has_value());
+  EXPECT_FALSE(score.false_per_lift.has_value());
+  // A run that never held its object is no lift: still no rate.
+  const RunResult never_held = FinishedRun(0, 0, {}, 0, 0.0);
+  const ControllerScore unheld = ScoreRuns("x", {&never_held}, 0);
+  EXPECT_EQ(unheld.lifts, 0);
+  EXPECT_FALSE(unheld.false_per_lift.has_value());
+}
+
+// Three runs: held 30 s with 2 false flags, held 60 s with 3, never held (dropped at the close).
+// By hand: 2 lifts (the runs that held), 5 false flags, 1.5 min held: 2.5 per lift, 3.33 per minute.
+Scorecard PerLiftScorecard() {
+  RunResult short_hold = FinishedRun(0, 0, {}, 2, 30.0);
+  RunResult long_hold = FinishedRun(0, 0, {}, 3, 60.0);
+  RunResult never_held = FinishedRun(0, 0, {}, 0, 0.0);
+  never_held.metrics.dropped = true;
+  Scorecard scorecard;
+  scorecard.set_name = "lifts";
+  scorecard.set_version = 1;
+  scorecard.runs_per_controller = 3;
+  scorecard.completed = true;
+  scorecard.rows = {{"grip_slip", "short.v0", {}, "", short_hold},
+                    {"grip_slip", "long.v0", {}, "", long_hold},
+                    {"grip_slip", "dropped.v0", {}, "", never_held}};
+  scorecard.scores = {ScoreRuns("grip_slip", {&short_hold, &long_hold, &never_held}, 0)};
+  return scorecard;
+}
+
+TEST(ScorecardTest, FalseFlagsPerLiftCountOneLiftPerRunThatHeldItsObject) {
+  constexpr int kLifts = 2;
+  constexpr double kFalsePerLift = 5.0 / 2.0;
+  constexpr double kFalsePerMin = 5.0 / 1.5;
+  const Scorecard scorecard = PerLiftScorecard();
+  const ControllerScore& score = scorecard.scores.front();
+  EXPECT_EQ(score.runs, 3);
+  EXPECT_EQ(score.lifts, kLifts);
+  ASSERT_TRUE(score.false_per_lift.has_value());
+  EXPECT_NEAR(*score.false_per_lift, kFalsePerLift, kTol);
+  EXPECT_NEAR(*score.false_per_min, kFalsePerMin, kTol);
+
+  // The table: per lift beside per minute, with its flags over its lifts.
+  const std::string table = ScorecardTable(scorecard);
+  EXPECT_NE(table.find("false flags / min held    3.33 (5)"), std::string::npos) << table;
+  EXPECT_NE(table.find("false flags / lift        2.50 (5/2)"), std::string::npos) << table;
+  // CSV and JSON: the column once, with the same value; the lifts beside it.
+  const std::string csv = ScorecardCsv(scorecard);
+  std::vector<std::string> header;
+  std::vector<std::string> values;
+  std::istringstream lines(csv);
+  std::string line;
+  for (std::vector<std::string>* cells : {&header, &values}) {
+    ASSERT_TRUE(std::getline(lines, line)) << csv;
+    std::istringstream fields(line);
+    for (std::string cell; std::getline(fields, cell, ',');) cells->push_back(cell);
+  }
+  ASSERT_EQ(std::count(header.begin(), header.end(), "false_flags_per_lift"), 1) << csv;
+  const size_t column = std::find(header.begin(), header.end(), "false_flags_per_lift") - header.begin();
+  ASSERT_LT(column, values.size()) << csv;
+  EXPECT_NEAR(std::stod(values[column]), kFalsePerLift, kTol) << csv;
+  const nlohmann::json json = ScorecardJson(scorecard);
+  const nlohmann::json& controller = json.at("controllers").at(0);
+  EXPECT_NEAR(controller.at("false_flags_per_lift").get<double>(), kFalsePerLift, kTol);
+  EXPECT_EQ(controller.at("lifts").get<int>(), kLifts);
+  // Per sensor (all three runs on the default sensor): the same figure, in JSON and in the table.
+  ASSERT_EQ(controller.at("by_sensor").size(), 1u) << controller.at("by_sensor").dump();
+  const nlohmann::json& sensor = controller.at("by_sensor").begin().value();
+  EXPECT_NEAR(sensor.at("false_flags_per_lift").get<double>(), kFalsePerLift, kTol);
+  const std::string by_sensor = ScorecardBySensorTable(scorecard);
+  EXPECT_NE(by_sensor.find("false flags/lift"), std::string::npos) << by_sensor;
+  EXPECT_NE(by_sensor.find("2.50 (2 lifts)"), std::string::npos) << by_sensor;
+  // The plot: a panel of its own, a bar of that height.
+  const plot::Figure figure = ScorecardFigure(scorecard);
+  const auto panel = std::find_if(figure.panels.begin(), figure.panels.end(), [](const plot::Chart& chart) {
+    return chart.title == "false flags per lift";
+  });
+  ASSERT_NE(panel, figure.panels.end());
+  ASSERT_EQ(panel->bars.size(), 1u);
+  ASSERT_TRUE(panel->bars[0].value.has_value());
+  EXPECT_NEAR(*panel->bars[0].value, kFalsePerLift, kTol);
+}
+
+ExpectationOutcome Outcome(const std::string& name, bool passed, const std::string& value_text,
+                           const std::string& limit, const std::string& note = "") {
+  ExpectationOutcome outcome;
+  outcome.name = name;
+  outcome.passed = passed;
+  outcome.value_text = value_text;
+  outcome.limit = limit;
+  outcome.note = note;
+  return outcome;
+}
+
+TEST(ScorecardTest, FailedRunsNameTheirFirstFailedExpectationAndNoPassingRun) {
+  RunResult passed = FinishedRun(0, 0, {}, 0, 30.0);
+  passed.outcomes = {Outcome("not_dropped", true, "held", "true"),
+                     Outcome("max_slip_mm", true, "0.1 mm", "<= 2 mm")};
+  // Fails two expectations: only the first it recorded is named, with its value and limit.
+  RunResult slipped = FinishedRun(0, 0, {}, 0, 30.0);
+  slipped.passed = false;
+  slipped.outcomes = {Outcome("not_dropped", true, "held", "true"),
+                      Outcome("max_slip_mm", false, "3.2 mm", "<= 2 mm"),
+                      Outcome("max_grip_n", false, "12.5 N", "<= 10 N")};
+  RunResult crushed = FinishedRun(0, 0, {}, 0, 30.0);
+  crushed.passed = false;
+  crushed.outcomes = {Outcome("not_crushed", false, "crushed (9.1 N)", "true", "limit 8 N")};
+  Scorecard scorecard;
+  scorecard.rows = {{"grip_slip", "passing.v0", {}, "", passed},
+                    {"grip_slip", "slipping.v1", {}, "", slipped},
+                    {"open_loop", "passing.v0", {}, "", passed},
+                    {"open_loop", "crushing.v0", {}, "", crushed},
+                    {"open_loop", "broken.v2", {}, "scenario broken.yaml: no such file", {}},
+                    {"open_loop", "late.v3", {}, "interrupted", {}}};
+  const std::string listing = ScorecardFailedRuns(scorecard);
+  EXPECT_EQ(listing,
+            "  failed runs (run@controller: first failed expectation: got, limit):\n"
+            "    slipping.v1@grip_slip: max_slip_mm: got 3.2 mm, limit <= 2 mm\n"
+            "    crushing.v0@open_loop: not_crushed: got crushed (9.1 N), limit true (limit 8 N)\n"
+            "    broken.v2@open_loop: error: scenario broken.yaml: no such file\n"
+            "  not finished (interrupted): 1 run\n");
+  EXPECT_EQ(listing.find("passing"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find("max_grip_n"), std::string::npos) << listing;
+
+  // Every run passed: said so, nothing listed.
+  scorecard.rows = {{"grip_slip", "passing.v0", {}, "", passed}};
+  EXPECT_EQ(ScorecardFailedRuns(scorecard), "  failed runs: none\n");
 }
 
 TEST(ScorecardTest, ShippedSetExpandsReproduciblyWithinItsRanges) {
@@ -317,10 +441,11 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
         "added_mass_step        grip_slip        2"}) {
     EXPECT_NE(by_scenario.find(line), std::string::npos) << line << "\n" << result.out;
   }
-  for (const char* label : {"gross slips flagged", "gross latency p50", "gross latency p95", "micro-slips flagged",
-                            "all slip events flagged", "false flags / min held", "drops", "crushes",
-                            "grip efficiency median", "grip efficiency p95", "peak grip / oracle median",
-                            "Fn estimation RMSE", "passed"}) {
+  for (const char* label :
+       {"gross slips flagged", "gross latency p50", "gross latency p95", "micro-slips flagged",
+        "all slip events flagged", "false flags / min held", "false flags / lift", "drops", "crushes",
+        "grip efficiency median", "grip efficiency p95", "peak grip / oracle median", "Fn estimation RMSE",
+        "passed"}) {
     EXPECT_NE(result.out.find(label), std::string::npos) << label;
   }
 
@@ -328,10 +453,11 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
   const std::string csv = ReadText(out + "/scorecard.csv");
   const std::string csv_header = csv.substr(0, csv.find('\n'));
   for (const char* column :
-       {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms", "false_flags_per_min", "drops",
-        "crushes", "grip_efficiency_median", "grip_efficiency_p95", "peak_grip_ratio_median",
-        "gross_slip_events", "gross_slip_detected", "gross_slip_detected_pct", "gross_latency_p50_ms",
-        "gross_latency_p95_ms", "micro_slip_events", "micro_slip_detected", "fn_rmse_n", "passed", "runs"}) {
+       {"controller", "slip_detected_pct", "latency_p50_ms", "latency_p95_ms", "false_flags_per_min",
+        "false_flags_per_lift", "lifts", "drops", "crushes", "grip_efficiency_median", "grip_efficiency_p95",
+        "peak_grip_ratio_median", "gross_slip_events", "gross_slip_detected", "gross_slip_detected_pct",
+        "gross_latency_p50_ms", "gross_latency_p95_ms", "micro_slip_events", "micro_slip_detected",
+        "fn_rmse_n", "passed", "runs"}) {
     EXPECT_NE(csv_header.find(column), std::string::npos) << column;
   }
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
@@ -370,6 +496,30 @@ TEST(ScorecardCliTest, ScoresBothControllersSideBySideAndTheReferenceDetectsMore
     EXPECT_EQ(metrics.at("dropped").get<bool>(), run.at("run") == "added_mass_step.v1") << run.at("run");
   }
   EXPECT_EQ(grip_slip_runs, 4);
+  // Under the table, each run that failed with the first expectation its summary records as failed,
+  // and no run that passed.
+  const size_t failed_at = result.out.find("  failed runs");
+  ASSERT_NE(failed_at, std::string::npos) << result.out;
+  const std::string failed = result.out.substr(failed_at, result.out.find("by sensor") - failed_at);
+  int failures = 0;
+  for (const nlohmann::json& run : json.at("runs")) {
+    const std::string name = run.at("run").get<std::string>() + "@" + run.at("controller").get<std::string>();
+    const nlohmann::json& summary = run.at("summary");
+    if (summary.at("passed").get<bool>()) {
+      EXPECT_EQ(failed.find("    " + name + ":"), std::string::npos) << name << " passed\n" << failed;
+      continue;
+    }
+    ++failures;
+    for (const nlohmann::json& outcome : summary.at("expectations")) {
+      if (outcome.at("passed").get<bool>()) continue;
+      const std::string line = "    " + name + ": " + outcome.at("name").get<std::string>() + ": got " +
+                               outcome.at("value_text").get<std::string>() + ", limit " +
+                               outcome.at("limit").get<std::string>();
+      EXPECT_NE(failed.find(line), std::string::npos) << line << "\n" << failed;
+      break;
+    }
+  }
+  EXPECT_GE(failures, 1) << "the premise: the reference drops added_mass_step.v1";
   // The false flags by cue add up to the false flags, and the table names them when there are any;
   // the misses with no unit loaded, and those where only the thumb slid, are some of the misses.
   int by_cue = 0;
