@@ -1,0 +1,334 @@
+#!/usr/bin/python3
+"""Train a slip detector on a `graspbed dataset` and export it for the C++ learned cue.
+
+    /usr/bin/python3 python/train_slip_model.py out/dataset --out out/slip_model.json --plots out/slip_plots
+
+Reads DIR/ticks.npz and DIR/manifest.json (one or more shards of one dataset), trains on the train
+split's held ticks, picks the flag threshold on the validation split and prints, on the test split
+and per sensor (profile/sensitivities): the PR-AUC (average precision) of the per-tick label
+(default "gross slip within 20 ms") for the learned model and for the reference's hand-tuned cues
+(their continuous statistic, and their binary flag, on the ticks of runs that logged them), and the
+event-level figures (gross slips flagged within 50 ms, latency, false flags per lift). Writes the
+model file (format graspbed-slip-model 1, docs/training-slip-detector.md) with check rows the C++
+loader re-evaluates. Needs Debian's python3-numpy and python3-sklearn (python3-matplotlib for
+--plots).
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+MODEL_FORMAT = "graspbed-slip-model"
+MODEL_VERSION = 1
+SPLITS = {"train": 0, "validation": 1, "test": 2}
+EVENT_WINDOW_S = 0.05  # a flag up to 50 ms before a gross slip's onset detects it (metrics' early window)
+CHECK_ROWS = 64
+
+
+def load_dataset(dirs):
+    """The shards' arrays concatenated, and the first manifest (all must be of one dataset)."""
+    parts, manifests = [], []
+    for directory in dirs:
+        with open(os.path.join(directory, "manifest.json")) as stream:
+            manifest = json.load(stream)
+        if not manifest.get("completed"):
+            sys.exit(f"{directory}: the dataset is incomplete (interrupted or still running)")
+        manifests.append(manifest)
+        with np.load(os.path.join(directory, "ticks.npz")) as archive:
+            parts.append({name: archive[name] for name in archive.files})
+    first = manifests[0]
+    for directory, manifest in zip(dirs, manifests):
+        for key in ("feature_set", "layout", "tick_period_s", "sensors", "horizons_ms"):
+            if manifest[key] != first[key]:
+                sys.exit(f"{directory}: {key} = {manifest[key]} differs from {dirs[0]}'s {first[key]}")
+    data = {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+    return data, first
+
+
+def event_figures(run, time_s, gross, onset, score, threshold, held):
+    """Gross slips flagged within 50 ms (early flags count), latency p50/p95 [ms], false flags per lift.
+
+    An event is a maximal stretch of gross-slip ticks of one run; its onset the first. A false flag is a
+    rising edge of score >= threshold on a held tick with no gross slip within 50 ms either side."""
+    flag = (score >= threshold) & held
+    detected, latencies, false_flags = 0, [], 0
+    runs = np.unique(run)
+    events = 0
+    for r in runs:
+        idx = np.flatnonzero(run == r)
+        t, g, f = time_s[idx], gross[idx], flag[idx]
+        starts = np.flatnonzero(g & ~np.concatenate(([False], g[:-1])))
+        for s in starts:
+            events += 1
+            window = (t >= t[s] - EVENT_WINDOW_S) & (t <= t[s] + EVENT_WINDOW_S) & f
+            if window.any():
+                detected += 1
+                latencies.append(max(0.0, t[np.flatnonzero(window)[0]] - t[s]) * 1e3)
+        rises = np.flatnonzero(f & ~np.concatenate(([False], f[:-1])))
+        gross_times = t[g]
+        for i in rises:
+            if gross_times.size == 0 or np.min(np.abs(gross_times - t[i])) > EVENT_WINDOW_S:
+                false_flags += 1
+    lifts = len(runs)
+    return {
+        "gross_events": events,
+        "detected": detected,
+        "detected_pct": 100.0 * detected / events if events else None,
+        "latency_p50_ms": float(np.percentile(latencies, 50)) if latencies else None,
+        "latency_p95_ms": float(np.percentile(latencies, 95)) if latencies else None,
+        "false_flags": false_flags,
+        "false_flags_per_lift": false_flags / lifts if lifts else None,
+    }
+
+
+def pr_auc(y, score):
+    from sklearn.metrics import average_precision_score
+    if y.sum() == 0 or y.sum() == len(y):
+        return None
+    return float(average_precision_score(y, score))
+
+
+def train_trees(x, y, xv, yv, args):
+    """Gradient-boosted trees; the number of trees chosen on the validation split (by run group)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier
+    from sklearn.metrics import log_loss
+    model = HistGradientBoostingClassifier(
+        max_iter=args.max_iter, learning_rate=0.1, max_leaf_nodes=args.max_leaf_nodes, min_samples_leaf=50,
+        l2_regularization=1.0, early_stopping=False, random_state=args.seed)
+    model.fit(x, y)
+    if len(yv) and 0 < yv.sum() < len(yv):
+        losses = [log_loss(yv, p[:, 1], labels=[0, 1]) for p in model.staged_predict_proba(xv)]
+        best = int(np.argmin(losses)) + 1
+        if best < model.n_iter_:
+            model.set_params(max_iter=best)
+            model.fit(x, y)
+    return model
+
+
+def train_logistic(x, y):
+    from sklearn.linear_model import LogisticRegression
+    mean, scale = x.mean(axis=0), x.std(axis=0)
+    scale[scale <= 0] = 1.0
+    model = LogisticRegression(max_iter=500)
+    model.fit((x - mean) / scale, y)
+    return model, mean, scale
+
+
+def export_trees(model):
+    trees = []
+    for (predictor,) in model._predictors:
+        nodes = predictor.nodes
+        leaf = nodes["is_leaf"].astype(bool)
+        trees.append({
+            "feature": [int(-1 if l else f) for f, l in zip(nodes["feature_idx"], leaf)],
+            "threshold": [float(v) for v in nodes["num_threshold"]],
+            "left": [int(v) for v in nodes["left"]],
+            "right": [int(v) for v in nodes["right"]],
+            "missing_left": [int(v) for v in nodes["missing_go_to_left"]],
+            "value": [float(v) for v in nodes["value"]],
+        })
+    return {"kind": "trees", "baseline": float(np.ravel(model._baseline_prediction)[0]), "trees": trees}
+
+
+def score_of(kind, model, x):
+    if kind == "trees":
+        return model.predict_proba(x.astype(np.float64))[:, 1]
+    fitted, mean, scale = model
+    return fitted.predict_proba((x.astype(np.float64) - mean) / scale)[:, 1]
+
+
+def choose_threshold(score, data, mask, label, target_pct):
+    """The highest threshold that still flags target_pct of the validation split's gross slips within
+    50 ms (fewest false flags at that recall); 0.5 when the split has no gross slip."""
+    gross = data["contact_state"][mask] == 3
+    if not gross.any():
+        return 0.5
+    best = None
+    for threshold in np.unique(np.round(np.quantile(score, np.linspace(0.5, 0.9999, 200)), 6))[::-1]:
+        figures = event_figures(data["run"][mask], data["time_s"][mask], gross, None, score, threshold,
+                                data["holding"][mask].astype(bool))
+        if figures["detected_pct"] is not None and figures["detected_pct"] >= target_pct:
+            best = float(threshold)
+            break
+    return best if best is not None else float(np.quantile(score, 0.5))
+
+
+def evaluate(kind, model, data, manifest, label, threshold):
+    """Per sensor on the test split's held ticks: PR-AUC learned vs hand-tuned, and event figures."""
+    test = (data["split"] == SPLITS["test"]) & (data["holding"] == 1)
+    y = data[label].astype(bool)
+    score = np.zeros(len(y))
+    score[test] = score_of(kind, model, data["features"][test])
+    rows = []
+    for index, sensor in enumerate(manifest["sensors"] + ["all"]):
+        mask = test & ((data["sensor"] == index) if sensor != "all" else True)
+        if not mask.any():
+            continue
+        handtuned = mask & ~np.isnan(data["handtuned_score"])
+        row = {"sensor": sensor, "ticks": int(mask.sum()), "prior": float(y[mask].mean()),
+               "learned_pr_auc": pr_auc(y[mask], score[mask]),
+               "ticks_with_handtuned": int(handtuned.sum()),
+               "learned_pr_auc_same_ticks": pr_auc(y[handtuned], score[handtuned]) if handtuned.any() else None,
+               "handtuned_pr_auc": pr_auc(y[handtuned], data["handtuned_score"][handtuned]) if handtuned.any() else None,
+               "handtuned_flag_pr_auc": (pr_auc(y[handtuned], data["controller_slip_flag"][handtuned])
+                                         if handtuned.any() else None)}
+        gross = data["contact_state"][mask] == 3
+        held = np.ones(int(mask.sum()), dtype=bool)
+        row["learned_events"] = event_figures(data["run"][mask], data["time_s"][mask], gross, None, score[mask],
+                                              threshold, held)
+        if handtuned.any():
+            g = data["contact_state"][handtuned] == 3
+            row["handtuned_events"] = event_figures(
+                data["run"][handtuned], data["time_s"][handtuned], g, None,
+                data["controller_slip_flag"][handtuned].astype(float), 0.5, np.ones(int(handtuned.sum()), dtype=bool))
+        rows.append(row)
+    return rows, score
+
+
+def check_rows(score, data, label, rng):
+    """Up to CHECK_ROWS test rows, half of them positives, with the trainer's scores."""
+    test = np.flatnonzero((data["split"] == SPLITS["test"]) & (data["holding"] == 1))
+    positives = test[data[label][test] == 1]
+    negatives = test[data[label][test] == 0]
+    pick = np.concatenate([rng.choice(positives, min(len(positives), CHECK_ROWS // 2), replace=False),
+                           rng.choice(negatives, min(len(negatives), CHECK_ROWS // 2), replace=False)])
+    return pick
+
+
+def fmt(value, pattern="{:.3f}"):
+    return "-" if value is None else pattern.format(value)
+
+
+def print_table(rows, label, threshold):
+    print(f"test split, held ticks; label {label}; learned flag at score >= {threshold:.4g}")
+    print(f"  {'sensor':24s} {'ticks':>8s} {'prior':>7s} {'PR-AUC learned':>15s} {'(same ticks)':>12s}"
+          f" {'hand-tuned':>10s} {'(flag)':>7s} {'gross flagged<=50ms':>20s} {'p95 ms':>7s} {'false/lift':>10s}"
+          f" {'hand-tuned flagged':>18s} {'false/lift':>10s}")
+    for row in rows:
+        ev = row["learned_events"]
+        hv = row.get("handtuned_events") or {}
+        flagged = "-" if ev["detected_pct"] is None else f"{ev['detected_pct']:.1f}% ({ev['detected']}/{ev['gross_events']})"
+        hflag = "-" if not hv or hv["detected_pct"] is None else f"{hv['detected_pct']:.1f}% ({hv['detected']}/{hv['gross_events']})"
+        print(f"  {row['sensor']:24s} {row['ticks']:8d} {row['prior']:7.4f} {fmt(row['learned_pr_auc']):>15s}"
+              f" {fmt(row['learned_pr_auc_same_ticks']):>12s} {fmt(row['handtuned_pr_auc']):>10s}"
+              f" {fmt(row['handtuned_flag_pr_auc']):>7s} {flagged:>20s} {fmt(ev['latency_p95_ms'], '{:.1f}'):>7s}"
+              f" {fmt(ev['false_flags_per_lift'], '{:.2f}'):>10s} {hflag:>18s}"
+              f" {fmt(hv.get('false_flags_per_lift'), '{:.2f}'):>10s}")
+
+
+def write_plots(directory, data, manifest, score, label):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from sklearn.metrics import precision_recall_curve
+    os.makedirs(directory, exist_ok=True)
+    test = (data["split"] == SPLITS["test"]) & (data["holding"] == 1)
+    y = data[label].astype(bool)
+    sensors = manifest["sensors"]
+    figure, axes = plt.subplots(1, len(sensors), figsize=(4.2 * len(sensors), 4.0), squeeze=False)
+    for index, (sensor, axis) in enumerate(zip(sensors, axes[0])):
+        mask = test & (data["sensor"] == index)
+        handtuned = mask & ~np.isnan(data["handtuned_score"])
+        for name, m, s, style in (("learned", mask, score, "-"),
+                                  ("learned, grip_slip runs", handtuned, score, ":"),
+                                  ("hand-tuned cues", handtuned, data["handtuned_score"], "--")):
+            if m.any() and 0 < y[m].sum() < m.sum():
+                precision, recall, _ = precision_recall_curve(y[m], s[m])
+                axis.plot(recall, precision, style, label=f"{name} (AP {pr_auc(y[m], s[m]):.2f})")
+        if mask.any():
+            axis.axhline(y[mask].mean(), color="grey", lw=0.8, label="prior")
+        axis.set_title(sensor, fontsize=10)
+        axis.set_xlabel("recall")
+        axis.set_ylabel("precision")
+        axis.set_xlim(0, 1)
+        axis.set_ylim(0, 1.02)
+        axis.legend(fontsize=7, loc="upper right")
+    figure.suptitle(f"test split, held ticks: {label}")
+    figure.tight_layout()
+    path = os.path.join(directory, "pr_curves.png")
+    figure.savefig(path, dpi=90)
+    print(f"PR curves -> {path}")
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("datasets", nargs="+", help="dataset directories (shards of one dataset)")
+    parser.add_argument("--out", default="slip_model.json", help="model file to write")
+    parser.add_argument("--label", default="gross_within_20ms", help="per-tick label to learn")
+    parser.add_argument("--model", choices=["trees", "logistic"], default="trees")
+    parser.add_argument("--compare", action="store_true", help="also train the other kind and print both PR-AUCs")
+    parser.add_argument("--max-iter", type=int, default=150)
+    parser.add_argument("--max-leaf-nodes", type=int, default=15)
+    parser.add_argument("--max-train-ticks", type=int, default=800000)
+    parser.add_argument("--target-recall", type=float, default=97.0,
+                        help="%% of the validation split's gross slips the threshold must flag within 50 ms")
+    parser.add_argument("--shuffle-labels", action="store_true",
+                        help="strawman: train on labels permuted across ticks (must fall to the prior)")
+    parser.add_argument("--plots", default="", help="directory for pr_curves.png")
+    parser.add_argument("--report", default="", help="write the figures as JSON here")
+    parser.add_argument("--seed", type=int, default=1)
+    return parser.parse_args(argv)
+
+
+def main(argv):
+    args = parse_args(argv)
+    started = time.time()
+    data, manifest = load_dataset(args.datasets)
+    names = [f["name"] for f in manifest["features"]]
+    if args.label not in data:
+        sys.exit(f"--label {args.label}: the dataset has no such array")
+    rng = np.random.default_rng(args.seed)
+    held = data["holding"] == 1
+    train = np.flatnonzero((data["split"] == SPLITS["train"]) & held)
+    if len(train) > args.max_train_ticks:
+        train = np.sort(rng.choice(train, args.max_train_ticks, replace=False))
+    validation = (data["split"] == SPLITS["validation"]) & held
+    x, y = data["features"][train].astype(np.float64), data[args.label][train].astype(int)
+    if args.shuffle_labels:
+        y = rng.permutation(y)
+    xv, yv = data["features"][validation].astype(np.float64), data[args.label][validation].astype(int)
+    print(f"{len(data['time_s'])} ticks, {len(manifest['runs'])} runs; training on {len(train)} held ticks "
+          f"({y.mean():.4f} positive), validation {int(validation.sum())}")
+    kinds = [args.model] + ([k for k in ("trees", "logistic") if k != args.model] if args.compare else [])
+    results = {}
+    for kind in kinds:
+        model = train_trees(x, y, xv, yv, args) if kind == "trees" else train_logistic(x, y)
+        sv = score_of(kind, model, xv) if len(yv) else np.zeros(0)
+        threshold = choose_threshold(sv, data, validation, args.label, args.target_recall) if len(yv) else 0.5
+        rows, score = evaluate(kind, model, data, manifest, args.label, threshold)
+        print(f"\n{kind}: validation PR-AUC {fmt(pr_auc(yv.astype(bool), sv) if len(yv) else None)}")
+        print_table(rows, args.label, threshold)
+        results[kind] = (model, threshold, rows, score)
+    model, threshold, rows, score = results[args.model]
+    export = export_trees(model) if args.model == "trees" else {
+        "kind": "logistic", "mean": model[1].tolist(), "scale": model[2].tolist(),
+        "weights": model[0].coef_[0].tolist(), "bias": float(model[0].intercept_[0])}
+    pick = check_rows(score, data, args.label, rng)
+    document = {
+        "format": MODEL_FORMAT, "version": MODEL_VERSION,
+        "layout": manifest["layout"], "tick_period_s": manifest["tick_period_s"],
+        "features": {"set": manifest["feature_set"], "names": names},
+        "label": args.label, "threshold": threshold, "model": export,
+        "check": {"features": data["features"][pick].astype(np.float64).tolist(), "scores": score[pick].tolist()},
+        "training": {"datasets": [os.path.abspath(d) for d in args.datasets], "graspbed_version": manifest["graspbed_version"],
+                     "train_ticks": int(len(train)), "shuffled_labels": args.shuffle_labels,
+                     "target_recall_pct": args.target_recall, "test": rows},
+    }
+    with open(args.out + ".tmp", "w") as stream:
+        json.dump(document, stream, separators=(",", ":"))
+    os.replace(args.out + ".tmp", args.out)
+    print(f"\nmodel ({args.model}, {os.path.getsize(args.out) / 1024:.0f} kB) -> {args.out}; {time.time() - started:.1f} s")
+    if args.plots:
+        write_plots(args.plots, data, manifest, score, args.label)
+    if args.report:
+        with open(args.report, "w") as stream:
+            json.dump({kind: {"threshold": r[1], "test": r[2]} for kind, r in results.items()}, stream, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
