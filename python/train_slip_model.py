@@ -270,6 +270,8 @@ def parse_args(argv):
                         help="strawman: train on labels permuted across ticks (must fall to the prior)")
     parser.add_argument("--plots", default="", help="directory for pr_curves.png")
     parser.add_argument("--report", default="", help="write the figures as JSON here")
+    parser.add_argument("--test-scores", default="",
+                        help="write the test split's held ticks' features and this model's scores (.npz) here")
     parser.add_argument("--seed", type=int, default=1)
     return parser.parse_args(argv)
 
@@ -322,6 +324,9 @@ def main(argv):
         json.dump(document, stream, separators=(",", ":"))
     os.replace(args.out + ".tmp", args.out)
     print(f"\nmodel ({args.model}, {os.path.getsize(args.out) / 1024:.0f} kB) -> {args.out}; {time.time() - started:.1f} s")
+    if args.test_scores:
+        test = (data["split"] == SPLITS["test"]) & held
+        np.savez(args.test_scores, features=data["features"][test], scores=score[test])
     if args.plots:
         write_plots(args.plots, data, manifest, score, args.label)
     if args.report:

@@ -339,8 +339,8 @@ nlohmann::json Manifest(const std::vector<SweepSpec>& specs, const std::vector<D
   for (size_t r = 0; r < runs.size(); ++r) {
     const DatasetRun& run = runs[r];
     const RunTicks& part = ticks[r];
-    nlohmann::json overrides = nlohmann::json::object();
-    for (const Override& o : run.overrides) overrides[o.key] = o.value;
+    nlohmann::json overrides = nlohmann::json::array();  // in order: `graspbed run --set` each to rerun it
+    for (const Override& o : run.overrides) overrides.push_back({o.key, o.value});
     nlohmann::json row = {{"run", run.index}, {"spec", run.spec}, {"sweep_run", run.sweep_run}, {"group", run.group},
                           {"split", kSplitNames[run.split]}, {"scenario", configs[r].name},
                           {"controller", configs[r].controller.name}, {"profile", run.profile},
