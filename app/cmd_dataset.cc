@@ -87,8 +87,8 @@ void AddDatasetCommand(CLI::App& root) {
   command->add_option("--out", options->out_dir, "output directory (default out/dataset)");
   command->add_option("--shard", options->shard, "build shard K of N (runs with index % N == K - 1)");
   command->add_option("--profiles", options->profiles,
-                      "comma-separated sensor profiles every run is run under (default divider_12bit,"
-                      "inamp_16bit,bridge_24bit)");
+                      "comma-separated sensors every run is run under: PROFILE or PROFILE/SENSITIVITIES "
+                      "(default: divider_12bit, inamp_16bit, bridge_24bit, each with paper and fea)");
   command->add_option("--horizons", options->horizons, "horizons of the gross-slip labels [ms] (default 10,20,50,100)");
   command->add_option("--split-seed", options->split_seed, "seeds the order of the run groups before the split");
   command->add_option("-j,--jobs", options->jobs, "parallel runs")->check(CLI::Range(1, 256));

@@ -15,6 +15,8 @@
 #include "common/config_error.h"
 #include "common/npz.h"
 #include "common/signal_log.h"
+#include "controller/grip_slip_controller.h"
+#include "controller/slip_detector.h"
 #include "controller/slip_features.h"
 #include "testbed/schedule.h"
 
@@ -25,7 +27,9 @@ namespace fs = std::filesystem;
 using common::MakeNpyArray;
 using common::NpyArray;
 
-const std::vector<std::string> kRealisticProfiles = {"divider_12bit", "inamp_16bit", "bridge_24bit"};
+// Every realistic readout chain with either sensitivity source: the scorecard's sensors.
+const std::vector<std::string> kRealisticProfiles = {"divider_12bit/paper", "inamp_16bit/paper", "bridge_24bit/paper",
+                                                     "divider_12bit/fea",   "inamp_16bit/fea",   "bridge_24bit/fea"};
 constexpr double kContactN = 0.05;  // the finger touches the object above this true force [N]
 
 // FNV-1a, 64 bit: stable across machines and builds.
@@ -44,6 +48,8 @@ struct RunTicks {
   std::vector<double> time_s;
   std::vector<float> fn, ft, total_fn, shear_axial, shear_circ, effort, features, slip_speed, slip_distance;
   std::vector<float> handtuned_score;
+  std::vector<float> replayed_score;
+  std::vector<uint8_t> replayed_flag;
   std::vector<uint8_t> validity, stale, holding, controller_flag;
   TickLabels labels;
   int gross_events = 0;
@@ -105,6 +111,59 @@ std::optional<float> HandTunedScore(const common::SignalLog& log, size_t row) {
   return static_cast<float>(score);
 }
 
+/// The reference's hand-tuned cues (SlipDetector with grip_slip's default settings) replayed over the
+/// states a run logged, whatever controller ran it, so they are scored on every tick the learned cue
+/// is: armed from 3 frames of unit contact until 0.1 s without (grip_slip's contact_confirm_frames and
+/// contact_lost_s), its friction at grip_slip's friction_initial (the reference learns it at slips),
+/// the grip its 2 ms low-pass of total_fn_n. The log has no readout noise figures
+/// (TactileState::noise_known), so the noise-scaled thresholds fall back to their fixed floors.
+class HandTunedReplay {
+ public:
+  explicit HandTunedReplay(double rate_hz) : config_(Config(rate_hz)), detector_(config_.slip),
+        grip_(config_.grip_filter_s, 1.0 / rate_hz), rate_hz_(rate_hz) {}
+
+  /// The statistic (largest cue statistic over its threshold, 0 unarmed) and flag at this tick.
+  std::pair<float, uint8_t> Update(const sensor::TactileState& state) {
+    const double grip_n = grip_.Update(state.total_fn_n);
+    const controller::SlipSignals& previous = detector_.signals();
+    const bool touching = previous.contact_units >= 1;
+    contact_frames_ = touching ? contact_frames_ + 1 : 0;
+    quiet_frames_ = touching ? 0 : quiet_frames_ + 1;
+    if (!armed_ && contact_frames_ >= config_.contact_confirm_frames) {
+      armed_ = true;
+      detector_.RestartContact();
+    } else if (armed_ && quiet_frames_ >= config_.contact_lost_s * rate_hz_) {
+      armed_ = false;
+    }
+    const controller::SlipSignals& s = detector_.Update(state, grip_n, config_.friction_initial, armed_, true);
+    double score = 0.0;
+    if (s.settled && armed_) {
+      const double pairs[][2] = {{s.load_ratio, s.ratio_threshold},
+                                 {s.vibration_rms_n, s.vibration_threshold_n},
+                                 {s.centroid_shift_units, s.centroid_shift_threshold},
+                                 {s.centroid_drift_units, s.centroid_drift_threshold}};
+      for (const auto& pair : pairs) {
+        if (pair[1] > 0.0) score = std::max(score, pair[0] / pair[1]);
+      }
+    }
+    return {static_cast<float>(score), static_cast<uint8_t>(armed_ && s.any() ? 1 : 0)};
+  }
+
+ private:
+  static controller::GripSlipConfig Config(double rate_hz) {
+    controller::GripSlipConfig config;
+    config.slip.sample_rate_hz = rate_hz;
+    return config;
+  }
+  controller::GripSlipConfig config_;
+  controller::SlipDetector detector_;
+  controller::LowPassFilter grip_;
+  double rate_hz_;
+  bool armed_ = false;
+  int contact_frames_ = 0;
+  int quiet_frames_ = 0;
+};
+
 /// Copies what the controller saw, its features and the truth columns out of the run's log.
 RunTicks ExtractRun(const common::SignalLog& log, const ScenarioConfig& config) {
   RunTicks run;
@@ -116,6 +175,7 @@ RunTicks ExtractRun(const common::SignalLog& log, const ScenarioConfig& config) 
     for (const char* stem : {"fn_est_n_", "ft_est_n_", "validity_"}) unit_columns.push_back(log.Column(stem + std::to_string(u)));
   }
   controller::SlipFeatureExtractor extractor(controller::SlipFeatureLayoutFor(units), 1.0 / config.controller.rate_hz);
+  HandTunedReplay replay(config.controller.rate_hz);
   sensor::TactileState state;
   std::array<double, controller::kSlipFeatureCount> features{};
   run.features.reserve(run.ticks * features.size());
@@ -145,6 +205,9 @@ RunTicks ExtractRun(const common::SignalLog& log, const ScenarioConfig& config) 
     const std::optional<float> handtuned = HandTunedScore(log, row);
     run.has_handtuned = handtuned.has_value();
     run.handtuned_score.push_back(handtuned.value_or(std::numeric_limits<float>::quiet_NaN()));
+    const auto [replayed_score, replayed_flag] = replay.Update(state);
+    run.replayed_score.push_back(replayed_score);
+    run.replayed_flag.push_back(replayed_flag);
   }
   return run;
 }
@@ -239,7 +302,9 @@ std::vector<DatasetRun> ExpandDataset(const std::vector<SweepSpec>& specs, const
       for (const std::string& profile : profiles) {
         DatasetRun run{static_cast<int>(runs.size()), static_cast<int>(s), sweep_run.index, profile,
                        sweep_run.overrides, group, 0};
-        run.overrides.push_back({"sensor.profile", profile});
+        const size_t slash = profile.find('/');
+        run.overrides.push_back({"sensor.profile", profile.substr(0, slash)});
+        if (slash != std::string::npos) run.overrides.push_back({"sensor.sensitivities", profile.substr(slash + 1)});
         runs.push_back(std::move(run));
       }
     }
@@ -276,9 +341,11 @@ std::vector<NpyArray> TickArrays(const std::vector<DatasetRun>& runs, const std:
     units = part.units;
     for (std::vector<float> RunTicks::*field : {&RunTicks::fn, &RunTicks::ft, &RunTicks::total_fn, &RunTicks::shear_axial,
                         &RunTicks::shear_circ, &RunTicks::effort, &RunTicks::features, &RunTicks::slip_speed,
-                        &RunTicks::slip_distance, &RunTicks::handtuned_score})
+                        &RunTicks::slip_distance, &RunTicks::handtuned_score,
+                                                 &RunTicks::replayed_score})
       Append(all.*field, part.*field);
-    for (std::vector<uint8_t> RunTicks::*field : {&RunTicks::validity, &RunTicks::stale, &RunTicks::holding, &RunTicks::controller_flag})
+    for (std::vector<uint8_t> RunTicks::*field : {&RunTicks::validity, &RunTicks::stale, &RunTicks::holding,
+                                                   &RunTicks::controller_flag, &RunTicks::replayed_flag})
       Append(all.*field, part.*field);
     Append(all.time_s, part.time_s);
     Append(all.labels.contact_state, part.labels.contact_state);
@@ -301,7 +368,9 @@ std::vector<NpyArray> TickArrays(const std::vector<DatasetRun>& runs, const std:
       MakeNpyArray("shear_circumferential_n", all.shear_circ, {n}), MakeNpyArray("grip_effort", all.effort, {n}),
       MakeNpyArray("features", all.features, {n, controller::kSlipFeatureCount}),
       MakeNpyArray("controller_slip_flag", all.controller_flag, {n}),
-      MakeNpyArray("handtuned_score", all.handtuned_score, {n}), MakeNpyArray("holding", all.holding, {n}),
+      MakeNpyArray("handtuned_score", all.handtuned_score, {n}),
+      MakeNpyArray("handtuned_replayed_score", all.replayed_score, {n}),
+      MakeNpyArray("handtuned_replayed_flag", all.replayed_flag, {n}), MakeNpyArray("holding", all.holding, {n}),
       MakeNpyArray("contact_state", all.labels.contact_state, {n}),
       MakeNpyArray("slip_speed_mm_s", all.slip_speed, {n}), MakeNpyArray("slip_distance_mm", all.slip_distance, {n})};
   static_assert(std::size(kDatasetInputs) == 8, "kDatasetInputs and the arrays written here must match");

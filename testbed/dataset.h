@@ -57,8 +57,9 @@ inline constexpr DatasetInput kDatasetInputs[] = {
 
 /// Settings of a dataset build.
 struct DatasetOptions {
-  /// Sensor profiles every sweep run is run under (`sensor.profile`); empty: every realistic one
-  /// (divider_12bit, inamp_16bit, bridge_24bit).
+  /// Sensors every sweep run is run under: `PROFILE` (sensor.profile) or `PROFILE/SENSITIVITIES`
+  /// (also sensor.sensitivities), as the scorecard names sensors; empty: every realistic profile
+  /// (divider_12bit, inamp_16bit, bridge_24bit) with either sensitivity source (paper, fea).
   std::vector<std::string> profiles;
   /// Horizons of the "gross slip within h" labels [ms].
   std::vector<int> horizons_ms = {10, 20, 50, 100};
@@ -79,7 +80,7 @@ struct DatasetRun {
   int spec = 0;       ///< which spec
   int sweep_run = 0;  ///< its index in that spec's sweep
   std::string profile;
-  std::vector<Override> overrides;  ///< the sweep run's, then sensor.profile
+  std::vector<Override> overrides;  ///< the sweep run's, then sensor.profile (and .sensitivities)
   int group = 0;                    ///< run group: (spec, sweep run), shared by its profiles
   int split = 0;                    ///< 0 train, 1 validation, 2 test
 };

@@ -45,7 +45,7 @@ def check(condition, message):
 
 def build_dataset(graspbed, source, out):
     result = run([graspbed, "dataset", os.path.join(source, "scenarios/datasets/tiny.yaml"), "--out", out, "-j", "2",
-                  "--profiles", "divider_12bit,bridge_24bit"])
+                  "--profiles", "divider_12bit/fea,bridge_24bit/paper"])
     check(result.returncode == 0, f"graspbed dataset exits 0 ({result.stderr.strip()[-300:]})")
     manifest = json.load(open(os.path.join(out, "manifest.json")))
     data = dict(np.load(os.path.join(out, "ticks.npz")))
