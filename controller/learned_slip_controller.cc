@@ -41,10 +41,14 @@ constexpr DiagnosticChannel kDiagnosticChannels[] = {
     {"grip_target_n", "grip target of the force loop [N]"},
 };
 
-ConstantGripConfig GripConfig(const LearnedSlipControllerConfig& config) {
+/// The force loop's settings. With a task ceiling the closing effort is capped at the effort that
+/// holds the ceiling, as the reference caps it (ceiling_effort_margin 1): a fragile object is not
+/// crushed by the digits' impact.
+ConstantGripConfig GripConfig(const LearnedSlipControllerConfig& config, double ceiling_n) {
   ConstantGripConfig grip;
   grip.grip_n = config.max_grip_n;  // the held grip is set through the ceiling (SetGripCeiling)
   grip.close_effort = config.close_effort;
+  if (ceiling_n > 0.0) grip.close_effort = std::clamp(grip.effort_per_newton * ceiling_n, 0.01, config.close_effort);
   return grip;
 }
 
@@ -62,7 +66,7 @@ std::string LearnedSlipController::DefaultModelPath() {
 }
 
 LearnedSlipController::LearnedSlipController(const LearnedSlipControllerConfig& config, const std::string& model_path)
-    : config_(config), cue_(LoadModel(model_path), config.threshold), grip_(GripConfig(config)) {
+    : config_(config), cue_(LoadModel(model_path), config.threshold), grip_(GripConfig(config, 0.0)) {
   if (config.initial_grip_n > config.max_grip_n) {
     throw common::ConfigError("", 0, "initial_grip_n", common::ReadableNumber(config.initial_grip_n),
                               "must be <= max_grip_n")
@@ -104,6 +108,8 @@ void LearnedSlipController::SetIntent(GraspIntent intent) { grip_.SetIntent(inte
 void LearnedSlipController::SetGripCeiling(double ceiling_n) {
   if (std::isnan(ceiling_n)) throw std::invalid_argument("grip ceiling = nan: must be a number of newtons");
   task_ceiling_n_ = (ceiling_n > 0.0 && std::isfinite(ceiling_n)) ? ceiling_n : 0.0;
+  grip_ = ConstantGripController(GripConfig(config_, task_ceiling_n_));  // before a run, not per tick
+  grip_.SetGripCeiling(target_n_);
 }
 
 hand::HandCommand LearnedSlipController::Update(const sensor::TactileState& state, double time_s) {

@@ -141,20 +141,27 @@ def score_of(kind, model, x):
     return fitted.predict_proba((x.astype(np.float64) - mean) / scale)[:, 1]
 
 
-def choose_threshold(score, data, mask, label, target_pct):
-    """The highest threshold that still flags target_pct of the validation split's gross slips within
-    50 ms (fewest false flags at that recall); 0.5 when the split has no gross slip."""
+def choose_threshold(score, y, data, mask, rule, target_pct):
+    """The flag threshold, on the validation split's held ticks. rule "f1": the threshold of the best
+    per-tick F1 (a flag that is right when up and up when it should be; the default: in closed loop
+    every false tick is grip charged to the efficiency). rule "recall": the highest threshold that
+    still flags target_pct of the gross slips within 50 ms (one hard event can drive it near 0)."""
+    if rule == "f1":
+        from sklearn.metrics import precision_recall_curve
+        if not 0 < y.sum() < len(y):
+            return 0.5
+        precision, recall, thresholds = precision_recall_curve(y, score)
+        f1 = 2 * precision * recall / np.maximum(precision + recall, 1e-12)
+        return float(thresholds[int(np.argmax(f1[:-1]))])
     gross = data["contact_state"][mask] == 3
     if not gross.any():
         return 0.5
-    best = None
     for threshold in np.unique(np.round(np.quantile(score, np.linspace(0.5, 0.9999, 200)), 6))[::-1]:
         figures = event_figures(data["run"][mask], data["time_s"][mask], gross, None, score, threshold,
                                 data["holding"][mask].astype(bool))
         if figures["detected_pct"] is not None and figures["detected_pct"] >= target_pct:
-            best = float(threshold)
-            break
-    return best if best is not None else float(np.quantile(score, 0.5))
+            return float(threshold)
+    return float(np.quantile(score, 0.5))
 
 
 def evaluate(kind, model, data, manifest, label, threshold):
@@ -276,8 +283,10 @@ def parse_args(argv):
     parser.add_argument("--max-iter", type=int, default=150)
     parser.add_argument("--max-leaf-nodes", type=int, default=15)
     parser.add_argument("--max-train-ticks", type=int, default=800000)
+    parser.add_argument("--threshold-rule", choices=["f1", "recall"], default="f1",
+                        help="flag threshold: best per-tick F1 on the validation split, or --target-recall")
     parser.add_argument("--target-recall", type=float, default=97.0,
-                        help="%% of the validation split's gross slips the threshold must flag within 50 ms")
+                        help="rule recall: %% of the validation split's gross slips the threshold must flag within 50 ms")
     parser.add_argument("--shuffle-labels", action="store_true",
                         help="strawman: train on labels permuted across ticks (must fall to the prior)")
     parser.add_argument("--plots", default="", help="directory for pr_curves.png")
@@ -312,7 +321,8 @@ def main(argv):
     for kind in kinds:
         model = train_trees(x, y, xv, yv, args) if kind == "trees" else train_logistic(x, y)
         sv = score_of(kind, model, xv) if len(yv) else np.zeros(0)
-        threshold = choose_threshold(sv, data, validation, args.label, args.target_recall) if len(yv) else 0.5
+        threshold = (choose_threshold(sv, yv, data, validation, args.threshold_rule, args.target_recall)
+                     if len(yv) else 0.5)
         rows, score = evaluate(kind, model, data, manifest, args.label, threshold)
         print(f"\n{kind}: validation PR-AUC {fmt(pr_auc(yv.astype(bool), sv) if len(yv) else None)}")
         print_table(rows, args.label, threshold)
@@ -330,7 +340,7 @@ def main(argv):
         "check": {"features": data["features"][pick].astype(np.float64).tolist(), "scores": score[pick].tolist()},
         "training": {"datasets": [os.path.abspath(d) for d in args.datasets], "graspbed_version": manifest["graspbed_version"],
                      "train_ticks": int(len(train)), "shuffled_labels": args.shuffle_labels,
-                     "target_recall_pct": args.target_recall, "test": rows},
+                     "threshold_rule": args.threshold_rule, "target_recall_pct": args.target_recall, "test": rows},
     }
     with open(args.out + ".tmp", "w") as stream:
         json.dump(document, stream, separators=(",", ":"))
