@@ -26,6 +26,7 @@ packages=(
   python3 python3-dev pybind11-dev               # the graspbed Python module; python3 runs the install tests
   strace                                         # the install test traces file access where unshare is refused
   python3-numpy python3-pytest                   # its signals as numpy arrays; its tests
+  python3-sklearn python3-matplotlib             # training the learned slip cue (python/train_slip_model.py), its PR plots
   chromium                                       # graspbed report's test loads the HTML report in headless chromium
 )
 

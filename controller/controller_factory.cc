@@ -7,6 +7,7 @@
 #include "controller/constant_grip_controller.h"
 #include "controller/grasp_controller.h"
 #include "controller/grip_slip_controller.h"
+#include "controller/learned_slip_controller.h"
 #include "controller/open_loop_controller.h"
 #include "controller/plugin_loader.h"
 
@@ -35,6 +36,10 @@ const std::vector<ControllerEntry>& Entries() {
       {"grip_slip", &GripSlipController::Parameters,
        [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
          return std::make_unique<GripSlipController>(GripSlipController::ConfigFromParams(p));
+       }},
+      {"learned_slip", &LearnedSlipController::Parameters,
+       [](const ControllerParams& p) -> std::unique_ptr<GraspController> {
+         return std::make_unique<LearnedSlipController>(LearnedSlipController::ConfigFromParams(p));
        }},
   };
   return entries;

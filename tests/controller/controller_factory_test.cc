@@ -31,7 +31,7 @@ TEST(ControllerFactoryTest, KnowsGripSlipOpenLoopAndConstantGrip) {
   EXPECT_EQ(MakeController("grip_slip", {})->name(), "grip_slip");
   EXPECT_EQ(MakeController("constant_grip", {{"grip_n", 3.0}})->name(), "constant_grip");
   EXPECT_THAT(ErrorOf([] { MakeController("grip_slap", {}); }),
-              HasSubstr("unknown controller 'grip_slap'; valid controllers: constant_grip, grip_slip, open_loop"));
+              HasSubstr("unknown controller 'grip_slap'; valid controllers: constant_grip, grip_slip, learned_slip, open_loop"));
   EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"grip_n", -1.0}}); }),
               HasSubstr("grip_n = -1: must be in [0.01, 500] N"));
   EXPECT_THAT(ErrorOf([] { MakeController("constant_grip", {{"contact_confirm_frames", 2.5}}); }),
