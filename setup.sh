@@ -19,6 +19,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev                # command line, JSON output
   libcairo2-dev fonts-dejavu-core                # plots are drawn with cairo; their labels need a font
   libpng-dev                                     # PNG files (plots, stills): written with libpng's fast settings
+  zlib1g-dev                                     # the dataset's .npz archives: zlib's crc32
   libegl-dev libegl-mesa0 libgl1-mesa-dri        # offscreen rendering: EGL, Mesa llvmpipe (no display/GPU)
   ffmpeg                                         # videos: run --video pipes frames to it; tests read them with ffprobe
   libglfw3-dev xvfb xauth xdotool                # graspbed view: a window (GLFW); its tests run under xvfb-run and type keys with xdotool

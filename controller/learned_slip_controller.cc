@@ -112,7 +112,8 @@ void LearnedSlipController::SetGripCeiling(double ceiling_n) {
   grip_.SetGripCeiling(target_n_);
 }
 
-hand::HandCommand LearnedSlipController::Update(const sensor::TactileState& state, double time_s) {
+hand::HandCommand LearnedSlipController::Update(const sensor::TactileState& state, const hand::HandState& hand,
+                                                double time_s) {
   if (state.unit_count != cue_.model().layout.units) {
     throw std::invalid_argument(cue_.model().source_file + ": layout.units = " +
                                 std::to_string(cue_.model().layout.units) + ": the model was trained for layout " +
@@ -130,7 +131,7 @@ hand::HandCommand LearnedSlipController::Update(const sensor::TactileState& stat
   was_holding_ = holding;
   const double ceiling = task_ceiling_n_ > 0.0 ? std::min(target_n_, task_ceiling_n_) : target_n_;
   grip_.SetGripCeiling(ceiling);
-  const hand::HandCommand command = grip_.Update(state, time_s);
+  const hand::HandCommand command = grip_.Update(state, hand, time_s);
   telemetry_ = grip_.telemetry();
   const bool flagged = holding && cue.flag;
   telemetry_.slip_detected = flagged;

@@ -47,7 +47,8 @@ class LearnedSlipController final : public GraspController {
   void SetIntent(GraspIntent intent) override;
   /// @throws std::invalid_argument at a state whose unit count differs from the model's (once, at the
   /// first tick: a configuration error, not a run-time condition)
-  hand::HandCommand Update(const sensor::TactileState& state, double time_s) override;
+  hand::HandCommand Update(const sensor::TactileState& state, const hand::HandState& hand,
+                           double time_s) override;
   void SetGripCeiling(double ceiling_n) override;
   ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return "learned_slip"; }
