@@ -231,6 +231,13 @@ const std::vector<Binding>& Bindings() {
           "detector_settle_max_s", slip.settle_max_s, 0.0, 2.0, "s",
           "after detector_settle_s the cues wait for a quiet contact (vibration under its threshold), "
           "at most this long after contact onset or stale data"),
+      GRASPBED_BIND("proprioception", use_proprioception, 0, 1, "",
+                    "1: use the hand's motor current and joints where it reports them (the squeeze's absolute "
+                    "limits on the object's real squeeze, a closing that found nothing stops); 0: the units "
+                    "alone"),
+      GRASPBED_BIND("motor_stall_pinch_n", motor.stall_pinch_n, 1.0, 1000.0, "N",
+                    "pinch force of a digit at stall with full effort (the hand's rating): motor current / "
+                    "stall current x this is the squeeze the motor makes"),
       GRASPBED_BIND(
           "preload_reference", slip.preload_reference, 0, 1, "",
           "1: the shear locked in when the grasp settles is preload; the ratio cue measures the load on "
@@ -309,7 +316,7 @@ GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& para
 }
 
 GripSlipController::GripSlipController(const GripSlipConfig& config)
-    : config_(config), detector_(ValidatedSlipConfig(config)) {
+    : config_(config), detector_(ValidatedSlipConfig(config)), motor_(config.motor) {
   grip_filter_ = LowPassFilter(config_.grip_filter_s, 1.0 / config_.slip.sample_rate_hz);
   Reset();
 }
@@ -320,6 +327,8 @@ const char* GripSlipController::PhaseName(Phase phase) {
       return "idle";
     case Phase::kClosing:
       return "closing";
+    case Phase::kMissed:
+      return "missed";
     case Phase::kLoading:
       return "loading";
     case Phase::kHolding:
@@ -336,6 +345,7 @@ const char* GripSlipController::PhaseName(Phase phase) {
 
 void GripSlipController::Reset() {
   detector_.Reset();
+  motor_.Reset();
   grip_filter_.Clear();
   intent_ = GraspIntent::kIdle;
   phase_ = Phase::kIdle;
@@ -429,6 +439,10 @@ double GripSlipController::CeilingN() const {
   return task_ceiling_n_ > 0.0 ? std::min(task_ceiling_n_, config_.max_grip_n) : config_.max_grip_n;
 }
 
+double GripSlipController::SensedCeilingN() const { return Sensed(CeilingN()); }
+
+double GripSlipController::Sensed(double squeeze_n) const { return squeeze_n * diagnostics_.sensed_share; }
+
 void GripSlipController::Enter(Phase phase, double time_s) {
   phase_ = phase;
   phase_start_s_ = time_s;
@@ -441,12 +455,13 @@ double GripSlipController::EffortCap() const {
 double GripSlipController::ForceLoop(double target_n, double grip_n, double dt_s, bool may_increase) {
   const double effort_cap = EffortCap();
   const double error_n = target_n - grip_n;
-  const double feed_forward = config_.effort_per_newton * target_n;
+  // The feed-forward drives the whole squeeze, of which the units see sensed_share.
+  const double feed_forward = config_.effort_per_newton * target_n / diagnostics_.sensed_share;
   // At the ceiling the grip may rise no further, and a P term there answers the summed noise of all
   // the units frame by frame: the finger shakes the contact and the vibration cue reads it as slip.
   // There it acts only on the error beyond a band (a motor stronger than the feed-forward assumes
   // still pushes past the ceiling and is pulled back).
-  const bool at_ceiling = target_n >= CeilingN();
+  const bool at_ceiling = target_n >= SensedCeilingN();
   const double band_n = at_ceiling ? config_.ceiling_deadband_n : 0.0;
   const double proportional =
       config_.kp_effort_per_n * std::copysign(std::max(std::abs(error_n) - band_n, 0.0), error_n);
@@ -472,14 +487,14 @@ void GripSlipController::UpdateHoldTarget(double dt_s) {
   // sticks, so coupling to it does not feed back through the grip).
   const double shear_n = signals.tangential_load_n +
                         config_.preload_coupling * std::max(signals.contact_shear_n - signals.tangential_load_n, 0.0);
-  const double coupled = std::max(config_.min_grip_n, shear_n / friction_ * config_.safety_margin);
+  const double coupled = std::max(Sensed(config_.min_grip_n), shear_n / friction_ * config_.safety_margin);
   // Rise at once, fall slowly: a load that drops for a moment must not loosen the grip with it.
   coupled_target_n_ = coupled >= coupled_target_n_
                           ? coupled
                           : std::max(coupled, coupled_target_n_ - config_.grip_decrease_rate_n_per_s * dt_s);
   // Stored above the ceiling (an impact's shear spike coupled at once), the target would sit at
   // the ceiling until it had decayed all the way down from there: it falls from the ceiling.
-  coupled_target_n_ = std::min(coupled_target_n_, CeilingN());
+  coupled_target_n_ = std::min(coupled_target_n_, SensedCeilingN());
   slip_floor_n_ = std::max(0.0, slip_floor_n_ - config_.slip_floor_decay_n_per_s * dt_s);
 }
 
@@ -509,46 +524,49 @@ void GripSlipController::RespondToSlip(double time_s) {
   // From the target, not the measured grip: a slip that wedges the object into the pad (a ball
   // rolling in the pinch) spikes the squeeze for a few ms, and a response from that spike went
   // straight to the ceiling and stayed there.
-  slip_floor_n_ = target_n_ * (1.0 + config_.slip_grip_gain) + config_.slip_grip_step_n;
+  slip_floor_n_ = target_n_ * (1.0 + config_.slip_grip_gain) + Sensed(config_.slip_grip_step_n);
   cue_fell_since_response_ = false;
   Enter(Phase::kSlip, time_s);
 }
 
-hand::HandCommand GripSlipController::Update(const TactileState& state, const hand::HandState& /*hand*/,
-                                             double time_s) {
+double GripSlipController::AdvanceClock(double time_s) {
   const double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxStepS) : 0.0;
   have_time_ = true;
   last_time_s_ = time_s;
+  return dt_s;
+}
 
+void GripSlipController::FollowIntent(double time_s) {
   // The user's intent changes the phase whatever the data say.
+  const bool idle = phase_ == Phase::kIdle || phase_ == Phase::kOpen || phase_ == Phase::kReleasing;
   if (intent_ == GraspIntent::kOpen && phase_ != Phase::kReleasing && phase_ != Phase::kOpen) {
     Enter(Phase::kReleasing, time_s);
-  } else if (intent_ == GraspIntent::kClose &&
-             (phase_ == Phase::kIdle || phase_ == Phase::kOpen || phase_ == Phase::kReleasing)) {
+  } else if (intent_ == GraspIntent::kClose && idle) {
     Enter(Phase::kClosing, time_s);
     contact_frames_ = 0;
     friction_ = config_.friction_initial;
     slip_floor_n_ = 0.0;
     integrator_ = 0.0;
+    motor_.RestartShare();
   }
+}
 
-  hand::HandCommand command;
-  const bool releasing = phase_ == Phase::kReleasing || phase_ == Phase::kOpen;
-  const bool data_ok = !state.stale && state.valid_count >= config_.min_valid_units;
-  if (!data_ok && !releasing) {
-    // Safe hold: keep the last command computed from good data, never opening on its own.
-    safe_hold_ = true;
-    command = last_good_command_;
-    command.grip_effort = std::max(command.grip_effort, 0.0);
-    telemetry_.phase = "safe_hold";
-    telemetry_.safe_hold = true;
-    telemetry_.slip_detected = false;
-    telemetry_.slip_cues = "";
-    telemetry_.grip_target_n = target_n_;
-    telemetry_.friction_estimate = friction_;
-    diagnostics_.effort = command.grip_effort;
-    return command;
-  }
+hand::HandCommand GripSlipController::SafeHold() {
+  // Keep the last command computed from good data, never opening on its own.
+  safe_hold_ = true;
+  hand::HandCommand command = last_good_command_;
+  command.grip_effort = std::max(command.grip_effort, 0.0);
+  telemetry_.phase = "safe_hold";
+  telemetry_.safe_hold = true;
+  telemetry_.slip_detected = false;
+  telemetry_.slip_cues = "";
+  telemetry_.grip_target_n = target_n_;
+  telemetry_.friction_estimate = friction_;
+  diagnostics_.effort = command.grip_effort;
+  return command;
+}
+
+bool GripSlipController::TakeFrame(const TactileState& state, bool data_ok, double time_s) {
   if (safe_hold_ && data_ok) {
     // Data are back: the filters hold pre-gap samples, so restart them and let them settle.
     safe_hold_ = false;
@@ -557,131 +575,135 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, const ha
     last_contact_s_ = time_s;
   }
   telemetry_.safe_hold = !data_ok;
-
   const bool new_frame =
       data_ok && (!have_frame_ || state.sequence != last_sequence_ || state.time_s != last_frame_time_s_);
-  if (new_frame) {
-    have_frame_ = true;
-    last_sequence_ = state.sequence;
-    last_frame_time_s_ = state.time_s;
-    int saturated = 0;
-    const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
-    for (int i = 0; i < count; ++i) {
-      if (state.validity[static_cast<size_t>(i)] == UnitValidity::kOutOfRange) ++saturated;
-    }
-    diagnostics_.saturated_units = saturated;
-    diagnostics_.measured_grip_n = grip_filter_.Update(state.total_fn_n + saturated * config_.unit_range_n);
-    const bool armed = phase_ == Phase::kLoading || phase_ == Phase::kHolding || phase_ == Phase::kSlip;
-    detector_.Update(state, diagnostics_.measured_grip_n, friction_, armed, phase_ != Phase::kSlip);
+  if (!new_frame) return false;
+  have_frame_ = true;
+  last_sequence_ = state.sequence;
+  last_frame_time_s_ = state.time_s;
+  int saturated = 0;
+  const int count = std::clamp(state.unit_count, 0, sensor::kMaxUnits);
+  for (int i = 0; i < count; ++i) {
+    if (state.validity[static_cast<size_t>(i)] == UnitValidity::kOutOfRange) ++saturated;
   }
+  diagnostics_.saturated_units = saturated;
+  diagnostics_.measured_grip_n = grip_filter_.Update(state.total_fn_n + saturated * config_.unit_range_n);
+  const bool armed = phase_ == Phase::kLoading || phase_ == Phase::kHolding || phase_ == Phase::kSlip;
+  detector_.Update(state, diagnostics_.measured_grip_n, friction_, armed, phase_ != Phase::kSlip);
+  return true;
+}
+
+hand::HandCommand GripSlipController::Close(bool new_frame, double time_s) {
+  target_n_ = 0.0;
+  hand::HandCommand command;
+  // The index closed all the way round nothing: driving on would only stall the motor at the stop.
+  if (config_.use_proprioception && motor_.closed_on_nothing()) {
+    Enter(Phase::kMissed, time_s);
+    return command;
+  }
+  command.grip_effort = std::min(config_.close_effort, EffortCap());
+  const SlipSignals& signals = detector_.signals();
+  if (new_frame) contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
+  if (contact_frames_ < config_.contact_confirm_frames) return command;
+  Enter(Phase::kLoading, time_s);
+  detector_.RestartContact();
+  last_contact_s_ = time_s;
+  load_target_n_ = std::min(diagnostics_.measured_grip_n, Sensed(config_.initial_grip_n));
+  coupled_target_n_ = 0.0;
+  // The closing effort drives the finger towards the object, not a force: the force loop starts
+  // fresh from the force measured now, so the closing effort does not become a pinch.
+  integrator_ = 0.0;
+  return command;
+}
+
+bool GripSlipController::CountCues(double time_s) {
+  // The ratio cue held up with the target at its ceiling says the load is beyond what the ceiling
+  // allows by the friction estimate, not that the contact is sliding now (the grip can rise no
+  // further either way). Past ratio_ceiling_count_s of its episode (by default from its rise) it
+  // does not count as slip, nor does the centroid cue, whose check on a rolling pad is that same
+  // load ratio; the vibration cue still does. Held up, it hid every later slip and kept the flag up
+  // for seconds. A load hovering at the threshold crosses it again and again (pouring: a rise every
+  // few ms): a rise soon after the last fall continues the episode.
+  const SlipSignals& signals = detector_.signals();
+  const bool at_ceiling = target_n_ >= SensedCeilingN();
+  if (signals.ratio_slip && !ratio_was_up_) {
+    const bool continues = at_ceiling && time_s - ratio_fall_s_ <= config_.ratio_ceiling_rearm_s;
+    if (!continues) ratio_rise_s_ = time_s;
+  }
+  if (!signals.ratio_slip && ratio_was_up_) ratio_fall_s_ = time_s;
+  ratio_was_up_ = signals.ratio_slip;
+  const bool ratio_held =
+      signals.ratio_slip && at_ceiling && time_s - ratio_rise_s_ >= config_.ratio_ceiling_count_s;
+  ratio_counts_ = signals.ratio_slip && !ratio_held;
+  centroid_counts_ = signals.centroid_slip && !ratio_held;
+  return ratio_counts_ || signals.vibration_slip || centroid_counts_;
+}
+
+void GripSlipController::FollowSlip(bool slip_now, double time_s, double dt_s) {
+  // A load cue persisting after a response (the ratio above the friction estimate, the contact
+  // travelling) says the step did not cover the load: the floor keeps rising, and once the squeeze
+  // has reached it another step follows. A vibration cue that stays up while the grip steps up is
+  // also the step's own ringing of the contact: on its own it asks again only after it fell.
+  if (!slip_now) cue_fell_since_response_ = true;
+  const bool load_cue = ratio_counts_ || centroid_counts_;
+  if (load_cue && phase_ == Phase::kSlip) {
+    slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
+  } else if (slip_now && phase_ == Phase::kSlip) {
+    // Vibration alone: a slide the step did not stop, or the step's own ringing; slower.
+    slip_floor_n_ += config_.slip_vibration_rate_n_per_s * dt_s;
+  }
+  const double grip_n = diagnostics_.measured_grip_n;
+  const bool landed = grip_n >= config_.slip_landed_fraction * std::min(slip_floor_n_, SensedCeilingN());
+  const bool asks_again = cue_fell_since_response_ || (landed && load_cue);
+  if (slip_now && time_s >= refractory_until_s_ && asks_again) RespondToSlip(time_s);
+  if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
+}
+
+hand::HandCommand GripSlipController::Hold(double time_s, double dt_s, bool* slip_now) {
   const SlipSignals& signals = detector_.signals();
   const double grip_n = diagnostics_.measured_grip_n;
-  const bool may_increase = diagnostics_.saturated_units == 0;
-  const double ceiling_n = CeilingN();
-  bool slip_now = false;
-
-  switch (phase_) {
-    case Phase::kIdle:
-      target_n_ = 0.0;
-      command.grip_effort = 0.0;
-      break;
-    case Phase::kClosing: {
-      target_n_ = 0.0;
-      command.grip_effort = std::min(config_.close_effort, EffortCap());
-      if (new_frame)
-        contact_frames_ = signals.contact_units >= config_.contact_min_units ? contact_frames_ + 1 : 0;
-      if (contact_frames_ >= config_.contact_confirm_frames) {
-        Enter(Phase::kLoading, time_s);
-        detector_.RestartContact();
-        last_contact_s_ = time_s;
-        load_target_n_ = std::min(grip_n, config_.initial_grip_n);
-        coupled_target_n_ = 0.0;
-        // The closing effort drives the finger towards the object, not a force: the force loop
-        // starts fresh from the force measured now, so the closing effort does not become a pinch.
-        integrator_ = 0.0;
-      }
-      break;
-    }
-    case Phase::kLoading:
-    case Phase::kHolding:
-    case Phase::kSlip: {
-      if (signals.in_contact) last_contact_s_ = time_s;
-      if (time_s - last_contact_s_ > config_.contact_lost_s) {
-        // Object gone (or never there): go back to closing rather than squeezing air harder.
-        Enter(Phase::kClosing, time_s);
-        contact_frames_ = 0;
-        target_n_ = 0.0;
-        command.grip_effort = std::min(config_.close_effort, EffortCap());
-        break;
-      }
-      UpdateHoldTarget(dt_s);
-      if (phase_ == Phase::kLoading) {
-        load_target_n_ = std::min(load_target_n_ + config_.load_rate_n_per_s * dt_s, config_.initial_grip_n);
-        const bool loaded = load_target_n_ >= config_.initial_grip_n &&
-                            grip_n >= kLoadedFraction * std::min(config_.initial_grip_n, ceiling_n);
-        if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
-      }
-      // The ratio cue held up with the target at its ceiling says the load is beyond what the
-      // ceiling allows by the friction estimate, not that the contact is sliding now (the grip can
-      // rise no further either way). Past ratio_ceiling_count_s of its episode (by default from
-      // its rise) it does not count as slip, nor does the centroid cue, whose check on a rolling
-      // pad is that same load ratio (the pad deforms under the load); the vibration cue still does.
-      // Held up, it hid every later slip (a flag already up when a slip begins detects nothing) and
-      // kept the flag up for seconds. With a count window, a load hovering at the threshold would
-      // cross it again and again (pouring: a rise every few ms): a rise soon after the last fall
-      // continues the episode.
-      if (signals.ratio_slip && !ratio_was_up_) {
-        const bool continues =
-            target_n_ >= ceiling_n && time_s - ratio_fall_s_ <= config_.ratio_ceiling_rearm_s;
-        if (!continues) ratio_rise_s_ = time_s;
-      }
-      if (!signals.ratio_slip && ratio_was_up_) ratio_fall_s_ = time_s;
-      ratio_was_up_ = signals.ratio_slip;
-      const bool ratio_held = signals.ratio_slip && target_n_ >= ceiling_n &&
-                              time_s - ratio_rise_s_ >= config_.ratio_ceiling_count_s;
-      ratio_counts_ = signals.ratio_slip && !ratio_held;
-      centroid_counts_ = signals.centroid_slip && !ratio_held;
-      slip_now = ratio_counts_ || signals.vibration_slip || centroid_counts_;
-      // A load cue persisting after a response (the ratio above the friction estimate, the contact
-      // travelling) says the step did not cover the load: the floor keeps rising
-      // (slip_grip_rate_n_per_s), and once the squeeze has reached it another step follows. A
-      // vibration cue that stays up while the grip steps up is also the step's own ringing of the
-      // contact: answered with a rising floor and a step every refractory period, it drove the grip
-      // to the ceiling (3 of the scorecard's runs), so on its own it asks again only after it fell.
-      if (!slip_now) cue_fell_since_response_ = true;
-      const bool load_cue = ratio_counts_ || centroid_counts_;
-      if (load_cue && phase_ == Phase::kSlip) {
-        slip_floor_n_ += config_.slip_grip_rate_n_per_s * dt_s;
-      } else if (slip_now && phase_ == Phase::kSlip) {
-        // Vibration alone: a slide the step did not stop, or the step's own ringing; the floor
-        // still rises, slower (a shaken box slid out of a grip that rose once and stopped).
-        slip_floor_n_ += config_.slip_vibration_rate_n_per_s * dt_s;
-      }
-      const bool landed = grip_n >= config_.slip_landed_fraction * std::min(slip_floor_n_, ceiling_n);
-      const bool asks_again = cue_fell_since_response_ || (landed && load_cue);
-      if (slip_now && time_s >= refractory_until_s_ && asks_again) RespondToSlip(time_s);
-      if (phase_ == Phase::kSlip && time_s >= refractory_until_s_) Enter(Phase::kHolding, time_s);
-      double base_n =
-          phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
-      // A sensor that cannot resolve shear cannot tell the load: hold at a fixed share of the ceiling.
-      if (signals.shear_blind && phase_ != Phase::kLoading)
-        base_n = std::max(base_n, config_.shear_blind_grip_fraction * ceiling_n);
-      target_n_ = std::min(std::max(base_n, slip_floor_n_), ceiling_n);
-      command.grip_effort = ForceLoop(target_n_, grip_n, dt_s, may_increase);
-      break;
-    }
-    case Phase::kReleasing:
-      target_n_ = 0.0;
-      integrator_ = 0.0;
-      command.grip_effort = -config_.open_effort;
-      if (time_s - phase_start_s_ >= config_.release_time_s) Enter(Phase::kOpen, time_s);
-      break;
-    case Phase::kOpen:
-      target_n_ = 0.0;
-      command.grip_effort = 0.0;
-      break;
+  hand::HandCommand command;
+  if (signals.in_contact) last_contact_s_ = time_s;
+  if (time_s - last_contact_s_ > config_.contact_lost_s) {
+    // Object gone (or never there): go back to closing rather than squeezing air harder.
+    Enter(Phase::kClosing, time_s);
+    contact_frames_ = 0;
+    target_n_ = 0.0;
+    command.grip_effort = std::min(config_.close_effort, EffortCap());
+    return command;
   }
+  UpdateHoldTarget(dt_s);
+  const double ceiling_n = SensedCeilingN();
+  if (phase_ == Phase::kLoading) {
+    const double initial_n = Sensed(config_.initial_grip_n);
+    load_target_n_ = std::min(load_target_n_ + Sensed(config_.load_rate_n_per_s) * dt_s, initial_n);
+    const bool loaded = load_target_n_ >= initial_n && grip_n >= kLoadedFraction * std::min(initial_n, ceiling_n);
+    if (loaded || time_s - phase_start_s_ >= config_.load_timeout_s) Enter(Phase::kHolding, time_s);
+  }
+  *slip_now = CountCues(time_s);
+  FollowSlip(*slip_now, time_s, dt_s);
+  double base_n = phase_ == Phase::kLoading ? std::max(load_target_n_, coupled_target_n_) : coupled_target_n_;
+  // A sensor that cannot resolve shear cannot tell the load: hold at a fixed share of the ceiling.
+  if (signals.shear_blind && phase_ != Phase::kLoading)
+    base_n = std::max(base_n, config_.shear_blind_grip_fraction * ceiling_n);
+  target_n_ = std::min(std::max(base_n, slip_floor_n_), ceiling_n);
+  // The motor's squeeze at the ceiling already: the units' share may be stale, the object is not.
+  const bool squeeze_room = !(config_.use_proprioception && motor_.known() && motor_.squeeze_n() >= CeilingN());
+  command.grip_effort = ForceLoop(target_n_, grip_n, dt_s, diagnostics_.saturated_units == 0 && squeeze_room);
+  return command;
+}
 
+hand::HandCommand GripSlipController::Release(double time_s) {
+  target_n_ = 0.0;
+  integrator_ = 0.0;
+  hand::HandCommand command;
+  command.grip_effort = -config_.open_effort;
+  if (time_s - phase_start_s_ >= config_.release_time_s) Enter(Phase::kOpen, time_s);
+  return command;
+}
+
+hand::HandCommand GripSlipController::Report(const hand::HandCommand& command, bool slip_now, bool data_ok,
+                                             double time_s) {
   // Outside the phases that watch for slip the cues are silent: a ratio cue up again later rose anew.
   if (phase_ != Phase::kLoading && phase_ != Phase::kHolding && phase_ != Phase::kSlip) {
     ratio_was_up_ = false;
@@ -691,7 +713,8 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, const ha
     flag_until_s_ = kNeverS;
   }
   // The reported flag is held past the last frame a cue counted (slip_flag_hold_s): a cue flickering
-  // about its threshold within one episode is one flag; the response above follows the cues.
+  // about its threshold within one episode is one flag; the response follows the cues.
+  const SlipSignals& signals = detector_.signals();
   if (slip_now) {
     flag_until_s_ = time_s + config_.slip_flag_hold_s;
     flag_cues_ = CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_);
@@ -705,10 +728,53 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, const ha
   telemetry_.slip_cues = flag_up ? flag_cues_ : "";
   diagnostics_.effort = command.grip_effort;
   diagnostics_.integrator = integrator_;
-  diagnostics_.ceiling_n = ceiling_n;
+  diagnostics_.ceiling_n = SensedCeilingN();
   diagnostics_.slip_floor_n = slip_floor_n_;
   diagnostics_.signals = signals;
   return command;
+}
+
+hand::HandCommand GripSlipController::Update(const TactileState& state, const hand::HandState& hand,
+                                             double time_s) {
+  const double dt_s = AdvanceClock(time_s);
+  FollowIntent(time_s);
+  const bool releasing = phase_ == Phase::kReleasing || phase_ == Phase::kOpen;
+  const bool data_ok = !state.stale && state.valid_count >= config_.min_valid_units;
+  if (!data_ok && !releasing) return SafeHold();
+  const bool new_frame = TakeFrame(state, data_ok, time_s);
+  if (config_.use_proprioception) {
+    motor_.Update(hand, last_good_command_.grip_effort, diagnostics_.measured_grip_n, dt_s);
+    diagnostics_.motor_squeeze_n = motor_.squeeze_n();
+    // The targets are kept in the units' measure: a new share rescales them, so the squeeze they
+    // stand for does not jump (a share halving at once doubled the feed-forward: a cup crushed).
+    const double rescale = motor_.sensed_share() / diagnostics_.sensed_share;
+    load_target_n_ *= rescale;
+    coupled_target_n_ *= rescale;
+    slip_floor_n_ *= rescale;
+    target_n_ *= rescale;
+    diagnostics_.sensed_share = motor_.sensed_share();
+  }
+  bool slip_now = false;
+  hand::HandCommand command;
+  switch (phase_) {
+    case Phase::kClosing:
+      command = Close(new_frame, time_s);
+      break;
+    case Phase::kLoading:
+    case Phase::kHolding:
+    case Phase::kSlip:
+      command = Hold(time_s, dt_s, &slip_now);
+      break;
+    case Phase::kReleasing:
+      command = Release(time_s);
+      break;
+    case Phase::kIdle:
+    case Phase::kMissed:
+    case Phase::kOpen:
+      target_n_ = 0.0;
+      break;
+  }
+  return Report(command, slip_now, data_ok, time_s);
 }
 
 }  // namespace graspbed::controller

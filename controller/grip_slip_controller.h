@@ -9,7 +9,13 @@
 ///
 /// The grip force is closed-loop on the measured normal force (sum over valid units, saturated units
 /// counted at the rated range) with feed-forward + PI and anti-windup, since the motor effort to
-/// force map depends on the object. Sees only TactileState, time and intent.
+/// force map depends on the object. Sees only TactileState, the hand's own state, time and intent.
+///
+/// With proprioception (`proprioception` 1, the default; the hand reports its motor current and
+/// joints) it also keeps the grip's absolute numbers (initial grip, floor, ceiling, slip step) on the
+/// object's real squeeze when the units see only part of it (MotorSqueeze's sensed share), and stops
+/// driving a closing that reached the closed end stop without finding anything (phase "missed").
+/// Without it, or on a hand that does not report them, it behaves as before.
 
 #include <limits>
 #include <string>
@@ -17,6 +23,7 @@
 
 #include "controller/filters.h"
 #include "controller/grasp_controller.h"
+#include "controller/motor_squeeze.h"
 #include "controller/slip_detector.h"
 
 namespace graspbed::controller {
@@ -103,6 +110,9 @@ struct GripSlipConfig {
   double slip_flag_hold_s = 0.005;
 
   SlipDetectorConfig slip;  ///< slip detection cues (their own parameters)
+  /// Use the hand's proprioception (motor current, joints) where the hand reports it.
+  bool use_proprioception = true;
+  MotorSqueezeConfig motor;  ///< the motor's squeeze estimate
 
   /// @throws common::ConfigError keyed by the offending parameter (its name among Parameters(),
   /// also for a detector field: "detector_settle_s" for slip.settle_s), with its value, in the
@@ -118,6 +128,8 @@ struct GripSlipDiagnostics {
   double ceiling_n = 0.0;        ///< effective grip ceiling (overall and per task) [N]
   double slip_floor_n = 0.0;     ///< grip raised by the last slip response, decaying [N]
   int saturated_units = 0;       ///< units out of range in the newest frame
+  double motor_squeeze_n = 0.0;  ///< squeeze the motor current says (0 unknown) [N]
+  double sensed_share = 1.0;     ///< share of the squeeze the units see, as the grip's scale [-]
   SlipSignals signals;           ///< what the slip detector saw
 };
 
@@ -151,11 +163,31 @@ class GripSlipController final : public GraspController {
   const GripSlipConfig& config() const { return config_; }
 
  private:
-  enum class Phase { kIdle, kClosing, kLoading, kHolding, kSlip, kReleasing, kOpen };
+  enum class Phase { kIdle, kClosing, kMissed, kLoading, kHolding, kSlip, kReleasing, kOpen };
   static const char* PhaseName(Phase phase);
 
   void Enter(Phase phase, double time_s);
+  /// The grip ceiling on the object's squeeze [N] (overall and per task).
   double CeilingN() const;
+  /// The same in the units' measure: scaled by the sensed share [N].
+  double SensedCeilingN() const;
+  /// An absolute grip figure (floor, initial grip, slip step) in the units' measure [N].
+  double Sensed(double squeeze_n) const;
+
+  // One tick, in order (Update): the clock and the intent, the safe hold on bad data, the frame,
+  // then the phase's own function, then the telemetry.
+  double AdvanceClock(double time_s);
+  void FollowIntent(double time_s);
+  hand::HandCommand SafeHold();
+  bool TakeFrame(const sensor::TactileState& state, bool data_ok, double time_s);
+  hand::HandCommand Close(bool new_frame, double time_s);
+  hand::HandCommand Hold(double time_s, double dt_s, bool* slip_now);
+  hand::HandCommand Release(double time_s);
+  /// Counts the cues as slip or not (the ratio cue held at the ceiling; SlipCueGate).
+  bool CountCues(double time_s);
+  /// Raises the slip floor while cues persist after a response; responds to a new slip.
+  void FollowSlip(bool slip_now, double time_s, double dt_s);
+  hand::HandCommand Report(const hand::HandCommand& command, bool slip_now, bool data_ok, double time_s);
   /// Largest closing effort allowed under the current ceiling [-].
   double EffortCap() const;
   /// Force loop: effort for `target_n` given the measured grip; updates the integrator.
@@ -165,6 +197,7 @@ class GripSlipController final : public GraspController {
 
   GripSlipConfig config_;
   SlipDetector detector_;
+  MotorSqueeze motor_;
   LowPassFilter grip_filter_;
 
   GraspIntent intent_ = GraspIntent::kIdle;
