@@ -1,0 +1,100 @@
+// The reference controller's proprioceptive parts, each where it decides the outcome of a real
+// simulated run (through the `graspbed run` command): the motor's squeeze estimate keeps a 3 g cup
+// uncrushed that the units alone crush, and a closing that meets nothing stops at the closed stop
+// instead of stalling the motor there. Each is run with the part switched off (the strawman).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/cli_runner.h"
+#include "tests/support/temp_dir.h"
+
+namespace graspbed::controller {
+namespace {
+
+using graspbed::test_support::CliResult;
+using graspbed::test_support::RunCli;
+using graspbed::test_support::TempDir;
+
+/// `graspbed run` of `scenario` with `sets` (each "key=value"), its summary JSON.
+nlohmann::json RunScenario(const std::string& scenario, const std::vector<std::string>& sets,
+                           const std::string& out_dir) {
+  std::string arguments = "run " + std::string(GRASPBED_SOURCE_DIR) + "/scenarios/" + scenario +
+                          ".yaml --no-plots --json --out " + out_dir;
+  for (const std::string& set : sets) arguments += " --set " + set;
+  const CliResult cli = RunCli(arguments);
+  EXPECT_TRUE(cli.exit_code == 0 || cli.exit_code == 1) << arguments << "\n" << cli.err;
+  return nlohmann::json::parse(cli.out, nullptr, /*allow_exceptions=*/false);
+}
+
+/// Whether expectation `name` of a run's summary passed.
+bool Passed(const nlohmann::json& run, const std::string& name) {
+  for (const nlohmann::json& expectation : run["expectations"]) {
+    if (expectation["name"] == name) return expectation["passed"].get<bool>();
+  }
+  ADD_FAILURE() << "no expectation " << name;
+  return false;
+}
+
+/// The last row of signals.csv in `dir`: column name -> cell text.
+std::vector<std::pair<std::string, std::string>> LastRow(const std::string& dir) {
+  std::ifstream in(dir + "/signals.csv");
+  std::string header, line, last;
+  std::getline(in, header);
+  while (std::getline(in, line)) last = line;
+  std::vector<std::pair<std::string, std::string>> cells;
+  std::stringstream names(header), values(last);
+  for (std::string name, value; std::getline(names, name, ',') && std::getline(values, value, ',');)
+    cells.emplace_back(name, value);
+  return cells;
+}
+
+std::string Cell(const std::vector<std::pair<std::string, std::string>>& row, const std::string& name) {
+  for (const auto& [column, value] : row) {
+    if (column == name) return value;
+  }
+  ADD_FAILURE() << "no column " << name;
+  return "";
+}
+
+TEST(ProprioceptionReferenceTest, TheMotorsSqueezeKeepsTheCupUncrushedWhereTheUnitsAloneCrushIt) {
+  TempDir dir;
+  // Half the cup's squeeze lands on the holder between the mesas: a grip on the units alone is a
+  // squeeze twice as large, past the cup's 3 N.
+  const nlohmann::json blind = RunScenario("lift_plastic_cup", {"controller.params.proprioception=0"},
+                                           (dir.path() / "blind").string());
+  EXPECT_FALSE(Passed(blind, "not_crushed"));
+  // The hand that reports no proprioception leaves the reference as blind.
+  const nlohmann::json numb =
+      RunScenario("lift_plastic_cup", {"proprioception.enabled=false"}, (dir.path() / "numb").string());
+  EXPECT_FALSE(Passed(numb, "not_crushed"));
+  const nlohmann::json feeling = RunScenario("lift_plastic_cup", {}, (dir.path() / "feeling").string());
+  EXPECT_TRUE(Passed(feeling, "not_crushed"));
+  EXPECT_TRUE(Passed(feeling, "not_dropped"));
+  EXPECT_TRUE(Passed(feeling, "max_slip_mm"));
+}
+
+TEST(ProprioceptionReferenceTest, AClosingThatFindsNothingStopsAtTheClosedStop) {
+  TempDir dir;
+  // The hand 15 cm beside the box and 20 cm up: the digits close on air.
+  const std::string away = "hand.initial_wrist_position_m=[0.15,0,0.2]";
+  const std::string feeling_dir = (dir.path() / "feeling").string();
+  RunScenario("default", {away, "duration_s=2.6"}, feeling_dir);
+  const auto feeling = LastRow(feeling_dir);
+  EXPECT_EQ(Cell(feeling, "phase"), "missed");
+  EXPECT_EQ(std::stod(Cell(feeling, "grip_effort")), 0.0);
+  EXPECT_GT(std::stod(Cell(feeling, "finger_q1")), 0.9);  // the index flexed all the way [rad]
+
+  const std::string blind_dir = (dir.path() / "blind").string();
+  RunScenario("default", {away, "duration_s=2.6", "controller.params.proprioception=0"}, blind_dir);
+  const auto blind = LastRow(blind_dir);
+  EXPECT_EQ(Cell(blind, "phase"), "closing");  // stalls the motor against the stop for ever
+  EXPECT_GT(std::stod(Cell(blind, "grip_effort")), 0.0);
+}
+
+}  // namespace
+}  // namespace graspbed::controller
