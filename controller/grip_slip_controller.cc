@@ -23,6 +23,9 @@ constexpr double kLoadedFraction = 0.9;
 /// Times closer than this are equal [s]: a clock summed frame by frame lands a hair either side of
 /// the instant a hold ends.
 constexpr double kTimeToleranceS = 1e-9;
+/// The share of the squeeze the units see is measured only this long after the last slip flag or
+/// response [s]: a slipping object bounces on the pad.
+constexpr double kCalmAfterSlipS = 0.2;
 
 /// Static name of the cues that count as slip (telemetry; no allocation).
 const char* CueNames(bool ratio, bool vibration, bool centroid) {
@@ -743,7 +746,9 @@ hand::HandCommand GripSlipController::Update(const TactileState& state, const ha
   if (!data_ok && !releasing) return SafeHold();
   const bool new_frame = TakeFrame(state, data_ok, time_s);
   if (config_.use_proprioception) {
-    motor_.Update(hand, last_good_command_.grip_effort, diagnostics_.measured_grip_n, dt_s);
+    const bool calm = (phase_ == Phase::kLoading || phase_ == Phase::kHolding) &&
+                      time_s - flag_until_s_ >= kCalmAfterSlipS && time_s - refractory_until_s_ >= kCalmAfterSlipS;
+    motor_.Update(hand, last_good_command_.grip_effort, diagnostics_.measured_grip_n, calm, dt_s);
     diagnostics_.motor_squeeze_n = motor_.squeeze_n();
     // The targets are kept in the units' measure: a new share rescales them, so the squeeze they
     // stand for does not jump (a share halving at once doubled the feed-forward: a cup crushed).

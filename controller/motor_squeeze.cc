@@ -36,7 +36,8 @@ void MotorSqueeze::RestartShare() {
   share_measured_ = false;
 }
 
-void MotorSqueeze::Update(const hand::HandState& hand, double last_effort, double sensed_grip_n, double dt_s) {
+void MotorSqueeze::Update(const hand::HandState& hand, double last_effort, double sensed_grip_n, bool calm,
+                          double dt_s) {
   const hand::DigitState& index = hand.digits[0];
   closed_on_nothing_ = hand.digit_count > 0 && !hand.stale && index.stops_known && index.at_closed_stop;
   double share_sum = 0.0;
@@ -57,7 +58,7 @@ void MotorSqueeze::Update(const hand::HandState& hand, double last_effort, doubl
   // Motor off and digits still: whatever current flows is the sensing chain's offset.
   if (last_effort == 0.0 && still) offset_share_ += Weight(config_.offset_filter_s, dt_s) * (share - offset_share_);
   squeeze_n_ = std::max(0.0, share - offset_share_) * config_.stall_pinch_n;
-  if (!still || squeeze_n_ < config_.min_squeeze_n || last_effort <= 0.0) return;
+  if (!calm || !still || squeeze_n_ < config_.min_squeeze_n || last_effort <= 0.0) return;
   const double seen = std::clamp(sensed_grip_n / squeeze_n_, config_.min_sensed_share, 1.0);
   share_ = share_measured_ ? share_ + Weight(config_.share_filter_s, dt_s) * (seen - share_) : seen;
   share_measured_ = true;

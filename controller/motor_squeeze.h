@@ -40,9 +40,11 @@ class MotorSqueeze {
 
   void Reset();
   /// One control tick: `hand` the newest hand state, `last_effort` the effort commanded at the
-  /// previous tick [-], `sensed_grip_n` the grip the units measure now [N], `dt_s` since the last
-  /// tick [s]. A hand without a known current leaves the estimate unknown.
-  void Update(const hand::HandState& hand, double last_effort, double sensed_grip_n, double dt_s);
+  /// previous tick [-], `sensed_grip_n` the grip the units measure now [N], `calm` whether the
+  /// grasp is settled (the controller's judgement: holding, no slip cue for a while; an object
+  /// bouncing on the pad reads 0 and 8 N by turns and says nothing of the share), `dt_s` since the
+  /// last tick [s]. A hand without a known current leaves the estimate unknown.
+  void Update(const hand::HandState& hand, double last_effort, double sensed_grip_n, bool calm, double dt_s);
 
   /// Whether a motor current is known (fresh) at this tick.
   bool known() const { return known_; }
