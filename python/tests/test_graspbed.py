@@ -193,7 +193,7 @@ def test_a_controller_without_update_is_bad_input():
 def test_bad_input_is_a_config_error_with_file_line_and_key():
     with pytest.raises(graspbed.ConfigError, match=r"scenarios/default.yaml: object.mass_kg = -1: must be >= 0.001"):
         graspbed.run(DEFAULT, overrides={"object.mass_kg": -1})
-    with pytest.raises(ValueError, match="controller.name = nope: unknown name; valid names: constant_grip, grip_slip, open_loop"):
+    with pytest.raises(ValueError, match="controller.name = nope: unknown name; valid names: constant_grip, grip_slip, learned_slip, open_loop"):
         graspbed.run(DEFAULT, controller="nope")
 
 
