@@ -339,7 +339,7 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   // its default target (3 N).
   const std::string signals = graspbed::test_support::ReadText(dir_.Path("rel/signals.csv"));
   const std::string header = signals.substr(0, signals.find('\n'));
-  EXPECT_THAT(header, ::testing::EndsWith(",ctl_grip_error_n"));
+  EXPECT_THAT(header, ::testing::EndsWith(",ctl_grip_error_n,ctl_index_current_a"));
   const double default_target_n = ControllerParameters(Plugin(kThreshold)).at(0).default_value;
   const Hold hold = HoldOf(dir_.Path("rel/signals.csv"));
   ASSERT_GT(hold.rows, 0) << "never held, or held too late to settle";
