@@ -43,7 +43,7 @@ const common::FieldTable<ProprioceptionConfig>& ProprioceptionConfigFields() {
           Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, 1.0), "s",
                         "sample -> available to the controller"),
           Table::Number("encoder_resolution_rad", &C::encoder_resolution_rad, NumberRule::Between(0.0, 0.1),
-                        "rad", "one encoder count on a hinge (0: exact)"),
+                        "rad", "one encoder count on a hinge (0: exact; the default: 12 bits, 2 pi / 4096)"),
           Table::Number("encoder_resolution_m", &C::encoder_resolution_m, NumberRule::Between(0.0, 1e-3), "m",
                         "one encoder count on a slide (jaw fixture; 0: exact)"),
           Table::Number("velocity_filter_hz", &C::velocity_filter_hz, NumberRule::Between(0.0, 10000.0), "Hz",
