@@ -262,9 +262,9 @@ double TimeControllerUpdate(const py::object& controller, int ticks) {
   return std::chrono::duration<double, std::nano>(elapsed).count() / ticks;
 }
 
-/// graspbed.DigitState and graspbed.HandState: read-only views of the tick's hand::HandState (the
-/// joint arrays numpy views, write=False, the same objects every tick). Valid during update().
-void BindHandState(py::module_& m) {
+/// graspbed.DigitState: a read-only view of one digit of the tick's hand::HandState (the joint
+/// arrays numpy views, write=False, the same objects every tick). Valid during update().
+void BindDigitState(py::module_& m) {
   using Digit = DigitStateView;
   py::class_<Digit>(m, "DigitState",
                     "One digit's proprioception (read-only; valid during update()). Check the *_known flags: "
@@ -304,6 +304,11 @@ void BindHandState(py::module_& m) {
       .def_property_readonly(
           "encoder_fault", [](const Digit& v) { return v.get().encoder_fault; },
           "the encoder stood still while the motor turned (position then unknown)");
+}
+
+/// graspbed.HandState: a read-only view of the tick's hand::HandState, its digits as DigitState.
+void BindHandState(py::module_& m) {
+  BindDigitState(m);
   py::class_<HandStateView>(m, "HandState",
                             "The hand's proprioception at this tick (read-only; valid during update())")
       .def_property_readonly(
