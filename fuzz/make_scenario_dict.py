@@ -15,7 +15,7 @@ import sys
 # The script's keys, actions, events and profiles, and the top level's keys that have no table.
 SCRIPT_WORDS = """
 name description seed duration_s backend sim serial replay log script object hand physics sensor
-controller expectations metrics plugin params
+controller expectations metrics plugin params proprioception
 at_s after delay_s timeout_s action position_m offset_m duration_s profile minimum_jerk linear
 height_m frequency_hz amplitude_m axis ramp_s mass_kg force_n friction unit r1_ohm r2_ohm scale
 probability latency_s

@@ -262,6 +262,76 @@ double TimeControllerUpdate(const py::object& controller, int ticks) {
   return std::chrono::duration<double, std::nano>(elapsed).count() / ticks;
 }
 
+/// graspbed.DigitState: a read-only view of one digit of the tick's hand::HandState (the joint
+/// arrays numpy views, write=False, the same objects every tick). Valid during update().
+void BindDigitState(py::module_& m) {
+  using Digit = DigitStateView;
+  py::class_<Digit>(m, "DigitState",
+                    "One digit's proprioception (read-only; valid during update()). Check the *_known flags: "
+                    "an unknown value means nothing")
+      .def_property_readonly(
+          "joint_count", [](const Digit& v) { return v.get().joint_count; },
+          "joints reported, proximal first")
+      .def_property_readonly(
+          "linear", [](const Digit& v) { return v.get().linear; },
+          "True: slides (jaw fixture) [m], [m/s]; False: hinges [rad], [rad/s]")
+      .def_property_readonly("position_known", [](const Digit& v) { return v.get().position_known; })
+      .def_property_readonly(
+          "joint_position",
+          [](Digit& v) {
+            v.Refresh();
+            return v.joint_position;
+          },
+          "flexion from the open pose per joint [rad] or [m], + closing (numpy, read-only view)")
+      .def_property_readonly("velocity_known", [](const Digit& v) { return v.get().velocity_known; })
+      .def_property_readonly(
+          "joint_velocity",
+          [](Digit& v) {
+            v.Refresh();
+            return v.joint_velocity;
+          },
+          "d(joint_position)/dt [rad/s] or [m/s] (numpy, read-only view)")
+      .def_property_readonly("current_known", [](const Digit& v) { return v.get().current_known; })
+      .def_property_readonly(
+          "motor_current_a", [](const Digit& v) { return v.get().motor_current_a; },
+          "the drive motor's current [A], + closing")
+      .def_property_readonly(
+          "stall_current_a", [](const Digit& v) { return v.get().stall_current_a; },
+          "the motor's current at stall with full effort [A]; 0 when unknown")
+      .def_property_readonly("stops_known", [](const Digit& v) { return v.get().stops_known; })
+      .def_property_readonly("at_open_stop", [](const Digit& v) { return v.get().at_open_stop; })
+      .def_property_readonly("at_closed_stop", [](const Digit& v) { return v.get().at_closed_stop; })
+      .def_property_readonly(
+          "encoder_fault", [](const Digit& v) { return v.get().encoder_fault; },
+          "the encoder stood still while the motor turned (position then unknown)");
+}
+
+/// graspbed.HandState: a read-only view of the tick's hand::HandState, its digits as DigitState.
+void BindHandState(py::module_& m) {
+  BindDigitState(m);
+  py::class_<HandStateView>(m, "HandState",
+                            "The hand's proprioception at this tick (read-only; valid during update())")
+      .def_property_readonly(
+          "time_s", [](const HandStateView& v) { return v.state->time_s; },
+          "sample time of the newest reading [s]; < 0 before the first")
+      .def_property_readonly(
+          "stale", [](const HandStateView& v) { return v.state->stale; },
+          "no new reading within the stale timeout")
+      .def_property_readonly(
+          "digit_count", [](const HandStateView& v) { return v.state->digit_count; },
+          "digits reported (0: no proprioception)")
+      .def_property_readonly(
+          "digits",
+          [](HandStateView& v) {
+            v.Refresh();
+            return v.digits;
+          },
+          "tuple of DigitState: [0] the index (the jaw's finger), [1] the thumb")
+      .def(
+          "any_known", [](const HandStateView& v) { return v.state->any_known(); },
+          "True when any digit reports any field");
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_graspbed, m) {
@@ -338,6 +408,8 @@ PYBIND11_MODULE(_graspbed, m) {
         v.Refresh();
         return v.ft_noise_n;
       });
+
+  BindHandState(m);
 
   m.def("_run", &Run, py::arg("scenario"), py::arg("overrides"), py::arg("controller"), py::arg("out_dir"),
         py::arg("plots"), py::arg("prompt_actions"), py::arg("intent_fifo"));

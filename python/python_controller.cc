@@ -12,11 +12,11 @@ namespace py = pybind11;
 namespace {
 
 /// A read-only 1-D numpy array of `count` elements at `data`, keeping `owner` alive.
-template <typename T>
-py::object ReadOnlyView(const T* data, int count, const std::shared_ptr<sensor::TactileState>& owner) {
+template <typename T, typename Owner>
+py::object ReadOnlyView(const T* data, int count, const std::shared_ptr<Owner>& owner) {
   // The capsule owns a reference to the state, so an array kept after the run stays valid.
-  py::capsule base(new std::shared_ptr<sensor::TactileState>(owner),
-                   [](void* p) { delete static_cast<std::shared_ptr<sensor::TactileState>*>(p); });
+  py::capsule base(new std::shared_ptr<Owner>(owner),
+                   [](void* p) { delete static_cast<std::shared_ptr<Owner>*>(p); });
   py::array_t<T> array({static_cast<py::ssize_t>(count)}, {static_cast<py::ssize_t>(sizeof(T))}, data, base);
   array.attr("setflags")(py::arg("write") = false);
   return array;
@@ -34,6 +34,55 @@ void TactileStateView::Refresh() {
   fn_noise_n = ReadOnlyView(s.fn_noise_n.data(), units, state);
   ft_noise_n = ReadOnlyView(s.ft_noise_n.data(), units, state);
   viewed_units = units;
+}
+
+void DigitStateView::Refresh() {
+  const int joints = get().joint_count;
+  if (joints == viewed_joints) return;
+  joint_position = ReadOnlyView(get().joint_position.data(), joints, state);
+  joint_velocity = ReadOnlyView(get().joint_velocity.data(), joints, state);
+  viewed_joints = joints;
+}
+
+void HandStateView::Refresh() {
+  const int count = state->digit_count;
+  if (count == viewed_digits) return;
+  py::tuple made(count);
+  for (int d = 0; d < count; ++d) {
+    DigitStateView digit;
+    digit.state = state;
+    digit.digit = d;
+    made[d] = py::cast(std::move(digit));
+  }
+  digits = std::move(made);
+  viewed_digits = count;
+}
+
+bool UpdateTakesHand(const py::handle& update, const std::string& label) {
+  py::object signature;
+  try {
+    signature = py::module_::import("inspect").attr("signature")(update);
+  } catch (py::error_already_set&) {
+    return false;  // no signature to read (a builtin): the original form
+  }
+  const py::object parameter = py::module_::import("inspect").attr("Parameter");
+  int positional = 0;
+  int required = 0;
+  bool var_positional = false;
+  for (const py::handle p : signature.attr("parameters").attr("values")()) {
+    const py::object kind = p.attr("kind");
+    if (kind.equal(parameter.attr("VAR_POSITIONAL"))) var_positional = true;
+    if (!kind.equal(parameter.attr("POSITIONAL_ONLY")) &&
+        !kind.equal(parameter.attr("POSITIONAL_OR_KEYWORD"))) {
+      continue;
+    }
+    ++positional;
+    if (p.attr("default").is(parameter.attr("empty"))) ++required;
+  }
+  if (required <= 3 && (var_positional || required == 3)) return true;
+  if (required <= 2 && positional >= 2) return false;
+  throw std::invalid_argument("Python controller " + label + ".update" + std::string(py::str(signature)) +
+                              ": expected update(state, t) or update(state, hand, t)");
 }
 
 PythonController::PythonController(py::object controller, std::string label)
@@ -61,8 +110,11 @@ PythonController::PythonController(py::object controller, std::string label)
                                   " declares diagnostic_channels but has no method diagnostics()");
     }
   }
+  update_takes_hand_ = UpdateTakesHand(update_, label_);
   view_object_ = py::cast(TactileStateView{});
   view_ = &view_object_.cast<TactileStateView&>();
+  hand_view_object_ = py::cast(HandStateView{});
+  hand_view_ = &hand_view_object_.cast<HandStateView&>();
   Reset();
 }
 
@@ -72,6 +124,7 @@ PythonController::~PythonController() {
   telemetry_method_ = py::object();
   diagnostics_method_ = py::object();
   view_object_ = py::object();
+  hand_view_object_ = py::object();
   last_phase_ = py::object();
   last_slip_cues_ = py::object();
   controller_ = py::object();
@@ -215,12 +268,17 @@ void PythonController::ReadDiagnostics(std::span<double> values) const {
 }
 
 controller::HandCommand PythonController::Update(const sensor::TactileState& state,
-                                                 const hand::HandState& /*hand*/, double time_s) {
+                                                 const hand::HandState& hand, double time_s) {
   py::gil_scoped_acquire gil;
   *view_->state = state;
   controller::HandCommand command;
   try {
-    command = ToCommand(update_(view_object_, time_s));
+    if (update_takes_hand_) {
+      *hand_view_->state = hand;
+      command = ToCommand(update_(view_object_, hand_view_object_, time_s));
+    } else {
+      command = ToCommand(update_(view_object_, time_s));
+    }
   } catch (py::error_already_set& error) {
     Fail("update()", error.what());
   }

@@ -1,17 +1,19 @@
 #pragma once
 /// PythonController: a GraspController whose decisions a Python object makes. The C++ control loop
-/// calls it every tick; it takes the GIL, shows the tick's TactileState to Python as a read-only
-/// view (numpy arrays onto one TactileState it owns, refreshed by one struct copy per tick, no new
-/// array objects per tick) and turns what update() returns into a HandCommand.
+/// calls it every tick; it takes the GIL, shows the tick's TactileState and HandState to Python as
+/// read-only views (numpy arrays onto one TactileState and one HandState it owns, each refreshed by
+/// one struct copy per tick, no new array objects per tick) and turns what update() returns into a
+/// HandCommand.
 ///
-/// The Python object: reset(), set_intent(intent: "idle" | "close" | "open"), update(state, t) ->
-/// command (a graspbed.HandCommand, a number taken as grip_effort, or a dict with grip_effort,
-/// enable, brake); optionally telemetry() -> dict (phase, grip_target_n, friction_estimate,
-/// slip_detected, slip_cues, slip_events, safe_hold), set_grip_ceiling(newtons), and
-/// diagnostic_channels (a sequence of names) with diagnostics() -> as many numbers, logged as
-/// signals.csv columns ctl_<name> every tick. Anything it raises, or a
-/// return that is no command (wrong type, effort not finite or outside [-1, 1]), ends the run with
-/// ControllerError naming the controller and the method.
+/// The Python object: reset(), set_intent(intent: "idle" | "close" | "open"), update(state, t) or
+/// update(state, hand, t) -> command (a graspbed.HandCommand, a number taken as grip_effort, or a
+/// dict with grip_effort, enable, brake); `hand` is the tick's HandState as a read-only view like
+/// the TactileState's (UpdateTakesHand says which form is called); optionally telemetry() -> dict (phase,
+/// grip_target_n, friction_estimate, slip_detected, slip_cues, slip_events, safe_hold),
+/// set_grip_ceiling(newtons), and diagnostic_channels (a sequence of names) with diagnostics() -> as many
+/// numbers, logged as signals.csv columns ctl_<name> every tick. Anything it raises, or a return that is no
+/// command (wrong type, effort not finite or outside [-1, 1]), ends the run with ControllerError naming the
+/// controller and the method.
 
 #include <pybind11/pybind11.h>
 
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "controller/grasp_controller.h"
+#include "hand/hand_state.h"
 
 namespace graspbed::python {
 
@@ -40,6 +43,36 @@ struct TactileStateView {
   /// Makes the arrays again if the unit count changed (first use, or another layout).
   void Refresh();
 };
+
+/// What Python sees of one digit of a HandState: its scalars read through `state`, its joint
+/// arrays as read-only numpy views of `state`'s, made once per joint count.
+struct DigitStateView {
+  std::shared_ptr<hand::HandState> state;  ///< shared with the HandStateView that made this view
+  int digit = 0;                           ///< index into state->digits (0 index or jaw finger, 1 thumb)
+  int viewed_joints = -1;                  ///< joint count the arrays below were made for
+  pybind11::object joint_position, joint_velocity;
+  const hand::DigitState& get() const { return state->digits[digit]; }
+  /// Makes the arrays again if the digit's joint count changed (first use, another backend).
+  void Refresh();
+};
+
+/// What Python sees of a HandState: the state (owned; copied in every tick) and a tuple of its
+/// digits' views, made once per digit count.
+struct HandStateView {
+  std::shared_ptr<hand::HandState> state = std::make_shared<hand::HandState>();
+  int viewed_digits = -1;   ///< digit count `digits` was made for
+  pybind11::object digits;  ///< tuple of DigitStateView, one per reported digit
+  /// Makes `digits` again if the digit count changed.
+  void Refresh();
+};
+
+/// Whether the Python `update` (a bound method or any callable) is called as update(state, hand, t)
+/// (true) or as the original update(state, t) (false), from its signature: three positional
+/// parameters without a default, or a `*args`, take the hand; one or two without a default (and at
+/// least two in all) do not; a callable without a signature (a builtin) is called the old way.
+/// @throws std::invalid_argument naming `label` when it can take neither form (fewer than two
+/// positional parameters, more than three without a default).
+bool UpdateTakesHand(const pybind11::handle& update, const std::string& label);
 
 class PythonController final : public controller::GraspController {
  public:
@@ -76,6 +109,9 @@ class PythonController final : public controller::GraspController {
   std::vector<double> diagnostic_values_;                ///< the last diagnostics(), one per channel
   pybind11::object view_object_;                         ///< the TactileStateView handed to update()
   TactileStateView* view_ = nullptr;                     ///< owned by view_object_
+  bool update_takes_hand_ = false;                       ///< update(state, hand, t), else update(state, t)
+  pybind11::object hand_view_object_;                    ///< the HandStateView handed to update()
+  HandStateView* hand_view_ = nullptr;                   ///< owned by hand_view_object_
   controller::ControllerTelemetry telemetry_;
   /// A telemetry string as a pointer that stays valid (kept in strings_); `last` caches the object.
   const char* Intern(const pybind11::handle& value, pybind11::object* last, const char* current);

@@ -13,6 +13,9 @@ namespace {
 /// A motor whose back-EMF term (effort - torque share) is at least this share of its no-load
 /// speed turns: a still encoder then is stuck.
 constexpr double kTurningShare = 0.2;
+/// Slack on comparisons of sample times, which are quotients index / rate: half a microsecond, as
+/// Poll's, so that a span of exactly the timeout is not lost to rounding.
+constexpr double kTimeSlackS = 5e-7;
 
 /// Weight of the new input in a first-order low-pass with cutoff `cutoff_hz` sampled every `dt_s`
 /// (1 when the cutoff is 0: no filter).
@@ -40,7 +43,7 @@ const common::FieldTable<ProprioceptionConfig>& ProprioceptionConfigFields() {
           Table::Number("latency_s", &C::latency_s, NumberRule::Between(0.0, 1.0), "s",
                         "sample -> available to the controller"),
           Table::Number("encoder_resolution_rad", &C::encoder_resolution_rad, NumberRule::Between(0.0, 0.1),
-                        "rad", "one encoder count on a hinge (0: exact)"),
+                        "rad", "one encoder count on a hinge (0: exact; the default: 12 bits, 2 pi / 4096)"),
           Table::Number("encoder_resolution_m", &C::encoder_resolution_m, NumberRule::Between(0.0, 1e-3), "m",
                         "one encoder count on a slide (jaw fixture; 0: exact)"),
           Table::Number("velocity_filter_hz", &C::velocity_filter_hz, NumberRule::Between(0.0, 10000.0), "Hz",
@@ -165,7 +168,8 @@ void SimHandSensor::SampleDigit(const DigitTruth& truth, double time_s, double d
   // does not move.
   const double effort = simulation_.grip_brake() ? 0.0 : simulation_.grip_effort();
   const bool turning = truth.has_motor && std::abs(effort - truth.motor_torque_share) >= kTurningShare;
-  digit.encoder_fault = turning && time_s - memory.unchanged_since_s >= config_.stuck_encoder_timeout_s;
+  digit.encoder_fault =
+      turning && time_s - memory.unchanged_since_s >= config_.stuck_encoder_timeout_s - kTimeSlackS;
   if (digit.encoder_fault) ++encoder_fault_samples_;
   digit.position_known = truth.joint_count > 0 && !digit.encoder_fault;
   digit.velocity_known = digit.position_known;

@@ -5,6 +5,7 @@
 #include "sensor/inversion.h"
 #include "sensor/readout.h"
 #include "sensor/strain_model.h"
+#include "sim/proprioception.h"
 #include "sim/scene_config.h"
 #include "testbed/scenario_config.h"
 
@@ -19,6 +20,7 @@ std::vector<ConfigSection> ConfigReference() {
       {"sensor.strain_model", sensor::StrainModelConfigFields().Reference()},
       {"sensor.readout", sensor::ReadoutConfigFields().Reference()},
       {"sensor.inversion", sensor::InversionConfigFields().Reference()},
+      {"proprioception", sim::ProprioceptionConfigFields().Reference()},
       {"controller", ControllerOptionsFields().Reference()},
       {"expectations", ExpectationsFields().Reference()},
       {"metrics", MetricsConfigFields().Reference()},

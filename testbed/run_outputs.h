@@ -40,8 +40,8 @@ void PrepareOutputDir(const std::string& dir);
 /// the loop holds; then the hand state the controller saw (hand::HandState): its sample time [s],
 /// stale flag and joint kind (hand_linear: 1 slides [m], 0 hinges [rad]), and per digit (finger, then
 /// thumb) joint positions q1, q2 [rad or m], velocities dq1, dq2 [rad/s or m/s], motor current and
-/// stall current [A], the end-stop flags and the encoder fault. An unknown value is an empty cell
-/// (NaN), never 0. Everything a replay needs to feed the loop the same input again.
+/// stall current [A], the end-stop flags and the encoder fault. An unknown value is NaN (written
+/// `nan`), never 0. Everything a replay needs to feed the loop the same input again.
 enum LoopColumn : size_t {
   kTime,
   kGripEffort,
@@ -88,7 +88,7 @@ extern const char* const kLoopColumnNames[kLoopColumnCount];
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry);
 /// The hand state the hand columns of `row` (a signals.csv row, loop columns first) hold: what
-/// WriteLoopCells wrote, empty cells unknown. A row without them (`has_columns` false: a recording
+/// WriteLoopCells wrote, NaN cells unknown. A row without them (`has_columns` false: a recording
 /// made before they existed) gives a hand with no proprioception.
 hand::HandState ReadHandCells(const double* row, bool has_columns);
 

@@ -3,7 +3,13 @@
 // squeeze (TactileState::total_fn_n) and a target into the motor effort, holds with the brake when
 // the tactile data cannot be trusted, and opens on request. No slip detection: the target must be
 // enough for the object (graspbed's grip_slip controller is the one that adapts).
+// From the hand's own state (HandState, controller API version 3) it takes two things: when the
+// index reaches its closed end stop without feeling anything, the hand closed on nothing, and it
+// stops driving the motor into the stop until the next intent; and it logs the index's motor
+// current beside its grip error (a diagnostic channel), the squeeze the motor makes as the motor
+// sees it.
 #include <algorithm>
+#include <limits>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -21,6 +27,7 @@ using graspbed::controller::DiagnosticChannel;
 using graspbed::controller::GraspController;
 using graspbed::controller::GraspIntent;
 using graspbed::controller::HandCommand;
+using graspbed::hand::HandState;
 using graspbed::sensor::TactileState;
 
 struct ThresholdGripConfig {
@@ -32,6 +39,17 @@ struct ThresholdGripConfig {
   int min_valid_units = 4;       ///< fewer valid units than this: hold (safe hold) [-]
 };
 
+/// The index's motor current as the hand measures it [A]; NaN when the hand does not report it.
+double IndexCurrentA(const HandState& hand) {
+  const bool known = hand.digit_count > 0 && hand.digits[0].current_known;
+  return known ? hand.digits[0].motor_current_a : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// True when the index rests against its closed end stop (a hand that reports its stops).
+bool IndexAtClosedStop(const HandState& hand) {
+  return hand.digit_count > 0 && hand.digits[0].stops_known && hand.digits[0].at_closed_stop;
+}
+
 class ThresholdGripController final : public GraspController {
  public:
   explicit ThresholdGripController(const ThresholdGripConfig& config) : config_(config) { Reset(); }
@@ -41,16 +59,20 @@ class ThresholdGripController final : public GraspController {
     effort_ = 0.0;
     last_time_s_ = -1.0;
     grip_error_n_ = 0.0;
+    closed_empty_ = false;
     telemetry_ = ControllerTelemetry{};
   }
-  void SetIntent(GraspIntent intent) override { intent_ = intent; }
+  void SetIntent(GraspIntent intent) override {
+    intent_ = intent;
+    closed_empty_ = false;
+  }
   void SetGripCeiling(double ceiling_n) override { ceiling_n_ = ceiling_n; }
 
   // Allocation-free: plain arithmetic on the state and members.
-  HandCommand Update(const TactileState& state, const graspbed::hand::HandState& /*hand*/,
-                     double time_s) override {
+  HandCommand Update(const TactileState& state, const HandState& hand, double time_s) override {
     const double dt_s = last_time_s_ < 0.0 ? 0.0 : std::clamp(time_s - last_time_s_, 0.0, 0.01);
     last_time_s_ = time_s;
+    index_current_a_ = IndexCurrentA(hand);
     const double target_n =
         ceiling_n_ > 0.0 ? std::min(config_.target_grip_n, ceiling_n_) : config_.target_grip_n;
     telemetry_.grip_target_n = target_n;
@@ -76,8 +98,10 @@ class ThresholdGripController final : public GraspController {
           return command;
         }
         if (state.total_fn_n < config_.contact_n && effort_ <= config_.approach_effort) {
-          telemetry_.phase = "closing";
-          effort_ = config_.approach_effort;
+          // Closed all the way without feeling anything: nothing to hold, stop pushing the stop.
+          closed_empty_ = closed_empty_ || IndexAtClosedStop(hand);
+          telemetry_.phase = closed_empty_ ? "closed_empty" : "closing";
+          effort_ = closed_empty_ ? 0.0 : config_.approach_effort;
         } else {
           telemetry_.phase = "holding";
           grip_error_n_ = target_n - state.total_fn_n;
@@ -92,23 +116,30 @@ class ThresholdGripController final : public GraspController {
   ControllerTelemetry telemetry() const override { return telemetry_; }
   std::string name() const override { return "threshold_grip"; }
 
-  // Optional: internal signals graspbed logs as signals.csv columns (here ctl_grip_error_n).
+  // Optional: internal signals graspbed logs as signals.csv columns (ctl_grip_error_n,
+  // ctl_index_current_a).
   std::span<const DiagnosticChannel> diagnostic_channels() const override {
     static constexpr DiagnosticChannel kChannels[] = {
-        {"grip_error_n", "grip target minus the sensed squeeze while holding [N]"}};
+        {"grip_error_n", "grip target minus the sensed squeeze while holding [N]"},
+        {"index_current_a", "the index's motor current the hand measured [A]; NaN when not reported"}};
     return kChannels;
   }
   void ReadDiagnostics(std::span<double> values) const override {
-    if (!values.empty()) values[0] = grip_error_n_;
+    if (values.size() >= 2) {
+      values[0] = grip_error_n_;
+      values[1] = index_current_a_;
+    }
   }
 
  private:
   ThresholdGripConfig config_;
   GraspIntent intent_ = GraspIntent::kIdle;
-  double effort_ = 0.0;        ///< current motor effort [-]
-  double last_time_s_ = -1.0;  ///< time of the previous Update [s]; < 0 before the first
-  double ceiling_n_ = 0.0;     ///< task grip ceiling [N]; 0 = none
-  double grip_error_n_ = 0.0;  ///< target minus sensed squeeze at the last holding update [N]
+  double effort_ = 0.0;           ///< current motor effort [-]
+  double last_time_s_ = -1.0;     ///< time of the previous Update [s]; < 0 before the first
+  double ceiling_n_ = 0.0;        ///< task grip ceiling [N]; 0 = none
+  double grip_error_n_ = 0.0;     ///< target minus sensed squeeze at the last holding update [N]
+  double index_current_a_ = 0.0;  ///< the index's motor current at the last update [A]; NaN unknown
+  bool closed_empty_ = false;     ///< closed onto the stop without contact, since the last intent
   ControllerTelemetry telemetry_;
 };
 

@@ -12,6 +12,12 @@ A Python controller is any object with
     update(state, t) -> command    state: graspbed.TactileState (read-only, numpy views, valid during the
                                    call), t: time [s]; command: graspbed.HandCommand, a number (grip
                                    effort in [-1, 1], + closes) or a dict(grip_effort=, enable=, brake=)
+    update(state, hand, t)         the same with the hand's proprioception, hand: graspbed.HandState
+                                   (hand.digits[0] the index, [1] the thumb: joint_position and
+                                   joint_velocity numpy views, motor_current_a, stop flags, each group
+                                   with its *_known flag). Which form is called is read once from
+                                   update's signature: three positional parameters without a default
+                                   (or *args) get the hand, two do not
     telemetry() -> dict            optional: phase, grip_target_n, friction_estimate, slip_detected,
                                    slip_cues, slip_events, safe_hold (logged and scored like a C++
                                    controller's)
@@ -24,10 +30,12 @@ import json
 import os
 import tempfile
 
-from ._graspbed import (CONTROLLER_API_VERSION, ConfigError, ControllerError, HandCommand, TactileState,
-                        __version__, controller_names, controller_parameters, data_dir, list_scenarios)
+from ._graspbed import (CONTROLLER_API_VERSION, ConfigError, ControllerError, DigitState, HandCommand, HandState,
+                        TactileState, __version__, controller_names, controller_parameters, data_dir,
+                        list_scenarios)
 
-__all__ = ["run", "suite", "sweep", "score", "HandCommand", "TactileState", "ControllerError", "ConfigError",
+__all__ = ["run", "suite", "sweep", "score", "HandCommand", "TactileState", "HandState", "DigitState",
+           "ControllerError", "ConfigError",
            "controller_names", "controller_parameters", "data_dir", "list_scenarios", "scenario_path",
            "CONTROLLER_API_VERSION", "__version__"]
 

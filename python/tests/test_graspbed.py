@@ -55,14 +55,16 @@ def test_the_same_logic_in_python_and_in_the_cpp_plugin_grips_alike():
         pytest.skip("GRASPBED_TEST_PLUGIN not set")
     py = graspbed.run(DEFAULT, controller=ThresholdGrip())["signals"]
     cpp = graspbed.run(DEFAULT, controller="plugin:" + plugin)["signals"]
-    # Same arithmetic on the same state, tick by tick: the same efforts to rounding.
+    # Same arithmetic on the same state, tick by tick: the same efforts to rounding; the same hand
+    # state read into the same diagnostic.
     np.testing.assert_allclose(py["grip_effort"], cpp["grip_effort"], atol=1e-9)
+    np.testing.assert_array_equal(py["ctl_index_current_a"], cpp["ctl_index_current_a"])
 
 
 def test_numpy_scalars_and_dicts_are_commands_too(short_grasp):
     class NumpyEffort(ThresholdGrip):
-        def update(self, state, t):
-            effort = super().update(state, t)
+        def update(self, state, hand, t):
+            effort = super().update(state, hand, t)
             if isinstance(effort, graspbed.HandCommand):
                 return {"grip_effort": effort.grip_effort, "brake": effort.brake}
             return np.float32(effort)
@@ -89,9 +91,9 @@ def test_diagnostic_channels_reach_the_signals(short_grasp):
     class Traced(ThresholdGrip):
         diagnostic_channels = ("sensed_fn_n", "units_in_contact")
 
-        def update(self, state, t):
+        def update(self, state, hand, t):
             self.last = (state.total_fn_n, state.contact_count)
-            return super().update(state, t)
+            return super().update(state, hand, t)
 
         def diagnostics(self):
             return self.last
@@ -128,7 +130,7 @@ def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_gras
     seen = {}
 
     class Probe(ThresholdGrip):
-        def update(self, state, t):
+        def update(self, state, hand, t):
             if state.contact_count > 0 and "fn" not in seen:
                 fn = state.fn_n
                 seen["fn"] = np.copy(fn)
@@ -140,7 +142,7 @@ def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_gras
                     fn[0] = 1.0
                 with pytest.raises(AttributeError):
                     state.total_fn_n = 0.0
-            return super().update(state, t)
+            return super().update(state, hand, t)
 
     graspbed.run(short_grasp(0.4), controller=Probe())
     assert seen["shape"] == (UNITS,)
@@ -158,7 +160,7 @@ def test_the_state_is_read_only_and_its_arrays_are_views_of_the_units(short_gras
 ])
 def test_a_bad_controller_return_ends_the_run_with_controller_error(bad, message, short_grasp):
     class Bad(ThresholdGrip):
-        def update(self, state, t):
+        def update(self, state, hand, t):
             return bad
 
     with pytest.raises(graspbed.ControllerError, match=message):
@@ -167,10 +169,10 @@ def test_a_bad_controller_return_ends_the_run_with_controller_error(bad, message
 
 def test_an_exception_in_update_names_the_controller_and_the_error(short_grasp):
     class Raises(ThresholdGrip):
-        def update(self, state, t):
+        def update(self, state, hand, t):
             if t > 0.1:
                 raise KeyError("lost my gains")
-            return super().update(state, t)
+            return super().update(state, hand, t)
 
     with pytest.raises(graspbed.ControllerError, match=r"Python controller python:Raises.update\(\): KeyError"):
         graspbed.run(short_grasp(0.3), controller=Raises())
@@ -193,7 +195,7 @@ def test_a_controller_without_update_is_bad_input():
 def test_bad_input_is_a_config_error_with_file_line_and_key():
     with pytest.raises(graspbed.ConfigError, match=r"scenarios/default.yaml: object.mass_kg = -1: must be >= 0.001"):
         graspbed.run(DEFAULT, overrides={"object.mass_kg": -1})
-    with pytest.raises(ValueError, match="controller.name = nope: unknown name; valid names: constant_grip, grip_slip, open_loop"):
+    with pytest.raises(ValueError, match="controller.name = nope: unknown name; valid names: constant_grip, grip_slip, learned_slip, open_loop"):
         graspbed.run(DEFAULT, controller="nope")
 
 

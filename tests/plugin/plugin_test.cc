@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -40,6 +41,7 @@ using ::testing::HasSubstr;
 const std::string kPluginDir = GRASPBED_TEST_PLUGIN_DIR;
 const std::string kThreshold = kPluginDir + "/libthreshold_grip.so";
 const std::string kWrongVersion = kPluginDir + "/libwrong_version_plugin.so";
+const std::string kApi2 = kPluginDir + "/libapi2_plugin.so";
 const std::string kThrowing = kPluginDir + "/libthrowing_plugin.so";
 const std::string kNotAPlugin = kPluginDir + "/libnot_a_plugin.so";
 const std::string kMissing = kPluginDir + "/libno_such_plugin.so";
@@ -104,6 +106,54 @@ TEST(PluginLoaderTest, TheControllerClosesHoldsAndOpensWithoutAllocating) {
   EXPECT_EQ(graspbed::test_support::AllocationCount(), before) << "Update allocated";
 }
 
+// A hand that reports its index: position, current and stops known, the index at `closed_rad`.
+hand::HandState IndexAt(double closed_rad, bool at_closed_stop, double current_a) {
+  hand::HandState hand;
+  hand.time_s = 0.0;
+  hand.digit_count = 2;
+  hand::DigitState& index = hand.digits[0];
+  index.joint_count = 2;
+  index.position_known = index.velocity_known = index.current_known = index.stops_known = true;
+  index.joint_position = {closed_rad, closed_rad};
+  index.motor_current_a = current_a;
+  index.stall_current_a = 1.0;
+  index.at_closed_stop = at_closed_stop;
+  return hand;
+}
+
+TEST(PluginLoaderTest, TheControllerReadsTheHandWithoutAllocating) {
+  const std::unique_ptr<GraspController> controller = MakeController(Plugin(kThreshold), {});
+  controller->Reset();
+  controller->SetIntent(GraspIntent::kClose);
+  sensor::TactileState state;  // nothing felt
+  state.unit_count = 20;
+  state.valid_count = 20;
+  ASSERT_EQ(controller->diagnostic_channels().size(), 2u);
+  EXPECT_STREQ(controller->diagnostic_channels()[1].name, "index_current_a");
+  std::array<double, 2> diagnostics{};
+  const long before = graspbed::test_support::AllocationCount();
+  // Closing freely: the approach effort, and the index's current logged as the hand measured it.
+  EXPECT_DOUBLE_EQ(controller->Update(state, IndexAt(0.5, false, 0.02), 0.0).grip_effort, 0.3);
+  controller->ReadDiagnostics(diagnostics);
+  EXPECT_DOUBLE_EQ(diagnostics[1], 0.02);
+  EXPECT_STREQ(controller->telemetry().phase, "closing");
+  // At the closed stop without contact: closed on nothing, the motor stops pushing the stop, and
+  // stays stopped (even if the index springs back off the stop) until the next intent.
+  EXPECT_DOUBLE_EQ(controller->Update(state, IndexAt(0.98, true, 0.31), 0.001).grip_effort, 0.0);
+  EXPECT_STREQ(controller->telemetry().phase, "closed_empty");
+  EXPECT_DOUBLE_EQ(controller->Update(state, IndexAt(0.9, false, 0.01), 0.002).grip_effort, 0.0);
+  // A hand without proprioception: the current is logged unknown (NaN), closing goes on.
+  controller->SetIntent(GraspIntent::kClose);
+  EXPECT_DOUBLE_EQ(controller->Update(state, hand::HandState{}, 0.003).grip_effort, 0.3);
+  controller->ReadDiagnostics(diagnostics);
+  EXPECT_TRUE(std::isnan(diagnostics[1]));
+  // Stops not known (a device on protocol version 1): the flag is not trusted.
+  hand::HandState unknown_stops = IndexAt(0.98, true, 0.31);
+  unknown_stops.digits[0].stops_known = false;
+  EXPECT_DOUBLE_EQ(controller->Update(state, unknown_stops, 0.004).grip_effort, 0.3);
+  EXPECT_EQ(graspbed::test_support::AllocationCount(), before) << "Update allocated";
+}
+
 TEST(PluginLoaderTest, AMissingLibraryIsNamed) {
   EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kMissing), {}); }),
               HasSubstr("controller plugin " + kMissing + ": no such file"));
@@ -129,6 +179,15 @@ TEST(PluginLoaderTest, APluginOfAnotherApiVersionIsRefusedBeforeItIsCalled) {
               HasSubstr(": built against controller API version " +
                         std::to_string(GRASPBED_CONTROLLER_API_VERSION + 1) + ", this graspbed has version " +
                         std::to_string(GRASPBED_CONTROLLER_API_VERSION) + "; rebuild the plugin"));
+}
+
+TEST(PluginLoaderTest, APluginBuiltAgainstApiVersion2IsRefusedNamingBothVersions) {
+  // Version 3 changed Update (the HandState): a version-2 plugin's vtable is not this graspbed's.
+  static_assert(GRASPBED_CONTROLLER_API_VERSION == 3, "update this test's message for the new version");
+  EXPECT_THAT(ErrorOf([] { MakeController(Plugin(kApi2), {}); }),
+              HasSubstr("controller plugin " + kApi2 +
+                        ": built against controller API version 2, this graspbed has version 3; rebuild the "
+                        "plugin against this graspbed's headers"));
 }
 
 TEST(PluginLoaderTest, AFactoryThatThrowsBecomesBadInput) {
@@ -196,6 +255,10 @@ TEST(PluginScenarioTest, BadPluginSectionsNameFileLineAndKey) {
       {"controller:\n  plugin: " + kWrongVersion + "\n", ":6: controller.plugin = " + kWrongVersion +
                                                              ": controller plugin " + kWrongVersion +
                                                              ": built against"},
+      {"controller:\n  plugin: " + kApi2 + "\n",
+       ":6: controller.plugin = " + kApi2 + ": controller plugin " + kApi2 +
+           ": built against controller API version 2, this graspbed has "
+           "version 3"},
       {"controller:\n  name: plugin:" + kNotAPlugin + "\n", ":6: controller.name = plugin:" + kNotAPlugin +
                                                                 ": controller plugin " + kNotAPlugin +
                                                                 ": not a graspbed"},
@@ -292,6 +355,11 @@ Hold HoldOf(const std::string& csv_path) {
   return hold;
 }
 
+// Held at the plugin's 3 N target the index's motor makes 0.15 of its stall torque, about 0.17 A of
+// the realistic profile's 1 A (measured: 0.18 A on average); before the close, about the 10 mA offset.
+constexpr double kHeldIndexCurrentMinA = 0.1;
+constexpr size_t kBeforeCloseRow = 100;  // 0.1 s: the default scenario closes at 0.15 s
+
 class PluginCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -309,6 +377,7 @@ TEST_F(PluginCliTest, EveryRefusedPluginExitsTwoWithItsReason) {
       {kMissing, "no such file"},
       {kNotAPlugin, "not a graspbed controller plugin"},
       {kWrongVersion, "built against controller API version"},
+      {kApi2, "built against controller API version 2, this graspbed has version 3"},
       {kThrowing, "cannot open weights.bin"},
   };
   for (const Case& c : cases) {
@@ -339,7 +408,7 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   // its default target (3 N).
   const std::string signals = graspbed::test_support::ReadText(dir_.Path("rel/signals.csv"));
   const std::string header = signals.substr(0, signals.find('\n'));
-  EXPECT_THAT(header, ::testing::EndsWith(",ctl_grip_error_n"));
+  EXPECT_THAT(header, ::testing::EndsWith(",ctl_grip_error_n,ctl_index_current_a"));
   const double default_target_n = ControllerParameters(Plugin(kThreshold)).at(0).default_value;
   const Hold hold = HoldOf(dir_.Path("rel/signals.csv"));
   ASSERT_GT(hold.rows, 0) << "never held, or held too late to settle";
@@ -348,6 +417,18 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   EXPECT_EQ(hold.min_target_n, default_target_n);
   EXPECT_EQ(hold.max_target_n, default_target_n);
   EXPECT_NEAR(hold.mean_estimate_n, default_target_n, kHeldGripErrorN);
+  // The plugin reads the hand: its diagnostic is the index's motor current the loop logged as the
+  // hand state it gave the plugin, row by row, and it rises once the index grips.
+  auto columns = ReadSignalColumns(dir_.Path("rel/signals.csv"));
+  const std::vector<double>& logged = columns["ctl_index_current_a"];
+  const std::vector<double>& measured = columns["finger_current_a"];
+  ASSERT_EQ(logged.size(), measured.size());
+  for (size_t row = 0; row < logged.size(); ++row) {
+    const bool same = logged[row] == measured[row] || (std::isnan(logged[row]) && std::isnan(measured[row]));
+    ASSERT_TRUE(same) << "row " << row << ": " << logged[row] << " != " << measured[row];
+  }
+  EXPECT_LT(measured[kBeforeCloseRow], kHeldIndexCurrentMinA);
+  EXPECT_GT(measured.back(), kHeldIndexCurrentMinA);
   // By bare name on GRASPBED_PLUGIN_PATH (the child inherits it), with a parameter through --set.
   ASSERT_EQ(::setenv("GRASPBED_PLUGIN_PATH", kPluginDir.c_str(), 1), 0);
   const CliResult named =
@@ -373,6 +454,32 @@ TEST_F(PluginCliTest, TheDefaultScenarioHoldsWithThePluginByRelativePathAndByNam
   EXPECT_EQ(out_of_range.exit_code, 2);
   EXPECT_THAT(out_of_range.err, HasSubstr("--set controller.params.target_grip_n=40: "));
   EXPECT_THAT(out_of_range.err, HasSubstr("controller.params.target_grip_n = 40: must be <= 10"));
+}
+
+TEST_F(PluginCliTest, ThePluginStopsAtTheClosedStopWhenItClosesOnNothing) {
+  // The hand lifted clear of the box, then closed: the index runs onto its closed stop (about 2 s at
+  // the approach effort), where the plugin stops driving the motor.
+  const std::string scenario = dir_.Write("empty.yaml", R"(name: close_on_nothing
+duration_s: 3.0
+object: {shape: box, size_m: [0.05, 0.05, 0.08], mass_kg: 0.1, friction: 0.8}
+controller: {name: grip_slip}
+script:
+  - {at_s: 0.0, action: lift, height_m: 0.15, duration_s: 0.2}
+  - {at_s: 0.3, action: close}
+)");
+  const CliResult run = RunCli("run " + scenario + " --no-plots --out " + dir_.Path("empty") +
+                               " --controller plugin:" + kThreshold);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  EXPECT_THAT(graspbed::test_support::ReadText(dir_.Path("empty/signals.csv")), HasSubstr(",closed_empty,"));
+  auto columns = ReadSignalColumns(dir_.Path("empty/signals.csv"));
+  const std::vector<double>& at_stop = columns["finger_at_closed_stop"];
+  const std::vector<double>& effort = columns["grip_effort"];
+  const auto reached = std::find(at_stop.begin(), at_stop.end(), 1.0);
+  ASSERT_NE(reached, at_stop.end()) << "the index never reached its closed stop";
+  const size_t first = static_cast<size_t>(reached - at_stop.begin());
+  ASSERT_GT(first, 0u);
+  EXPECT_DOUBLE_EQ(effort[first - 1], 0.3) << "closing at the approach effort until then";
+  for (size_t row = first; row < effort.size(); ++row) ASSERT_EQ(effort[row], 0.0) << "row " << row;
 }
 
 TEST_F(PluginCliTest, SuiteSweepAndScoreRunThePlugin) {
