@@ -400,6 +400,8 @@ constexpr DiagnosticChannel kDiagnosticChannels[] = {
     {"centroid_cue", "1 while the centroid cue is up (before the ceiling's hold) [-]"},
     {"settled", "1 once the cues are armed after contact [-]"},
     {"shear_blind", "1 while the readout's shear noise is above shear_blind_noise_n [-]"},
+    {"motor_squeeze_n", "squeeze the motor current says, 0 unknown (proprioception) [N]"},
+    {"sensed_share", "share of the squeeze the units see, the grip's scale (1 until measured) [-]"},
 };
 
 }  // namespace
@@ -425,7 +427,9 @@ void GripSlipController::ReadDiagnostics(std::span<double> values) const {
                         s.vibration_slip ? 1.0 : 0.0,
                         s.centroid_slip ? 1.0 : 0.0,
                         s.settled ? 1.0 : 0.0,
-                        s.shear_blind ? 1.0 : 0.0};
+                        s.shear_blind ? 1.0 : 0.0,
+                        diagnostics_.motor_squeeze_n,
+                        diagnostics_.sensed_share};
   static_assert(std::size(all) == std::size(kDiagnosticChannels));
   std::copy_n(all, std::min(values.size(), std::size(all)), values.begin());
 }

@@ -40,20 +40,14 @@ void MotorSqueeze::Update(const hand::HandState& hand, double last_effort, doubl
                           double dt_s) {
   const hand::DigitState& index = hand.digits[0];
   closed_on_nothing_ = hand.digit_count > 0 && !hand.stale && index.stops_known && index.at_closed_stop;
-  double share_sum = 0.0;
-  int motors = 0;
-  for (int d = 0; d < hand.digit_count; ++d) {
-    const hand::DigitState& digit = hand.digits[d];
-    if (!digit.current_known || digit.stall_current_a <= 0.0) continue;
-    share_sum += digit.motor_current_a / digit.stall_current_a;
-    ++motors;
-  }
-  known_ = motors > 0 && !hand.stale;
+  // The index's own motor: the units are on its pad, and the thumb's current also carries what its
+  // joint's creep under the load back-drives.
+  known_ = hand.digit_count > 0 && !hand.stale && index.current_known && index.stall_current_a > 0.0;
   if (!known_) {
     squeeze_n_ = 0.0;
     return;
   }
-  const double share = share_sum / motors;
+  const double share = index.motor_current_a / index.stall_current_a;
   const bool still = Still(hand, config_.max_joint_speed_rad_s);
   // Motor off and digits still: whatever current flows is the sensing chain's offset.
   if (last_effort == 0.0 && still) offset_share_ += Weight(config_.offset_filter_s, dt_s) * (share - offset_share_);

@@ -28,6 +28,10 @@ struct MotorSqueezeConfig {
   /// ... and is kept in [min_sensed_share, 1]: below it the object is mostly off the pad, and a
   /// grip scaled by it would squeeze blindly [-].
   double min_sensed_share = 0.25;
+  /// A share above this counts as 1: the motor's squeeze is known to +-10 % (the current sensing's
+  /// gain error and noise, the pad's lever arm moving with the posture), and a grip scaled by a
+  /// share of 0.9 would be a 10 % weaker grip on an object the units see whole [-].
+  double full_share_above = 0.75;
   double share_filter_s = 0.05;   ///< low-pass time constant of the sensed share [s]
   double offset_filter_s = 0.02;  ///< low-pass time constant of the tared current offset [s]
 };
@@ -46,12 +50,14 @@ class MotorSqueeze {
   /// last tick [s]. A hand without a known current leaves the estimate unknown.
   void Update(const hand::HandState& hand, double last_effort, double sensed_grip_n, bool calm, double dt_s);
 
-  /// Whether a motor current is known (fresh) at this tick.
+  /// Whether the index motor's current is known (fresh) at this tick.
   bool known() const { return known_; }
-  /// The squeeze the motor makes, the mean over the digits with a known current [N] (0 unknown).
+  /// The squeeze the index's motor makes [N] (0 unknown).
   double squeeze_n() const { return squeeze_n_; }
   /// Share of the squeeze the units see, in [min_sensed_share, 1]; 1 until it has been measured.
-  double sensed_share() const { return share_measured_ ? share_ : 1.0; }
+  double sensed_share() const {
+    return share_measured_ && share_ <= config_.full_share_above ? share_ : 1.0;
+  }
   /// True once the sensed share has been measured in this grasp.
   bool share_measured() const { return share_measured_; }
   /// The index (or the jaw's finger) rests at its closed end stop: a closing found nothing.

@@ -23,10 +23,12 @@ inline constexpr int kMaxDigitJoints = 2;
 struct DigitState {
   int joint_count = 0;  ///< joints reported, <= kMaxDigitJoints (proximal first)
   /// True when the digit's joints are slides (the jaw fixture): positions in [m], velocities in
-  /// [m/s]; false for hinges: [rad], [rad/s]. Positions grow as the digit closes, 0 at open.
+  /// [m/s]; false for hinges: [rad], [rad/s].
   bool linear = false;
   bool position_known = false;  ///< joint_position_* holds encoder readings
-  std::array<double, kMaxDigitJoints> joint_position{};  ///< flexion from the open pose [rad] or [m]
+  /// Flexion since the hand's start pose (the pre-shape) [rad] or [m], + closing; the open stop
+  /// may lie below 0 (the pre-shape is partly closed).
+  std::array<double, kMaxDigitJoints> joint_position{};
   bool velocity_known = false;
   std::array<double, kMaxDigitJoints> joint_velocity{};  ///< d(position)/dt [rad/s] or [m/s]
   /// The digit's drive motor current [A], + closing. Current, not a torque estimate: it is what the
