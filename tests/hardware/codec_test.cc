@@ -433,9 +433,10 @@ TEST(ProtocolHand, HandRoundTripsWithinTheWiresResolution) {
   EXPECT_TRUE(thumb.encoder_fault);
   EXPECT_NEAR(thumb.motor_current_a, -0.02, kMicroTol);
   EXPECT_EQ(thumb.stall_current_a, 0.0);  // 0 on the wire: unknown
-  // 66 body bytes + CRC, COBS overhead and the delimiter.
+  // 66 body bytes + 2 CRC, one COBS code byte (no run of 254) and the delimiter: docs/protocol.md's
+  // 70 bytes on the wire per HAND.
   EXPECT_EQ(HandBodySize(2), 66u);
-  EXPECT_LE(wire.size(), 66u + 2 + 2 + 1 + 20);
+  EXPECT_EQ(wire.size(), 70u);
 }
 
 TEST(ProtocolHand, ACorruptedHandIsOneCrcErrorAndTheNextDecodes) {

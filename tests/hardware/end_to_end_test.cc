@@ -136,7 +136,7 @@ class EndToEndTest : public ::testing::Test {
 };
 
 // Holding the default box, the index's MCP is flexed about 0.07 rad and its motor draws about
-// 0.085 A (docs/simulation.md, "Proprioception"; 0.01 A offset at rest): well above these.
+// 0.085 A (sim/proprioception.h, the realistic profile; 0.01 A offset at rest): well above these.
 constexpr double kHeldFingerFlexionRad = 0.03;
 constexpr double kHeldMotorCurrentA = 0.03;
 
