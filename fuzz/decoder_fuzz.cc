@@ -45,7 +45,8 @@ bool SameFields(const DecodedPacket& a, const DecodedPacket& b) {
     case PacketType::kHand: {
       const HandPacket& x = a.hand;
       const HandPacket& y = b.hand;
-      if (x.sequence != y.sequence || x.device_time_us != y.device_time_us || x.digit_count != y.digit_count) {
+      if (x.sequence != y.sequence || x.device_time_us != y.device_time_us ||
+          x.digit_count != y.digit_count) {
         return false;
       }
       for (int d = 0; d < x.digit_count; ++d) {

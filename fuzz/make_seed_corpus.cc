@@ -134,8 +134,8 @@ int main(int argc, char** argv) {
       {"garbage_between",
        Join({Bytes{0x13, 0x37, 0x42}, Frame(4, 20, 4000), Bytes(40, 0xff), Bytes{0x00}, Frame(5, 20, 5000)})},
       {"wrapping_sequence", Join({Frame(65535, 4, 0xFFFFFC18u), Frame(0, 4, 0)})},
-      {"v2_hello_select_hand_frames",
-       Join({Hello(0, 20, 2), Wire(select), Hand(0, 0, 2), Frame(0, 20, 0), Hand(1, 1000, 2), Frame(1, 20, 1000)})},
+      {"v2_hello_select_hand_frames", Join({Hello(0, 20, 2), Wire(select), Hand(0, 0, 2), Frame(0, 20, 0),
+                                            Hand(1, 1000, 2), Frame(1, 20, 1000)})},
       {"hand_one_digit", Hand(7, 7000, 1)},
       {"hand_malformed", Join({WireBody(three_digits), WireBody(hand_v1), Hand(8, 8000, 2)})},
   };

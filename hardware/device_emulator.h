@@ -4,9 +4,10 @@
 /// nominal rate (from a frame-source callback) while streaming, MOTOR_COMMANDs to a motor-sink
 /// callback, the 100 ms motor watchdog, STREAM_CONTROL; as a version-2 device (the default) also a
 /// HAND before each frame (from a hand-source callback) once the host has chosen version 2 with
-/// PROTOCOL_SELECT, and as a version-1 device (EmulatorConfig::protocol_version) none of that. The pty's slave is exposed at a symlink so a
-/// host opens it like a real port. Fault-injection knobs reproduce every fault the host must survive.
-/// No MuJoCo here: `graspbed emulate` plugs the simulation in through the callbacks.
+/// PROTOCOL_SELECT, and as a version-1 device (EmulatorConfig::protocol_version) none of that. The pty's
+/// slave is exposed at a symlink so a host opens it like a real port. Fault-injection knobs reproduce every
+/// fault the host must survive. No MuJoCo here: `graspbed emulate` plugs the simulation in through the
+/// callbacks.
 
 #include <atomic>
 #include <cstdint>
@@ -75,10 +76,10 @@ struct EmulatorStats {
   uint64_t host_corrupt = 0;  ///< host packets refused by our decoder
   uint64_t host_unknown = 0;  ///< host packets of a type this device's version does not define
   uint64_t selects = 0;       ///< PROTOCOL_SELECTs taken (version 2 chosen by the host)
-  uint64_t hand_sent = 0;       ///< HANDs written to the pty (including corrupted ones)
-  uint64_t hand_corrupted = 0;  ///< HANDs sent with a flipped byte (CorruptHand)
-  uint64_t hand_malformed = 0;  ///< valid-CRC HANDs with a bad digit count sent (InjectMalformedHand)
-  uint64_t hand_dropped = 0;    ///< HANDs skipped by DropHand (sequence numbers still advance)
+  uint64_t hand_sent = 0;     ///< HANDs written to the pty (including corrupted ones)
+  uint64_t hand_corrupted = 0;   ///< HANDs sent with a flipped byte (CorruptHand)
+  uint64_t hand_malformed = 0;   ///< valid-CRC HANDs with a bad digit count sent (InjectMalformedHand)
+  uint64_t hand_dropped = 0;     ///< HANDs skipped by DropHand (sequence numbers still advance)
   uint64_t hand_overflowed = 0;  ///< HANDs not sent because the host did not read
   uint16_t last_frame_sequence = 0;
   bool streaming = false;

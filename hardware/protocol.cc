@@ -77,11 +77,13 @@ PacketError ParseHand(std::span<const uint8_t> body, HandPacket* hand) {
   if (n < 1 || n > kMaxHandDigits) return PacketError::kBadHandCount;
   if (body.size() != HandBodySize(n)) return PacketError::kBadLength;
   for (int d = 0; d < n; ++d) {
-    if (p[10 + kHandDigitWireSize * static_cast<size_t>(d)] > kMaxHandJoints) return PacketError::kBadHandCount;
+    if (p[10 + kHandDigitWireSize * static_cast<size_t>(d)] > kMaxHandJoints)
+      return PacketError::kBadHandCount;
   }
   hand->device_time_us = GetU32(p + 4);
   hand->digit_count = n;
-  for (int d = 0; d < n; ++d) GetHandDigit(p + 10 + kHandDigitWireSize * static_cast<size_t>(d), &hand->digits[d]);
+  for (int d = 0; d < n; ++d)
+    GetHandDigit(p + 10 + kHandDigitWireSize * static_cast<size_t>(d), &hand->digits[d]);
   for (int d = n; d < kMaxHandDigits; ++d) hand->digits[d] = HandDigitWire{};
   return PacketError::kNone;
 }
@@ -115,12 +117,24 @@ PacketError ParseBaseType(PacketType type, std::span<const uint8_t> body, Decode
 
 void SetSequence(PacketType type, uint16_t sequence, DecodedPacket* packet) {
   switch (type) {
-    case PacketType::kTactileFrame: packet->frame.sequence = sequence; break;
-    case PacketType::kHello: packet->hello.sequence = sequence; break;
-    case PacketType::kHand: packet->hand.sequence = sequence; break;
-    case PacketType::kMotorCommand: packet->motor.sequence = sequence; break;
-    case PacketType::kStreamControl: packet->stream.sequence = sequence; break;
-    case PacketType::kProtocolSelect: packet->select.sequence = sequence; break;
+    case PacketType::kTactileFrame:
+      packet->frame.sequence = sequence;
+      break;
+    case PacketType::kHello:
+      packet->hello.sequence = sequence;
+      break;
+    case PacketType::kHand:
+      packet->hand.sequence = sequence;
+      break;
+    case PacketType::kMotorCommand:
+      packet->motor.sequence = sequence;
+      break;
+    case PacketType::kStreamControl:
+      packet->stream.sequence = sequence;
+      break;
+    case PacketType::kProtocolSelect:
+      packet->select.sequence = sequence;
+      break;
   }
 }
 
@@ -326,7 +340,8 @@ void ToHandState(const HandPacket& packet, hand::HandState* state) {
   }
 }
 
-void FromHandState(const hand::HandState& state, uint16_t sequence, uint32_t device_time_us, HandPacket* packet) {
+void FromHandState(const hand::HandState& state, uint16_t sequence, uint32_t device_time_us,
+                   HandPacket* packet) {
   packet->sequence = sequence;
   packet->device_time_us = device_time_us;
   packet->digit_count = static_cast<uint8_t>(std::clamp(state.digit_count, 0, kMaxHandDigits));
@@ -349,7 +364,8 @@ void FromHandState(const hand::HandState& state, uint16_t sequence, uint32_t dev
       wire.velocity[j] = digit.velocity_known ? ToWireI32(digit.joint_velocity[j], 1e6) : 0;
     }
     wire.motor_current_ua = digit.current_known ? ToWireI32(digit.motor_current_a, 1e6) : 0;
-    const double stall_ua = std::isfinite(digit.stall_current_a) ? std::round(digit.stall_current_a * 1e6) : 0.0;
+    const double stall_ua =
+        std::isfinite(digit.stall_current_a) ? std::round(digit.stall_current_a * 1e6) : 0.0;
     wire.stall_current_ua = static_cast<uint32_t>(std::clamp(stall_ua, 0.0, 4294967295.0));
   }
 }

@@ -44,11 +44,11 @@ static_assert(kMaxFrameUnits <= sensor::kMaxUnits, "RawFrame must hold every uni
 
 /// Packet type (header byte 0).
 enum class PacketType : uint8_t {
-  kTactileFrame = 0x01,   ///< device -> host
-  kHello = 0x02,          ///< device -> host
-  kHand = 0x03,           ///< device -> host, version 2
-  kMotorCommand = 0x81,   ///< host -> device
-  kStreamControl = 0x82,  ///< host -> device
+  kTactileFrame = 0x01,    ///< device -> host
+  kHello = 0x02,           ///< device -> host
+  kHand = 0x03,            ///< device -> host, version 2
+  kMotorCommand = 0x81,    ///< host -> device
+  kStreamControl = 0x82,   ///< host -> device
   kProtocolSelect = 0x83,  ///< host -> device, version 2
 };
 
@@ -83,10 +83,12 @@ struct HelloPacket {
 };
 
 /// The protocol version a HELLO says its device speaks: its max_version, 0 read as 1.
-inline uint8_t DeviceVersion(const HelloPacket& hello) { return hello.max_version == 0 ? 1 : hello.max_version; }
+inline uint8_t DeviceVersion(const HelloPacket& hello) {
+  return hello.max_version == 0 ? 1 : hello.max_version;
+}
 
 /// HAND flag bits (per digit, byte 1 of its block).
-inline constexpr uint8_t kHandLinear = 0x01;          ///< slides: positions in [um], else hinges [urad]
+inline constexpr uint8_t kHandLinear = 0x01;  ///< slides: positions in [um], else hinges [urad]
 inline constexpr uint8_t kHandPositionKnown = 0x02;
 inline constexpr uint8_t kHandVelocityKnown = 0x04;
 inline constexpr uint8_t kHandCurrentKnown = 0x08;
@@ -101,12 +103,12 @@ static_assert(kMaxHandDigits == hand::kMaxDigits && kMaxHandJoints == hand::kMax
 
 /// One digit of a HAND packet, in wire units.
 struct HandDigitWire {
-  uint8_t joint_count = 0;  ///< 0..kMaxHandJoints
-  uint8_t flags = 0;        ///< kHand* bits
+  uint8_t joint_count = 0;                         ///< 0..kMaxHandJoints
+  uint8_t flags = 0;                               ///< kHand* bits
   std::array<int32_t, kMaxHandJoints> position{};  ///< from the open pose [urad] or [um] (kHandLinear)
   std::array<int32_t, kMaxHandJoints> velocity{};  ///< [urad/s] or [um/s]
-  int32_t motor_current_ua = 0;                     ///< drive motor current [uA], + closing
-  uint32_t stall_current_ua = 0;                    ///< current at stall, full effort [uA]; 0 unknown
+  int32_t motor_current_ua = 0;                    ///< drive motor current [uA], + closing
+  uint32_t stall_current_ua = 0;                   ///< current at stall, full effort [uA]; 0 unknown
 };
 
 /// 0x03 HAND (version 2): the hand's proprioception at one sample.
@@ -213,7 +215,8 @@ void FromRawFrame(const sensor::RawFrame& frame, uint16_t sequence, uint32_t dev
 void ToHandState(const HandPacket& packet, hand::HandState* state);
 /// Fills a HAND from `state` (digits beyond kMaxHandDigits dropped; unknown or non-finite values
 /// sent as 0 with their known flag clear; values clamped to the i32 range).
-void FromHandState(const hand::HandState& state, uint16_t sequence, uint32_t device_time_us, HandPacket* packet);
+void FromHandState(const hand::HandState& state, uint16_t sequence, uint32_t device_time_us,
+                   HandPacket* packet);
 
 /// Motor effort in [-1, 1] to the wire's i16 (clamped), and back.
 int16_t EffortToWire(double effort);

@@ -46,8 +46,8 @@ struct RecordedSession {
   std::vector<hand::HandCommand> commands;
   std::vector<std::string> phase;
   /// Per tick: the hand columns named at loading, hand_column_count cells each (NaN, written `nan`
-  /// or left empty: unknown); the first, a time, on the loop's clock (a frame log's shifted like its ticks). Empty
-  /// when the recording lacks any of them (made before they existed, or a version-1 device's log).
+  /// or left empty: unknown); the first, a time, on the loop's clock (a frame log's shifted like its ticks).
+  /// Empty when the recording lacks any of them (made before they existed, or a version-1 device's log).
   std::vector<double> hand_cells;
   size_t hand_column_count = 0;
 

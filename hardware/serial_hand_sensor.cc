@@ -17,7 +17,8 @@ bool SerialHandSensor::Read(double time_s, hand::HandState* state) {
   *state = scratch_;
   // The device's clock is not the loop's: the sample is dated by when its last byte was read.
   // (Not before the loop's clock began: a HAND read before the session's first tick counts from 0.)
-  state->time_s = std::max(0.0, time_s - static_cast<double>(std::max<int64_t>(0, now_ns - arrival_ns)) * 1e-9);
+  state->time_s =
+      std::max(0.0, time_s - static_cast<double>(std::max<int64_t>(0, now_ns - arrival_ns)) * 1e-9);
   state->stale = false;
   return true;
 }

@@ -98,7 +98,8 @@ void SerialLink::Start() {
   if (!answered || error.empty()) {
     std::ostringstream message;
     message << "serial port " << path_ << ": no HELLO from the device within " << config_.hello_timeout_s
-            << " s: is it a graspbed readout (protocol v1 or v2) at the configured baud (" << config_.baud << ")?";
+            << " s: is it a graspbed readout (protocol v1 or v2) at the configured baud (" << config_.baud
+            << ")?";
     throw std::runtime_error(message.str());
   }
   throw std::runtime_error(error);

@@ -395,7 +395,8 @@ class SerialRun final : public BenchRun {
       hardware::SerialLink& link = *backend_->link();
       frame_logger_ = std::make_unique<hardware::FrameLogger>(
           config.log, [&link](hardware::TappedFrame* entry) { return link.PopTap(entry); }, layout_,
-          calibration_, loop_config_.readout, loop_config_.inversion, backend_->nominal_r0_ohm(), HandLogColumns());
+          calibration_, loop_config_.readout, loop_config_.inversion, backend_->nominal_r0_ohm(),
+          HandLogColumns());
     }
   }
 
@@ -543,8 +544,8 @@ class ReplayRun final : public BenchRun {
         replay_hand_(recording_),
         intent_from_recording_(!recording_.intent.empty()),
         recorded_offset_(BenchRun::Columns().size()) {
-    loop_ = std::make_unique<controller::ControlLoop>(replay_backend_, replay_hand_, *grasp_, no_actuator_, layout_,
-                                                      calibration_, loop_config_);
+    loop_ = std::make_unique<controller::ControlLoop>(replay_backend_, replay_hand_, *grasp_, no_actuator_,
+                                                      layout_, calibration_, loop_config_);
   }
 
   std::vector<std::string> Columns() const override {

@@ -92,7 +92,8 @@ std::string HandText(const nlohmann::json& summary) {
   if (!summary.contains("protocol_version")) return "";
   std::string text = "; protocol v" + summary.at("protocol_version").dump() + ", " +
                      summary.at("hand_messages").dump() + " hand messages";
-  if (summary.at("hand_malformed").get<uint64_t>() > 0) text += " (" + summary.at("hand_malformed").dump() + " malformed)";
+  if (summary.at("hand_malformed").get<uint64_t>() > 0)
+    text += " (" + summary.at("hand_malformed").dump() + " malformed)";
   return text;
 }
 
@@ -114,7 +115,8 @@ nlohmann::json HwSummary(const HwSession& session, const RunResult& result) {
   summary["final_valid_units"] = bench.at("final_valid_units");
   summary["interrupted"] = !result.completed;
   // The hand's proprioception: the protocol version chosen with the device (1: no HAND) and its HANDs.
-  for (const char* key : {"protocol_version", "hand_messages", "hand_malformed", "hand_dropped", "hand_readings"}) {
+  for (const char* key :
+       {"protocol_version", "hand_messages", "hand_malformed", "hand_dropped", "hand_readings"}) {
     summary[key] = bench.at(key);
   }
   for (const char* key : {"log", "log_rows", "log_rows_lost", "log_error", "last_error"}) {
@@ -199,8 +201,8 @@ std::string HwSummaryText(const HwSessionResult& result) {
        << summary.at("dropped") << " dropped, " << summary.at("reordered") << " reordered, "
        << summary.at("unknown_packets") << " unknown, " << summary.at("reconnects") << " reconnects, "
        << summary.at("stale_periods") << " stale periods, " << summary.at("sessions") << " sessions"
-       << HandText(summary) << "; peak grip " << FormatNewtons(summary.at("peak_total_fn_n").get<double>()) << " N (sensed)"
-       << (result.connected_at_end ? "" : "; device DISCONNECTED at the end")
+       << HandText(summary) << "; peak grip " << FormatNewtons(summary.at("peak_total_fn_n").get<double>())
+       << " N (sensed)" << (result.connected_at_end ? "" : "; device DISCONNECTED at the end")
        << (result.log_error.empty() ? "" : "; log: " + result.log_error) << '\n';
   if (summary.contains("latency")) {
     const nlohmann::json& latency = summary.at("latency");

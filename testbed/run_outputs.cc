@@ -122,7 +122,6 @@ void WriteHandCells(double* row, const hand::HandState& hand) {
   }
 }
 
-
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry) {
   const hand::HandCommand& command = loop.command();

@@ -189,7 +189,8 @@ std::map<std::string, std::vector<std::string>> ReadCells(const std::string& pat
 }
 
 /// Writes `path` less the columns whose names `drop` accepts: a recording from before them.
-void WriteWithout(const std::string& path, const std::string& out, const std::function<bool(const std::string&)>& drop) {
+void WriteWithout(const std::string& path, const std::string& out,
+                  const std::function<bool(const std::string&)>& drop) {
   std::ifstream in(path);
   std::ofstream to(out);
   std::string line;
@@ -663,7 +664,8 @@ TEST_F(BenchRunTest, TheHandStateCrossesTheWireAndReplaysTickForTick) {
   const auto old_replayed = ReadCells(Path("replay_old") + "/signals.csv");
   for (const char* column : testbed::internal::HandColumnNames()) {
     const std::vector<std::string>& cells = old_replayed.at(column);
-    EXPECT_EQ(std::count(cells.begin(), cells.end(), std::string("nan")), static_cast<long>(cells.size())) << column;
+    EXPECT_EQ(std::count(cells.begin(), cells.end(), std::string("nan")), static_cast<long>(cells.size()))
+        << column;
   }
 }
 
@@ -690,7 +692,8 @@ TEST_F(BenchRunTest, AVersionOneDeviceRunsTheScenarioWithTheHandUnknown) {
   for (const char* column : testbed::internal::HandColumnNames()) {
     const std::vector<std::string>& values = cells.at(column);
     ASSERT_GT(values.size(), 1000u);
-    EXPECT_EQ(std::count(values.begin(), values.end(), std::string("nan")), static_cast<long>(values.size())) << column;
+    EXPECT_EQ(std::count(values.begin(), values.end(), std::string("nan")), static_cast<long>(values.size()))
+        << column;
   }
 }
 

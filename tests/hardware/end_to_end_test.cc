@@ -268,8 +268,8 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   const size_t hand_first = 2u + 5u * kUnits;
   const size_t finger_q1 = hand_first + testbed::internal::kHandDigits + testbed::internal::kDigitQ1 -
                            testbed::internal::kHandTime;
-  const size_t finger_current = hand_first + testbed::internal::kHandDigits + testbed::internal::kDigitCurrent -
-                                testbed::internal::kHandTime;
+  const size_t finger_current = hand_first + testbed::internal::kHandDigits +
+                                testbed::internal::kDigitCurrent - testbed::internal::kHandTime;
   std::string last_finger_q1;
   std::string last_finger_current;
   uint64_t rows = 0;

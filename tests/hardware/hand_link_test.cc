@@ -78,8 +78,8 @@ class HandLinkTest : public ::testing::Test {
     backend_->Start();
     actuator_->Start();
     hand_sensor_ = std::make_unique<SerialHandSensor>(backend_->link());
-    loop_ = std::make_unique<controller::ControlLoop>(*backend_, *hand_sensor_, controller_, *actuator_, layout_,
-                                                      sensor::PaperCalibration(kUnits),
+    loop_ = std::make_unique<controller::ControlLoop>(*backend_, *hand_sensor_, controller_, *actuator_,
+                                                      layout_, sensor::PaperCalibration(kUnits),
                                                       controller::ControlLoopConfig{});
   }
 
@@ -178,8 +178,8 @@ TEST_F(HandLinkTest, CorruptDroppedAndMalformedHandsAreCountedAndTheLinkGoesOn) 
   emulator_->InjectMalformedHand(1);
   ASSERT_TRUE(WaitFor([&] {
     const EmulatorStats stats = emulator_->stats();
-    return stats.hand_corrupted - emu0.hand_corrupted == 2 && stats.hand_malformed - emu0.hand_malformed == 1 &&
-           stats.hand_dropped - emu0.hand_dropped == 3;
+    return stats.hand_corrupted - emu0.hand_corrupted == 2 &&
+           stats.hand_malformed - emu0.hand_malformed == 1 && stats.hand_dropped - emu0.hand_dropped == 3;
   }));
   const uint64_t messages = backend_->link()->hand_counters().messages;
   ASSERT_TRUE(WaitFor([&] { return backend_->link()->hand_counters().messages > messages + 5; }));
