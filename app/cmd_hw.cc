@@ -135,6 +135,12 @@ void AddEmulateCommand(CLI::App& root) {
       "--json", emulate_options->json,
       "Print a JSON summary at the end: ground truth and run metrics as the host left the hand");
   emulate
+      ->add_option("--protocol-version", emulate_options->session.protocol_version,
+                   "Highest wire protocol version the device speaks: 2 sends the hand's proprioception "
+                   "(HAND) once the host selects it; 1 is a device from before it (docs/protocol.md)")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
+  emulate
       ->add_option("--soak-cycles", emulate_options->session.soak_cycles,
                    "Inject the soak's fault schedule for N cycles from the host's first stream start "
                    "(corrupted, dropped, reordered and truncated frames, garbage, a disconnect and "

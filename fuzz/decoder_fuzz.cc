@@ -1,6 +1,7 @@
 // libFuzzer target for the wire decoder: arbitrary bytes, fed in chunks whose sizes the input picks,
 // must never crash, read out of bounds (ASan), overflow (UBSan) or deliver an inconsistent packet.
-// Every packet it delivers must survive a round trip (encode again, decode again, same fields), and
+// HAND (protocol version 2) is converted to a hand::HandState as the host does. Every packet it
+// delivers must survive a round trip (encode again, decode again, same fields), and
 // the body parser is also fuzzed directly, past the CRC that random bytes rarely pass.
 // Build, seed corpus and run: docs/hardware.md "Fuzzing".
 #include <algorithm>
@@ -38,8 +39,29 @@ bool SameFields(const DecodedPacket& a, const DecodedPacket& b) {
     }
     case PacketType::kHello:
       return a.hello.sequence == b.hello.sequence && a.hello.firmware_version == b.hello.firmware_version &&
-             a.hello.unit_count == b.hello.unit_count && a.hello.nominal_rate_hz == b.hello.nominal_rate_hz &&
+             a.hello.unit_count == b.hello.unit_count && a.hello.max_version == b.hello.max_version &&
+             a.hello.nominal_rate_hz == b.hello.nominal_rate_hz &&
              a.hello.nominal_r0_milliohm == b.hello.nominal_r0_milliohm;
+    case PacketType::kHand: {
+      const HandPacket& x = a.hand;
+      const HandPacket& y = b.hand;
+      if (x.sequence != y.sequence || x.device_time_us != y.device_time_us ||
+          x.digit_count != y.digit_count) {
+        return false;
+      }
+      for (int d = 0; d < x.digit_count; ++d) {
+        const HandDigitWire& p = x.digits[d];
+        const HandDigitWire& q = y.digits[d];
+        if (p.joint_count != q.joint_count || p.flags != q.flags || p.position != q.position ||
+            p.velocity != q.velocity || p.motor_current_ua != q.motor_current_ua ||
+            p.stall_current_ua != q.stall_current_ua) {
+          return false;
+        }
+      }
+      return true;
+    }
+    case PacketType::kProtocolSelect:
+      return a.select.sequence == b.select.sequence && a.select.version == b.select.version;
     case PacketType::kMotorCommand:
       return a.motor.sequence == b.motor.sequence && a.motor.effort == b.motor.effort &&
              a.motor.flags == b.motor.flags;
@@ -67,6 +89,12 @@ void CheckRoundTrip(const DecodedPacket& packet) {
     case PacketType::kStreamControl:
       size = EncodePacket(packet.stream, wire);
       break;
+    case PacketType::kHand:
+      size = EncodePacket(packet.hand, wire);
+      break;
+    case PacketType::kProtocolSelect:
+      size = EncodePacket(packet.select, wire);
+      break;
   }
   Check(size > 0);  // anything the decoder accepts fits on the wire
   StreamDecoder decoder;
@@ -86,6 +114,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   StreamDecoder decoder;
   static DecodedPacket packet;  // large: keep it off the fuzzer's stack
   static graspbed::sensor::RawFrame raw;
+  static graspbed::hand::HandState hand;
   uint64_t packets = 0;
   while (!input.empty()) {
     std::span<const uint8_t> piece = input.first(std::min(chunk, input.size()));
@@ -99,6 +128,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (packet.type == PacketType::kTactileFrame) {
         Check(packet.frame.unit_count >= 1 && packet.frame.unit_count <= kMaxUnitsOnWire);
         ToRawFrame(packet.frame, &raw);
+      }
+      if (packet.type == PacketType::kHand) {
+        Check(packet.hand.digit_count >= 1 && packet.hand.digit_count <= kMaxHandDigits);
+        ToHandState(packet.hand, &hand);
+        Check(hand.digit_count == packet.hand.digit_count);
       }
       CheckRoundTrip(packet);
     }

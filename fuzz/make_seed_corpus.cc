@@ -50,13 +50,37 @@ Bytes Frame(uint16_t sequence, int units, uint32_t time_us, uint8_t flags = 0) {
   return Wire(packet);
 }
 
-Bytes Hello(uint16_t sequence, int units) {
+Bytes Hello(uint16_t sequence, int units, uint8_t max_version = 0) {
   graspbed::hardware::HelloPacket packet;
   packet.sequence = sequence;
   packet.firmware_version = 0x0100;
   packet.unit_count = static_cast<uint8_t>(units);
+  packet.max_version = max_version;
   packet.nominal_rate_hz = 1000;
   packet.nominal_r0_milliohm = 3'400'000;
+  return Wire(packet);
+}
+
+/// A HAND (protocol version 2) of the prosthetic hand: index (2 hinges) and thumb (1 hinge), known
+/// fields and flags varied.
+Bytes Hand(uint16_t sequence, uint32_t time_us, int digits) {
+  using namespace graspbed::hardware;
+  HandPacket packet;
+  packet.sequence = sequence;
+  packet.device_time_us = time_us;
+  packet.digit_count = static_cast<uint8_t>(digits);
+  packet.digits[0] = {.joint_count = 2,
+                      .flags = kHandPositionKnown | kHandVelocityKnown | kHandCurrentKnown | kHandStopsKnown,
+                      .position = {612'000, 305'000},
+                      .velocity = {-1'500, 40},
+                      .motor_current_ua = 412'000,
+                      .stall_current_ua = 1'000'000};
+  packet.digits[1] = {.joint_count = 1,
+                      .flags = kHandCurrentKnown | kHandEncoderFault | kHandLinear,
+                      .position = {},
+                      .velocity = {},
+                      .motor_current_ua = -20'000,
+                      .stall_current_ua = 0};
   return Wire(packet);
 }
 
@@ -85,7 +109,19 @@ int main(int argc, char** argv) {
   stream.start = true;
   Bytes foreign_version(16, 0);
   foreign_version[0] = 0x02;
-  foreign_version[1] = 2;
+  foreign_version[1] = 3;
+  graspbed::hardware::ProtocolSelectPacket select;
+  select.sequence = 2;
+  select.version = 2;
+  // A HAND of 3 digits (refused) and a HAND claiming version 1 (a type version 1 does not define).
+  Bytes three_digits(graspbed::hardware::HandBodySize(3), 0);
+  three_digits[0] = 0x03;
+  three_digits[1] = 2;
+  three_digits[8] = 3;
+  Bytes hand_v1(graspbed::hardware::HandBodySize(1), 0);
+  hand_v1[0] = 0x03;
+  hand_v1[1] = 1;
+  hand_v1[8] = 1;
 
   const std::map<std::string, Bytes> seeds = {
       {"hello_then_frames_20", Join({Hello(0, 20), Frame(0, 20, 0), Frame(1, 20, 1000), Frame(2, 20, 2000)})},
@@ -98,6 +134,10 @@ int main(int argc, char** argv) {
       {"garbage_between",
        Join({Bytes{0x13, 0x37, 0x42}, Frame(4, 20, 4000), Bytes(40, 0xff), Bytes{0x00}, Frame(5, 20, 5000)})},
       {"wrapping_sequence", Join({Frame(65535, 4, 0xFFFFFC18u), Frame(0, 4, 0)})},
+      {"v2_hello_select_hand_frames", Join({Hello(0, 20, 2), Wire(select), Hand(0, 0, 2), Frame(0, 20, 0),
+                                            Hand(1, 1000, 2), Frame(1, 20, 1000)})},
+      {"hand_one_digit", Hand(7, 7000, 1)},
+      {"hand_malformed", Join({WireBody(three_digits), WireBody(hand_v1), Hand(8, 8000, 2)})},
   };
   int index = 0;
   for (const auto& [name, bytes] : seeds) {

@@ -41,6 +41,8 @@ void EmulatorConfig::Validate() const {
   Require(connect_delay_s >= 0, "emulator.connect_delay_s", connect_delay_s, "must be >= 0");
   Require(watchdog_s > 0, "emulator.watchdog_s", watchdog_s, "must be > 0");
   Require(nominal_r0_ohm > 0, "emulator.nominal_r0_ohm", nominal_r0_ohm, "must be > 0");
+  Require(protocol_version >= 1 && protocol_version <= kProtocolVersion, "emulator.protocol_version",
+          protocol_version, "must be 1 or 2");
 }
 
 DeviceEmulator::DeviceEmulator(const EmulatorConfig& config, FrameSource source, MotorSink sink)
@@ -90,6 +92,7 @@ void DeviceEmulator::OpenPty() {
   held_size_ = 0;
   hellos_this_connection_ = 0;
   answers_this_connection_ = 0;
+  selected_version_ = 1;
   stats_.host_connected = false;
   stats_.streaming = false;
 }
@@ -168,6 +171,8 @@ void DeviceEmulator::QueueHello() {
   hello.sequence = hello_seq_++;
   hello.firmware_version = config_.firmware_version;
   hello.unit_count = static_cast<uint8_t>(config_.unit_count);
+  // A version-1 device leaves byte 7 reserved (0).
+  hello.max_version = config_.protocol_version >= 2 ? static_cast<uint8_t>(config_.protocol_version) : 0;
   hello.nominal_rate_hz = static_cast<uint16_t>(config_.frame_rate_hz);
   hello.nominal_r0_milliohm = OhmToMilliohm(config_.nominal_r0_ohm);
   std::array<uint8_t, kMaxWirePacketSize> out;
@@ -214,9 +219,64 @@ void DeviceEmulator::HandleHostPacket(const DecodedPacket& packet, int64_t now_n
         stats_.streaming = false;
       }
       break;
+    case PacketType::kProtocolSelect:
+      // A version-1 device does not know this type: it ignores (and counts) it.
+      if (config_.protocol_version < kHandProtocolVersion || packet.select.version < 1 ||
+          packet.select.version > config_.protocol_version) {
+        ++stats_.host_unknown;
+        break;
+      }
+      selected_version_ = packet.select.version;
+      ++stats_.selects;
+      break;
     case PacketType::kTactileFrame:
     case PacketType::kHello:
+    case PacketType::kHand:
       break;  // device-to-host types: a confused host; ignore
+  }
+}
+
+void DeviceEmulator::SendHand(double device_time_s, uint32_t device_time_us) {
+  if (selected_version_ < kHandProtocolVersion || !hand_source_) return;
+  if (!hand_source_(device_time_s, &hand_state_) || hand_state_.digit_count < 1) return;
+  const uint16_t sequence = hand_seq_++;
+  if (drop_hand_ > 0) {
+    --drop_hand_;
+    ++stats_.hand_dropped;
+    return;
+  }
+  FromHandState(hand_state_, sequence, device_time_us, &wire_hand_);
+  std::array<uint8_t, kMaxWirePacketSize> out;
+  size_t size = 0;
+  if (malformed_hand_ > 0) {
+    // A valid CRC around a body that claims 3 digits and carries them: refused for its digit count.
+    std::array<uint8_t, HandBodySize(3)> body{};
+    body[0] = static_cast<uint8_t>(PacketType::kHand);
+    body[1] = kHandProtocolVersion;
+    body[2] = static_cast<uint8_t>(sequence);
+    body[3] = static_cast<uint8_t>(sequence >> 8);
+    body[8] = 3;
+    size = EncodeBody(body, out);
+  } else {
+    size = EncodePacket(wire_hand_, out);
+  }
+  if (size == 0) return;
+  const bool corrupt = corrupt_hand_ > 0 && malformed_hand_ == 0;
+  if (corrupt) {
+    uint8_t& byte = out[size / 2];
+    byte = (byte ^ 0x5A) != 0 ? static_cast<uint8_t>(byte ^ 0x5A) : static_cast<uint8_t>(byte ^ 0xA5);
+  }
+  if (!Queue(std::span<const uint8_t>(out.data(), size))) {
+    ++stats_.hand_overflowed;  // a pending fault waits for a HAND that is sent
+    return;
+  }
+  ++stats_.hand_sent;
+  if (malformed_hand_ > 0) {
+    --malformed_hand_;
+    ++stats_.hand_malformed;
+  } else if (corrupt) {
+    --corrupt_hand_;
+    ++stats_.hand_corrupted;
   }
 }
 
@@ -251,6 +311,7 @@ void DeviceEmulator::Tick(int64_t now_ns) {
     hello_sent_this_connection_ = false;
     hellos_this_connection_ = 0;
     answers_this_connection_ = 0;
+    selected_version_ = 1;  // every connection begins in version 1 until the host chooses
     hello_due_ns_ = now_ns + SecondsToNs(config_.connect_delay_s);
     decoder_.Reset();
   }
@@ -286,6 +347,8 @@ void DeviceEmulator::Tick(int64_t now_ns) {
     hello_due_ns_ = now_ns + SecondsToNs(config_.hello_period_s);
   }
   if (stats_.streaming && !paused_) {
+    // The hand's sample goes first, so a frame's host-side tap carries the hand of its own period.
+    SendHand(device_time_s, static_cast<uint32_t>(device_tick * static_cast<uint64_t>(1e6 * period_s)));
     const uint16_t sequence = frame_seq_++;
     const uint64_t index = frame_index_++;
     if (drop_frames_ > 0) {
@@ -351,6 +414,21 @@ void DeviceEmulator::Run() {
 void DeviceEmulator::CorruptFrames(int count) {
   std::lock_guard lock(mutex_);
   corrupt_frames_ += count;
+}
+
+void DeviceEmulator::CorruptHand(int count) {
+  std::lock_guard lock(mutex_);
+  corrupt_hand_ += count;
+}
+
+void DeviceEmulator::DropHand(int count) {
+  std::lock_guard lock(mutex_);
+  drop_hand_ += count;
+}
+
+void DeviceEmulator::InjectMalformedHand(int count) {
+  std::lock_guard lock(mutex_);
+  malformed_hand_ += count;
 }
 
 void DeviceEmulator::ReorderFrames(int count, int later) {
@@ -467,6 +545,8 @@ void DeviceEmulator::Reboot() {
   newest_intact_valid_ = false;
   held_size_ = 0;  // the old session's held-back frame is never sent
   hello_seq_ = 0;
+  hand_seq_ = 0;
+  selected_version_ = 1;  // a restarted device speaks version 1 until the host chooses again
   time_base_tick_ = tick_;
   stats_.streaming = false;
   SetMotor({});

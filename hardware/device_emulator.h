@@ -2,9 +2,12 @@
 /// DeviceEmulator: a tactile readout and hand electronics in software, behind a pseudo-terminal. It
 /// speaks docs/protocol.md as the device does: HELLO on connect and every second, TACTILE_FRAMEs at the
 /// nominal rate (from a frame-source callback) while streaming, MOTOR_COMMANDs to a motor-sink
-/// callback, the 100 ms motor watchdog, STREAM_CONTROL. The pty's slave is exposed at a symlink so a
-/// host opens it like a real port. Fault-injection knobs reproduce every fault the host must survive.
-/// No MuJoCo here: `graspbed emulate` plugs the simulation in through the callbacks.
+/// callback, the 100 ms motor watchdog, STREAM_CONTROL; as a version-2 device (the default) also a
+/// HAND before each frame (from a hand-source callback) once the host has chosen version 2 with
+/// PROTOCOL_SELECT, and as a version-1 device (EmulatorConfig::protocol_version) none of that. The pty's
+/// slave is exposed at a symlink so a host opens it like a real port. Fault-injection knobs reproduce every
+/// fault the host must survive. No MuJoCo here: `graspbed emulate` plugs the simulation in through the
+/// callbacks.
 
 #include <atomic>
 #include <cstdint>
@@ -13,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "hand/hand_state.h"
 #include "sensor/raw_frame.h"
 #include "hardware/protocol.h"
 #include "hardware/stream_decoder.h"
@@ -28,6 +32,9 @@ struct EmulatorConfig {
   double watchdog_s = 0.1;        ///< motor off when no MOTOR_COMMAND for this long [s]
   uint16_t firmware_version = 0x0100;
   double nominal_r0_ohm = 3400.0;  ///< reported in HELLO [Ohm]
+  /// The highest protocol version the device speaks (1 or 2). 1: its HELLO says 0 in byte 7 as a
+  /// version-1 device does, it never sends HAND and takes PROTOCOL_SELECT for an unknown packet.
+  int protocol_version = kProtocolVersion;
 
   /// @throws common::ConfigError naming the field (key path) and value.
   void Validate() const;
@@ -67,6 +74,13 @@ struct EmulatorStats {
   uint64_t settles = 0;       ///< Settle() calls
   uint64_t settles_unconfirmed = 0;  ///< of those, not confirmed by the host (timeout, no host)
   uint64_t host_corrupt = 0;  ///< host packets refused by our decoder
+  uint64_t host_unknown = 0;  ///< host packets of a type this device's version does not define
+  uint64_t selects = 0;       ///< PROTOCOL_SELECTs taken (version 2 chosen by the host)
+  uint64_t hand_sent = 0;     ///< HANDs written to the pty (including corrupted ones)
+  uint64_t hand_corrupted = 0;   ///< HANDs sent with a flipped byte (CorruptHand)
+  uint64_t hand_malformed = 0;   ///< valid-CRC HANDs with a bad digit count sent (InjectMalformedHand)
+  uint64_t hand_dropped = 0;     ///< HANDs skipped by DropHand (sequence numbers still advance)
+  uint64_t hand_overflowed = 0;  ///< HANDs not sent because the host did not read
   uint16_t last_frame_sequence = 0;
   bool streaming = false;
   bool host_connected = false;
@@ -80,11 +94,18 @@ class DeviceEmulator {
   using FrameSource = std::function<void(double device_time_s, bool streaming, sensor::RawFrame* frame)>;
   /// Receives the motor state whenever it changes (command, watchdog, stream loss, reboot).
   using MotorSink = std::function<void(const EmulatedMotor& motor)>;
+  /// Fills `state` with the hand's proprioception at device time `device_time_s` [s]; false when it
+  /// has none (no HAND is sent). Called on the emulator thread before each frame while a host that
+  /// chose version 2 streams.
+  using HandSource = std::function<bool(double device_time_s, hand::HandState* state)>;
 
   DeviceEmulator(const EmulatorConfig& config, FrameSource source, MotorSink sink = {});
   ~DeviceEmulator();
   DeviceEmulator(const DeviceEmulator&) = delete;
   DeviceEmulator& operator=(const DeviceEmulator&) = delete;
+
+  /// The hand's proprioception for HAND packets (call before Start(); none: no HAND is sent).
+  void SetHandSource(HandSource source) { hand_source_ = std::move(source); }
 
   /// Creates the pty and the symlink, starts the device thread. Throws std::runtime_error when the
   /// link path exists and is not a symlink, or the pty cannot be made.
@@ -101,6 +122,13 @@ class DeviceEmulator {
   void InjectGarbage(int bytes, bool delimited);
   /// Writes `bytes` non-zero bytes and then a delimiter (longer than the maximum packet when > 515).
   void InjectOversize(int bytes);
+  /// Sends the next `count` HANDs with one byte flipped (the host sees CRC/COBS errors: corrupt).
+  void CorruptHand(int count);
+  /// Skips the next `count` HANDs; their sequence numbers are used up (the host counts a gap).
+  void DropHand(int count);
+  /// Sends `count` HANDs with a valid CRC that claim 3 digits (the host refuses them: corrupt, and
+  /// HandCounters::malformed), in place of the next ones.
+  void InjectMalformedHand(int count);
   /// Sends a valid packet of undefined type `type` (version 1).
   void InjectUnknownType(uint8_t type);
   /// Sends a valid-CRC HELLO with protocol version `version`.
@@ -150,11 +178,13 @@ class DeviceEmulator {
   void ReleaseHeld();
   void Flush();
   void HandleHostPacket(const DecodedPacket& packet, int64_t now_ns);
+  void SendHand(double device_time_s, uint32_t device_time_us);
   void SetMotor(const EmulatedMotor& motor);
 
   const EmulatorConfig config_;
   FrameSource source_;
   MotorSink sink_;
+  HandSource hand_source_;
   std::thread thread_;
   std::atomic<bool> running_{false};
 
@@ -166,6 +196,13 @@ class DeviceEmulator {
   DecodedPacket packet_;
   sensor::RawFrame frame_;
   TactileFramePacket wire_frame_;
+  hand::HandState hand_state_;
+  HandPacket wire_hand_;
+  uint16_t hand_seq_ = 0;
+  int selected_version_ = 1;  // the version the host chose on this connection (1 until it selects)
+  int corrupt_hand_ = 0;
+  int drop_hand_ = 0;
+  int malformed_hand_ = 0;
   std::array<uint8_t, 65536> out_{};
   size_t out_size_ = 0;
   uint64_t tick_ = 0;

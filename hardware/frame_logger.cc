@@ -1,6 +1,7 @@
 #include "hardware/frame_logger.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -10,18 +11,21 @@ namespace graspbed::hardware {
 
 FrameLogger::FrameLogger(std::string path, TapSource source, const sensor::Layout& layout,
                          const sensor::Calibration& calibration, const sensor::ReadoutConfig& readout,
-                         const sensor::InversionConfig& inversion, double nominal_r0_ohm)
+                         const sensor::InversionConfig& inversion, double nominal_r0_ohm, HandLogColumns hand)
     : path_(std::move(path)),
       source_(std::move(source)),
       unit_count_(layout.unit_count()),
       readout_(readout, layout.unit_count(), nominal_r0_ohm),
-      inversion_(layout, calibration, inversion) {
+      inversion_(layout, calibration, inversion),
+      hand_(std::move(hand)),
+      hand_cells_(hand_.names.size()) {
   out_.open(path_ + ".partial", std::ios::trunc);
   if (!out_) throw std::invalid_argument("--log " + path_ + ": cannot write this file");
   out_ << "seq,device_time_s";
   for (int k = 0; k < unit_count_; ++k) {
     out_ << ",r1_" << k << ",r2_" << k << ",fn_" << k << ",ft_" << k << ",valid_" << k;
   }
+  for (const std::string& name : hand_.names) out_ << ',' << name;
   out_ << '\n';
   thread_ = std::thread([this] { Run(); });
 }
@@ -77,6 +81,18 @@ void FrameLogger::Write() {
                   entry_.frame.r2_ohm[k], state_.fn_n[k], state_.ft_n[k],
                   state_.validity[k] == sensor::UnitValidity::kValid ? 1 : 0);
     out_ << buffer;
+  }
+  if (!hand_cells_.empty()) {
+    hand_.write(entry_.hand, hand_cells_.data());
+    for (const double cell : hand_cells_) {
+      // Unknown: nan, as in signals.csv; values to 9 digits (below a micro-unit's wire step).
+      if (std::isnan(cell)) {
+        out_ << ",nan";
+      } else {
+        std::snprintf(buffer, sizeof(buffer), ",%.9g", cell);
+        out_ << buffer;
+      }
+    }
   }
   out_ << '\n';
   rows_.fetch_add(1);

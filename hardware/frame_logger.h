@@ -4,7 +4,9 @@
 /// link tapped (SerialLink::EnableTap / PopTap) and runs its own readout and inversion on each, with
 /// the same configuration and the same re-tare on a new device session, so the log misses no frame.
 /// Columns (docs/hardware.md, "The frame log"): seq, device_time_s, then per unit k r1_k, r2_k [Ohm],
-/// fn_k, ft_k [N, unit frame] and valid_k (0/1).
+/// fn_k, ft_k [N, unit frame] and valid_k (0/1), then, when the caller names them (HandLogColumns),
+/// the hand state the link held with the frame (its newest HAND; time on the device's clock), an
+/// unknown value `nan` as in signals.csv.
 /// The file is written as PATH.partial and renamed to PATH by Finish(); a log that was not finished
 /// (a crash, an exception) stays PATH.partial and never looks complete.
 
@@ -14,6 +16,7 @@
 #include <functional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "hardware/serial_link.h"
 #include "sensor/calibration.h"
@@ -29,6 +32,13 @@ namespace graspbed::hardware {
 /// logger's thread only.
 using TapSource = std::function<bool(TappedFrame*)>;
 
+/// The hand columns of a frame log: their names, and how to fill one cell per name from a hand state
+/// (NaN: unknown). The caller's, so the frame log's hand columns are signals.csv's. Empty: none.
+struct HandLogColumns {
+  std::vector<std::string> names;
+  std::function<void(const hand::HandState& hand, double* cells)> write;
+};
+
 class FrameLogger {
  public:
   /// Opens PATH.partial, writes the header and starts the writer thread. `nominal_r0_ohm` as the
@@ -36,7 +46,7 @@ class FrameLogger {
   /// path when it cannot be written.
   FrameLogger(std::string path, TapSource source, const sensor::Layout& layout,
               const sensor::Calibration& calibration, const sensor::ReadoutConfig& readout,
-              const sensor::InversionConfig& inversion, double nominal_r0_ohm);
+              const sensor::InversionConfig& inversion, double nominal_r0_ohm, HandLogColumns hand = {});
   /// Stops the writer thread; an unfinished log stays PATH.partial.
   ~FrameLogger();
   FrameLogger(const FrameLogger&) = delete;
@@ -65,6 +75,8 @@ class FrameLogger {
   sensor::ReadoutFrame readout_frame_;
   sensor::TactileState state_;
   uint64_t session_ = 1;  ///< SerialLink sessions start at 1
+  HandLogColumns hand_;
+  std::vector<double> hand_cells_;  ///< one per hand column, allocated once
   std::ofstream out_;
   std::thread thread_;
   std::atomic<bool> done_{false};

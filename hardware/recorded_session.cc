@@ -42,6 +42,11 @@ class Table {
     if (!column) throw ConfigError(path_ + ":1: no column " + name + " (" + kinds_ + ")");
     return *column;
   }
+  /// A number, or NaN for an empty cell (an unknown value).
+  double NumberOrUnknown(const std::vector<std::string>& row, size_t column, int line) const {
+    if (row[column].empty()) return std::nan("");
+    return Number(row, column, line);
+  }
   double Number(const std::vector<std::string>& row, size_t column, int line) const {
     const std::string& cell = row[column];
     char* end = nullptr;
@@ -69,7 +74,8 @@ int CountUnits(const Table& table, const std::string& prefix) {
 
 }  // namespace
 
-RecordedSession LoadRecordedSession(const std::string& path, int expected_units) {
+RecordedSession LoadRecordedSession(const std::string& path, int expected_units,
+                                    std::span<const char* const> hand_columns) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot read the recording");
   std::string line;
@@ -110,6 +116,12 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
   const std::optional<size_t> enable_column = table.Find("motor_enable");
   const std::optional<size_t> brake_column = table.Find("brake");
   const bool commands = effort_column && enable_column && brake_column;
+  std::vector<size_t> hand_column_index;
+  for (const char* name : hand_columns) {
+    if (const std::optional<size_t> column = table.Find(name)) hand_column_index.push_back(*column);
+  }
+  if (hand_column_index.size() != hand_columns.size()) hand_column_index.clear();  // all or none
+  session.hand_column_count = hand_column_index.size();
 
   int line_number = 1;
   double first_time_s = 0.0;
@@ -168,6 +180,11 @@ RecordedSession LoadRecordedSession(const std::string& path, int expected_units)
         session_column ? static_cast<uint64_t>(table.Number(row, *session_column, line_number)) : 0);
     if (intent_column) session.intent.push_back(row[*intent_column]);
     if (phase_column) session.phase.push_back(row[*phase_column]);
+    for (size_t c = 0; c < hand_column_index.size(); ++c) {
+      double cell = table.NumberOrUnknown(row, hand_column_index[c], line_number);
+      if (c == 0 && !signals) cell -= first_time_s;  // the frame log's device clock, as its ticks
+      session.hand_cells.push_back(cell);
+    }
     if (commands) {
       hand::HandCommand command;
       command.grip_effort = table.Number(row, *effort_column, line_number);

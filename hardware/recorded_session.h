@@ -11,9 +11,13 @@
 ///  - a frame log (`graspbed hw --log`, `graspbed run --backend serial --log`): one row per decoded
 ///    frame (seq, device_time_s, r1_K, r2_K, ...); each frame is one tick at its device time, counted
 ///    from the first frame. It carries no intent and no commands.
+/// Both may carry the hand state the loop held (signals.csv's hand columns; a frame log's from a link
+/// that received HANDs), read when the caller names the columns; a recording without them replays
+/// with the hand unknown.
 /// Loading reads the whole file (allocates); serving allocates nothing.
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -41,15 +45,23 @@ struct RecordedSession {
   /// Per tick: the command written and the controller's phase; empty when not recorded.
   std::vector<hand::HandCommand> commands;
   std::vector<std::string> phase;
+  /// Per tick: the hand columns named at loading, hand_column_count cells each (NaN, written `nan`
+  /// or left empty: unknown); the first, a time, on the loop's clock (a frame log's shifted like its ticks).
+  /// Empty when the recording lacks any of them (made before they existed, or a version-1 device's log).
+  std::vector<double> hand_cells;
+  size_t hand_column_count = 0;
 
   size_t ticks() const { return time_s.size(); }
+  bool has_hand() const { return !hand_cells.empty(); }
   const char* kind_name() const { return kind == Kind::kRunSignals ? "signals.csv" : "frame log"; }
 };
 
-/// Reads a recording. Throws common::ConfigError "PATH:LINE: ..." naming the column and value for a
-/// file that is neither kind, a malformed number, a row of the wrong length, or a unit count other
-/// than `expected_units`.
-RecordedSession LoadRecordedSession(const std::string& path, int expected_units);
+/// Reads a recording, and its `hand_columns` when it has every one of them (the first a time [s] on
+/// the recording's clock). Throws common::ConfigError "PATH:LINE: ..." naming the column and value
+/// for a file that is neither kind, a malformed number, a row of the wrong length, or a unit count
+/// other than `expected_units`.
+RecordedSession LoadRecordedSession(const std::string& path, int expected_units,
+                                    std::span<const char* const> hand_columns = {});
 
 /// Serves a RecordedSession: Seek(k) before the loop's k-th tick, then Read() returns that tick's
 /// status, with its frame when the status is kOk. The session must outlive the backend.

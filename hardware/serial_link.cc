@@ -98,7 +98,8 @@ void SerialLink::Start() {
   if (!answered || error.empty()) {
     std::ostringstream message;
     message << "serial port " << path_ << ": no HELLO from the device within " << config_.hello_timeout_s
-            << " s: is it a graspbed readout (protocol v1) at the configured baud (" << config_.baud << ")?";
+            << " s: is it a graspbed readout (protocol v1 or v2) at the configured baud (" << config_.baud
+            << ")?";
     throw std::runtime_error(message.str());
   }
   throw std::runtime_error(error);
@@ -137,6 +138,25 @@ sensor::BackendCounters SerialLink::counters() const {
   c.stale_periods = counter_stale_.load();
   c.sessions = counter_sessions_.load();
   return c;
+}
+
+HandCounters SerialLink::hand_counters() const {
+  HandCounters c;
+  c.messages = hand_messages_.load();
+  c.malformed = decoder_hand_errors_.load();
+  c.dropped = hand_dropped_.load();
+  c.late = hand_late_.load();
+  return c;
+}
+
+bool SerialLink::TryTakeHand(hand::HandState* state, uint64_t* last_id, int64_t* arrival_ns) {
+  if (hand_published_.load(std::memory_order_acquire) == *last_id) return false;
+  std::unique_lock lock(hand_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return false;
+  *state = hand_slot_;
+  *last_id = hand_slot_id_;
+  *arrival_ns = hand_slot_arrival_ns_;
+  return true;
 }
 
 double SerialLink::SecondsSinceLastFrame() const {
@@ -209,6 +229,12 @@ void SerialLink::SendStream(bool start) {
   WritePacket(std::span<const uint8_t>(out.data(), size));
 }
 
+void SerialLink::SendSelect(uint8_t version) {
+  std::array<uint8_t, kMaxWirePacketSize> out;
+  const size_t size = EncodePacket(ProtocolSelectPacket{.sequence = select_seq_++, .version = version}, out);
+  WritePacket(std::span<const uint8_t>(out.data(), size));
+}
+
 void SerialLink::SendPendingMotor() {
   const uint64_t word = pending_motor_.exchange(0, std::memory_order_acq_rel);
   const uint32_t pending = static_cast<uint32_t>(word);
@@ -237,6 +263,7 @@ void SerialLink::NewSession() {
   counter_sessions_.fetch_add(1, std::memory_order_acq_rel);
   have_last_frame_ = false;
   have_last_hello_ = false;
+  have_last_hand_ = false;
 }
 
 void SerialLink::HandleHello(const HelloPacket& hello) {
@@ -285,6 +312,11 @@ void SerialLink::HandleHello(const HelloPacket& hello) {
   }
   have_last_hello_ = true;
   last_hello_seq_ = hello.sequence;
+  // The version for this connection: the lower of the device's and ours. Chosen again at every
+  // HELLO (a device that rebooted forgot it), before the stream starts, so no frame goes without it.
+  const uint8_t version = std::min(kProtocolVersion, DeviceVersion(hello));
+  protocol_version_.store(version, std::memory_order_release);
+  if (has_sensor() && version >= kHandProtocolVersion) SendSelect(version);
   // Answering every HELLO with start is idempotent and restarts a device that rebooted.
   if (has_sensor()) SendStream(true);
 }
@@ -345,17 +377,46 @@ void SerialLink::HandleFrame(const TactileFramePacket& frame) {
   stale_ = false;
   { std::lock_guard lock(wait_mutex_); }
   frame_cv_.notify_all();
-  if (!tap_.empty()) {
-    std::lock_guard lock(tap_mutex_);
-    if (tap_size_ == tap_.size()) {
-      tap_overflows_.fetch_add(1);
-    } else {
-      TappedFrame& entry = tap_[(tap_head_ + tap_size_) % tap_.size()];
-      entry.frame = scratch_;
-      entry.session = session;
-      ++tap_size_;
-    }
+  if (!tap_.empty()) Tap(session);
+}
+
+void SerialLink::Tap(uint64_t session) {
+  std::lock_guard lock(tap_mutex_);
+  if (tap_size_ == tap_.size()) {
+    tap_overflows_.fetch_add(1);
+    return;
   }
+  TappedFrame& entry = tap_[(tap_head_ + tap_size_) % tap_.size()];
+  entry.frame = scratch_;
+  entry.session = session;
+  entry.hand = hand_scratch_;
+  ++tap_size_;
+}
+
+void SerialLink::HandleHand(const HandPacket& hand) {
+  if (!has_sensor() || !handshake_) return;  // before the HELLO: nobody's session
+  const int64_t arrival_ns = NowNs();
+  if (have_last_hand_) {
+    const int step = static_cast<int16_t>(hand.sequence - last_hand_seq_);
+    if (step <= 0 && step >= -kLateFrameWindow) {
+      hand_late_.fetch_add(1, std::memory_order_acq_rel);  // older than what the loop may hold
+      return;
+    }
+    if (step > 1) hand_dropped_.fetch_add(static_cast<uint64_t>(step - 1));
+  }
+  have_last_hand_ = true;
+  last_hand_seq_ = hand.sequence;
+  ToHandState(hand, &hand_scratch_);
+  hand_scratch_.time_s = static_cast<double>(hand.device_time_us) * 1e-6;
+  hand_scratch_.stale = false;
+  {
+    std::lock_guard lock(hand_mutex_);
+    hand_slot_ = hand_scratch_;
+    hand_slot_arrival_ns_ = arrival_ns;
+    hand_slot_id_ = hand_published_.load() + 1;
+    hand_published_.store(hand_slot_id_, std::memory_order_release);
+  }
+  hand_messages_.fetch_add(1);
 }
 
 void SerialLink::HandlePacket(const DecodedPacket& packet) {
@@ -366,8 +427,12 @@ void SerialLink::HandlePacket(const DecodedPacket& packet) {
     case PacketType::kTactileFrame:
       HandleFrame(packet.frame);
       break;
+    case PacketType::kHand:
+      HandleHand(packet.hand);
+      break;
     case PacketType::kMotorCommand:
     case PacketType::kStreamControl:
+    case PacketType::kProtocolSelect:
       ++extra_unknown_;
       break;  // host-to-device types: not for us
   }
@@ -377,6 +442,8 @@ void SerialLink::OnLost() {
   port_.Close();
   connected_.store(false, std::memory_order_release);
   handshake_ = false;
+  protocol_version_.store(0, std::memory_order_release);  // chosen again with the next HELLO
+  hand_scratch_ = hand::HandState{};  // a frame of the next connection carries no hand of this one
   pending_motor_.store(0);  // commands for the old connection must not reach the new one
 }
 
@@ -427,6 +494,7 @@ void SerialLink::Run() {
     }
     counter_corrupt_.store(decoder_.stats().corrupt() + extra_corrupt_);
     counter_unknown_.store(decoder_.stats().unknown() + extra_unknown_);
+    decoder_hand_errors_.store(decoder_.stats().hand_errors);
     if (port_.is_open()) SendPendingMotor();
     CheckStale();
   }

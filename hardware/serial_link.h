@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hand/hand_command.h"
+#include "hand/hand_state.h"
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_backend.h"
 #include "hardware/hardware_config.h"
@@ -53,6 +54,17 @@ FrameOrder ClassifyFrameOrder(int sequence_step, int64_t time_step_us, int64_t p
 struct TappedFrame {
   sensor::RawFrame frame;
   uint64_t session = 0;
+  /// The newest HAND decoded before the frame, its time_s on the device's clock [s] (digit_count 0:
+  /// none on this connection, e.g. a version-1 device).
+  hand::HandState hand;
+};
+
+/// What the link has seen of HAND packets (protocol version 2) since Start().
+struct HandCounters {
+  uint64_t messages = 0;   ///< HAND packets accepted (published to the hand sensor)
+  uint64_t malformed = 0;  ///< valid CRC, refused for their length or digit/joint count (also in corrupt)
+  uint64_t dropped = 0;    ///< sequence numbers missing between accepted HANDs
+  uint64_t late = 0;       ///< older than the newest accepted one: discarded
 };
 
 class SerialLink {
@@ -92,6 +104,14 @@ class SerialLink {
   uint64_t reordered() const { return counter_reordered_.load(std::memory_order_acquire); }
   /// The newest HELLO (firmware, unit count, nominal rate and R0).
   HelloPacket hello() const;
+  /// The protocol version chosen with the device on the current connection: the lower of its HELLO's
+  /// and kProtocolVersion (PROTOCOL_SELECT sent when 2); 0 before a HELLO.
+  uint8_t protocol_version() const { return protocol_version_.load(std::memory_order_acquire); }
+  /// Copies the newest hand state (HAND packet) when it is newer than `*last_id` (updating it), with
+  /// when it was decoded (steady clock [ns]) into `*arrival_ns`; its time_s is the device's [s].
+  /// Never blocks (false when the I/O thread holds it; taken at the next call), never allocates.
+  bool TryTakeHand(hand::HandState* state, uint64_t* last_id, int64_t* arrival_ns);
+  HandCounters hand_counters() const;
   /// The newest refusal or fault worth telling the user ("" when none).
   std::string last_error() const;
   const std::string& path() const { return path_; }
@@ -128,6 +148,9 @@ class SerialLink {
   void HandlePacket(const DecodedPacket& packet);
   void HandleHello(const HelloPacket& hello);
   void HandleFrame(const TactileFramePacket& frame);
+  void HandleHand(const HandPacket& hand);
+  void Tap(uint64_t session);
+  void SendSelect(uint8_t version);
   void NewSession();
   void OnLost();
   void SendPendingMotor();
@@ -167,6 +190,10 @@ class SerialLink {
   bool stale_ = false;
   uint16_t motor_seq_ = 0;
   uint16_t stream_seq_ = 0;
+  uint16_t select_seq_ = 0;
+  bool have_last_hand_ = false;
+  uint16_t last_hand_seq_ = 0;
+  hand::HandState hand_scratch_;  // converted HAND before publishing; its time on the device clock
   uint64_t extra_corrupt_ = 0;  // frames refused for a wrong unit count
   // Unit count of the current episode of refused frames (its message is set); -1 outside one.
   int last_refused_units_ = -1;
@@ -180,6 +207,8 @@ class SerialLink {
   // when the frame the command answers was decoded [us, modulo 2^32].
   std::atomic<uint64_t> pending_motor_{0};
   std::atomic<uint64_t> motor_sent_{0};
+  std::atomic<uint8_t> protocol_version_{0};
+  std::atomic<uint64_t> hand_messages_{0}, hand_dropped_{0}, hand_late_{0}, decoder_hand_errors_{0};
   std::atomic<uint64_t> counter_frames_{0}, counter_corrupt_{0}, counter_dropped_{0}, counter_unknown_{0},
       counter_reconnects_{0}, counter_stale_{0}, counter_sessions_{0}, counter_reordered_{0};
 
@@ -193,6 +222,11 @@ class SerialLink {
   bool answered_any_ = false;
   LatencyRecorder latency_;
   std::atomic<uint64_t> published_{0};
+  mutable std::mutex hand_mutex_;  // guards hand_slot_*; the loop only try_locks it
+  hand::HandState hand_slot_;
+  uint64_t hand_slot_id_ = 0;
+  int64_t hand_slot_arrival_ns_ = 0;
+  std::atomic<uint64_t> hand_published_{0};
   std::mutex wait_mutex_;
   std::condition_variable frame_cv_;
 

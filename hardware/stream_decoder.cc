@@ -36,6 +36,7 @@ void StreamDecoder::Fail(PacketError error) {
     case PacketError::kTooShort:
     case PacketError::kBadLength:
     case PacketError::kBadUnitCount:
+    case PacketError::kBadHandCount:
       ++stats_.length_errors;
       break;
     case PacketError::kNone:
@@ -74,6 +75,8 @@ bool StreamDecoder::Complete(DecodedPacket* packet) {
   synced_ = true;
   const PacketError error = ParseBody(body, packet);
   if (error != PacketError::kNone) {
+    const bool length = error == PacketError::kBadLength || error == PacketError::kBadHandCount;
+    if (length && body[0] == static_cast<uint8_t>(PacketType::kHand)) ++stats_.hand_errors;
     Fail(error);
     return false;
   }

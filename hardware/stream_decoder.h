@@ -18,10 +18,12 @@ struct DecoderStats {
   uint64_t packets = 0;          ///< packets delivered (valid CRC, known type and version)
   uint64_t cobs_errors = 0;      ///< delimiter in the middle of a COBS block (bytes lost)
   uint64_t crc_errors = 0;       ///< CRC mismatch
-  uint64_t length_errors = 0;    ///< too short, wrong body length for the type, bad unit count
+  uint64_t length_errors = 0;    ///< too short, wrong body length for the type, bad unit or digit count
+  /// Of length_errors, HAND packets (valid CRC, refused for their length or digit/joint count).
+  uint64_t hand_errors = 0;
   uint64_t too_long = 0;         ///< over kMaxPacketSize before a delimiter (discarded to the next 0x00)
-  uint64_t unknown_version = 0;  ///< valid CRC, protocol version other than 1 (rejected)
-  uint64_t unknown_type = 0;     ///< valid CRC, version 1, undefined type (ignored)
+  uint64_t unknown_version = 0;  ///< valid CRC, a protocol version this host does not speak (rejected)
+  uint64_t unknown_type = 0;     ///< valid CRC, a type its version does not define (ignored)
 
   /// Packets dropped for CRC, COBS or length errors (BackendCounters::corrupt).
   uint64_t corrupt() const { return cobs_errors + crc_errors + length_errors + too_long; }

@@ -3,6 +3,7 @@
 // intent script of a simulated run, with the outputs a simulated run writes less what only the
 // simulation knows (ground truth: truth columns, metrics and plots are absent, not zero).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "hardware/hardware_backend.h"
 #include "hardware/intent_input.h"
 #include "hardware/recorded_session.h"
+#include "hardware/serial_hand_sensor.h"
 #include "sensor/calibration.h"
 #include "sensor/layout.h"
 #include "testbed/run_outputs.h"
@@ -101,6 +103,45 @@ void CheckBenchScript(const ScenarioConfig& config, const RunOptions& options) {
       "others announced at their times for a person at the bench to perform";
   throw common::ConfigError(message);
 }
+
+/// The frame log's hand columns: signals.csv's, filled as WriteLoopCells fills them.
+hardware::HandLogColumns HandLogColumns() {
+  hardware::HandLogColumns columns;
+  columns.names.assign(HandColumnNames().begin(), HandColumnNames().end());
+  columns.write = [](const hand::HandState& hand, double* cells) {
+    std::array<double, kLoopColumnCount> row{};
+    WriteHandCells(row.data(), hand);
+    std::copy(row.begin() + kHandTime, row.end(), cells);
+  };
+  return columns;
+}
+
+/// The hand state of a recording, tick by tick: Seek(k) before the loop's k-th tick, then Read()
+/// gives that tick's recorded state (ReadHandCells), true when its sample time differs from the
+/// previous tick's (a new reading). A recording without hand columns gives an unknown hand (no
+/// digits, every field unknown). Never allocates.
+class ReplayHandSensor final : public hand::HandSensor {
+ public:
+  explicit ReplayHandSensor(const hardware::RecordedSession& recording) : recording_(recording) {}
+  void Seek(size_t tick) { tick_ = tick; }
+  bool Read(double /*time_s*/, hand::HandState* state) override {
+    if (!recording_.has_hand()) return false;
+    const double* cells = recording_.hand_cells.data() + tick_ * recording_.hand_column_count;
+    std::copy_n(cells, recording_.hand_column_count, row_.begin() + kHandTime);
+    const double time_s = row_[kHandTime];
+    const bool same = std::isnan(time_s) ? std::isnan(last_time_s_) : time_s == last_time_s_;
+    last_time_s_ = time_s;
+    *state = ReadHandCells(row_.data(), /*has_columns=*/true);
+    return !same;
+  }
+  std::string name() const override { return "replay"; }
+
+ private:
+  const hardware::RecordedSession& recording_;
+  std::array<double, kLoopColumnCount> row_{};
+  size_t tick_ = 0;
+  double last_time_s_ = std::nan("");
+};
 
 /// Writes into HandCommands nowhere: the actuator of a replay, which only compares.
 class NoActuator final : public hand::HandActuator {
@@ -251,6 +292,8 @@ class BenchRun : public RunBackend {
     bench["disconnected_ticks"] = ticks.disconnected_ticks;
     bench["actuator_failures"] = ticks.actuator_failures;
     bench["retares"] = ticks.retares;
+    bench["hand_readings"] = ticks.hand_readings;
+    bench["hand_stale_ticks"] = ticks.hand_stale_ticks;
     bench["peak_est_total_fn_n"] = peak_total_fn_n_;
     bench["final_est_total_fn_n"] = loop_->state().total_fn_n;
     bench["final_valid_units"] = loop_->state().valid_count;
@@ -344,13 +387,16 @@ class SerialRun final : public BenchRun {
       if (!config.log.empty()) fs::remove(config.log + ".partial");
       throw std::invalid_argument(error.what());
     }
-    loop_ = std::make_unique<controller::ControlLoop>(*backend_, *grasp_, *actuator_, layout_, calibration_,
-                                                      loop_config_);
+    // The hand's proprioception from the link's HANDs (none from a version-1 device: unknown).
+    hand_sensor_ = std::make_unique<hardware::SerialHandSensor>(backend_->link());
+    loop_ = std::make_unique<controller::ControlLoop>(*backend_, *hand_sensor_, *grasp_, *actuator_, layout_,
+                                                      calibration_, loop_config_);
     if (!config.log.empty()) {
       hardware::SerialLink& link = *backend_->link();
       frame_logger_ = std::make_unique<hardware::FrameLogger>(
           config.log, [&link](hardware::TappedFrame* entry) { return link.PopTap(entry); }, layout_,
-          calibration_, loop_config_.readout, loop_config_.inversion, backend_->nominal_r0_ohm());
+          calibration_, loop_config_.readout, loop_config_.inversion, backend_->nominal_r0_ohm(),
+          HandLogColumns());
     }
   }
 
@@ -449,6 +495,12 @@ class SerialRun final : public BenchRun {
     bench["stale_periods"] = counters.stale_periods;
     bench["sessions"] = counters.sessions;
     bench["motor_commands"] = link.motor_commands_sent();
+    const hardware::HandCounters hand = link.hand_counters();
+    bench["protocol_version"] = link.protocol_version();
+    bench["hand_messages"] = hand.messages;
+    bench["hand_malformed"] = hand.malformed;
+    bench["hand_dropped"] = hand.dropped;
+    bench["hand_late"] = hand.late;
     if (options_.latency_frames > 0) {
       const hardware::LatencySummary latency = actuator_->link()->latency();
       bench["latency"] = {{"frames_answered", latency.frames}, {"not_kept", latency.not_kept},
@@ -473,6 +525,7 @@ class SerialRun final : public BenchRun {
   std::unique_ptr<hardware::IntentInput> live_;
   std::unique_ptr<hardware::HardwareBackend> backend_;
   std::unique_ptr<hardware::HardwareActuator> actuator_;
+  std::unique_ptr<hardware::SerialHandSensor> hand_sensor_;
   std::unique_ptr<hardware::FrameLogger> frame_logger_;
   Clock::time_point start_;
   uint64_t seen_ = 0;
@@ -486,12 +539,13 @@ class ReplayRun final : public BenchRun {
  public:
   ReplayRun(const ScenarioConfig& config, const RunOptions& options)
       : BenchRun(config, options),
-        recording_(hardware::LoadRecordedSession(config.log, units_)),
+        recording_(hardware::LoadRecordedSession(config.log, units_, HandColumnNames())),
         replay_backend_(recording_, config.sensor.strain_model.nominal.r0_ohm),
+        replay_hand_(recording_),
         intent_from_recording_(!recording_.intent.empty()),
         recorded_offset_(BenchRun::Columns().size()) {
-    loop_ = std::make_unique<controller::ControlLoop>(replay_backend_, *grasp_, no_actuator_, layout_, calibration_,
-                                                      loop_config_);
+    loop_ = std::make_unique<controller::ControlLoop>(replay_backend_, replay_hand_, *grasp_, no_actuator_,
+                                                      layout_, calibration_, loop_config_);
   }
 
   std::vector<std::string> Columns() const override {
@@ -514,6 +568,7 @@ class ReplayRun final : public BenchRun {
       if (next && *next != intent()) SetIntent(*next, "recording", t, t);
     }
     replay_backend_.Seek(k);
+    replay_hand_.Seek(k);
     Tick(t);
     if (!recording_.commands.empty()) Compare(t, recording_.commands[k]);
     return t;
@@ -540,6 +595,7 @@ class ReplayRun final : public BenchRun {
     bench["recorded_ticks"] = recording_.ticks();
     bench["intent_from"] = intent_from_recording_ ? "recording" : "script";
     bench["commands_recorded"] = !recording_.commands.empty();
+    bench["hand_recorded"] = recording_.has_hand();
     if (!recording_.commands.empty()) {
       bench["commands_compared"] = commands_compared_;
       bench["commands_differing"] = commands_differing_;
@@ -573,6 +629,7 @@ class ReplayRun final : public BenchRun {
 
   const hardware::RecordedSession recording_;
   hardware::ReplayBackend replay_backend_;
+  ReplayHandSensor replay_hand_;
   NoActuator no_actuator_;
   const bool intent_from_recording_;
   const size_t recorded_offset_;  ///< the recorded command's first cell in the backend's block

@@ -51,6 +51,7 @@ void EmulatedHand::Frame(bool streaming, sensor::RawFrame* frame) {
       simulation.Step();
     }
     rig_.backend().Poll(target_s_);
+    rig_.hand_sensor().Poll(target_s_);
     const sim::GroundTruth truth = simulation.truth();
     std::lock_guard lock(mutex_);
     sim_time_s_ = simulation.time_s();
@@ -70,6 +71,7 @@ void EmulatedHand::Frame(bool streaming, sensor::RawFrame* frame) {
   }
   sensor::RawFrame fresh;
   while (rig_.backend().Read(&fresh) == sensor::ReadStatus::kOk) latest_ = fresh;
+  if (started_) rig_.hand_sensor().Read(target_s_, &latest_hand_);
   if (latest_.unit_count == 0) {  // nothing sampled yet: unloaded gauges
     latest_.unit_count = frame->unit_count;
     latest_.r1_ohm.fill(rig_.backend().nominal_r0_ohm());
@@ -78,6 +80,12 @@ void EmulatedHand::Frame(bool streaming, sensor::RawFrame* frame) {
   frame->flags = latest_.flags;
   std::copy_n(latest_.r1_ohm.begin(), frame->unit_count, frame->r1_ohm.begin());
   std::copy_n(latest_.r2_ohm.begin(), frame->unit_count, frame->r2_ohm.begin());
+}
+
+bool EmulatedHand::Hand(hand::HandState* state) const {
+  if (latest_hand_.digit_count == 0) return false;
+  *state = latest_hand_;
+  return true;
 }
 
 void EmulatedHand::Motor(const hand::HandCommand& command) {

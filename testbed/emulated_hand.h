@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hand/hand_command.h"
+#include "hand/hand_state.h"
 #include "sensor/layout.h"
 #include "sensor/raw_frame.h"
 #include "sensor/tactile_state.h"
@@ -37,6 +38,10 @@ class EmulatedHand {
   /// flags and resistances (frame->unit_count units) with the newest simulated sample (nominal R0
   /// before the first).
   void Frame(bool streaming, sensor::RawFrame* frame);
+  /// The hand's proprioception (the rig's simulated encoders and motor current, the scenario's
+  /// `proprioception:` profile) as of the newest Frame(): false before the first sample or when the
+  /// profile is disabled. Emulator thread.
+  bool Hand(hand::HandState* state) const;
   /// The motor state the device drives. A closing effort counts as the host's close, an opening
   /// one as its open (the motor going off is no decision of the host's).
   void Motor(const hand::HandCommand& command);
@@ -63,6 +68,7 @@ class EmulatedHand {
   std::atomic<bool> host_done_{false};
   controller::GraspIntent host_intent_ = controller::GraspIntent::kIdle;  ///< emulator thread only
   sensor::RawFrame latest_;
+  hand::HandState latest_hand_;  ///< emulator thread only
   double initial_object_z_m_ = 0.0;
   mutable std::mutex mutex_;  // guards the values below, read by other threads
   double sim_time_s_ = 0.0;

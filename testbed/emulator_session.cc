@@ -40,6 +40,10 @@ void AddEmulatorStats(const hardware::EmulatorStats& stats, nlohmann::json& summ
   summary["connects"] = stats.connects;
   summary["commands_before_hello"] = stats.commands_before_hello;
   summary["host_corrupt"] = stats.host_corrupt;
+  summary["protocol_version"] = stats.selects > 0 ? 2 : 1;  // what the host chose (last connection aside)
+  summary["selects"] = stats.selects;
+  summary["hand_sent"] = stats.hand_sent;
+  summary["hand_overflowed"] = stats.hand_overflowed;
 }
 
 }  // namespace
@@ -54,6 +58,7 @@ EmulatorSession::EmulatorSession(const EmulateOptions& options)
   emulator_config.unit_count = layout_.unit_count();
   emulator_config.frame_rate_hz = static_cast<int>(std::lround(config_.sensor.sample_rate_hz));
   emulator_config.nominal_r0_ohm = config_.sensor.strain_model.nominal.r0_ohm;
+  emulator_config.protocol_version = options_.protocol_version;
   schedule_.cycles = options_.soak_cycles;
   schedule_.period_s = options_.soak_period_s;
   schedule_.downtime_s = options_.soak_downtime_s;
@@ -69,6 +74,8 @@ EmulatorSession::EmulatorSession(const EmulateOptions& options)
       [this](const hardware::EmulatedMotor& motor) {
         device_->Motor({.grip_effort = motor.effort, .enable = motor.enable, .brake = motor.brake});
       });
+  // The simulated encoders and motor current (the scenario's `proprioception:` profile) for HAND.
+  emulator_->SetHandSource([this](double, hand::HandState* state) { return device_->Hand(state); });
 }
 
 // The emulator's thread calls into device_: it ends first.
@@ -140,6 +147,7 @@ std::string EmulateSummaryText(const nlohmann::json& summary) {
   text << "emulate " << summary.at("link").get<std::string>() << " ("
        << summary.at("ended_by").get<std::string>() << "): " << summary.at("sim_time_s").get<double>()
        << " s simulated, " << summary.at("frames_sent").get<uint64_t>() << " frames sent, "
+       << summary.at("hand_sent").get<uint64_t>() << " hand messages, "
        << summary.at("motor_commands").get<uint64_t>() << " motor commands, "
        << summary.at("watchdog_trips").get<uint64_t>() << " watchdog trips; object "
        << (!metrics.at("grasped").get<bool>()  ? "not grasped"

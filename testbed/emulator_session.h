@@ -26,6 +26,9 @@ struct EmulateOptions {
   std::string scenario;  ///< scenario YAML (wrist and object script); empty: a plain device until stopped
   /// Simulated seconds after the host's first stream start [s]; < 0: the scenario's (in a soak: none).
   double duration_s = -1.0;
+  /// Highest wire protocol version the device speaks (1 or 2; docs/protocol.md): 2 sends the
+  /// hand's proprioception (HAND) to a host that selects it, 1 is a device from before HAND.
+  int protocol_version = 2;
   // The soak's fault schedule (docs/hardware.md, "The soak"); on when soak_cycles > 0.
   int soak_cycles = 0;           ///< cycles of the schedule; 0: no soak
   double soak_period_s = 60.0;   ///< one cycle [s]

@@ -87,6 +87,16 @@ ScenarioConfig HwScenario(const HwRunConfig& config, const HwSessionOptions& opt
   return scenario;
 }
 
+/// "; protocol v2, 1000 hand messages" (with the malformed when any); "" for a summary without them.
+std::string HandText(const nlohmann::json& summary) {
+  if (!summary.contains("protocol_version")) return "";
+  std::string text = "; protocol v" + summary.at("protocol_version").dump() + ", " +
+                     summary.at("hand_messages").dump() + " hand messages";
+  if (summary.at("hand_malformed").get<uint64_t>() > 0)
+    text += " (" + summary.at("hand_malformed").dump() + " malformed)";
+  return text;
+}
+
 /// hw's own summary keys (docs/hardware.md), from the run's.
 nlohmann::json HwSummary(const HwSession& session, const RunResult& result) {
   const nlohmann::json& bench = result.bench;
@@ -104,6 +114,11 @@ nlohmann::json HwSummary(const HwSession& session, const RunResult& result) {
   summary["final_total_fn_n"] = bench.at("final_est_total_fn_n");
   summary["final_valid_units"] = bench.at("final_valid_units");
   summary["interrupted"] = !result.completed;
+  // The hand's proprioception: the protocol version chosen with the device (1: no HAND) and its HANDs.
+  for (const char* key :
+       {"protocol_version", "hand_messages", "hand_malformed", "hand_dropped", "hand_readings"}) {
+    summary[key] = bench.at(key);
+  }
   for (const char* key : {"log", "log_rows", "log_rows_lost", "log_error", "last_error"}) {
     if (bench.contains(key)) summary[key] = bench.at(key);
   }
@@ -185,9 +200,9 @@ std::string HwSummaryText(const HwSessionResult& result) {
        << " s, " << summary.at("frames") << " frames, " << summary.at("corrupt") << " corrupt, "
        << summary.at("dropped") << " dropped, " << summary.at("reordered") << " reordered, "
        << summary.at("unknown_packets") << " unknown, " << summary.at("reconnects") << " reconnects, "
-       << summary.at("stale_periods") << " stale periods, " << summary.at("sessions")
-       << " sessions; peak grip " << FormatNewtons(summary.at("peak_total_fn_n").get<double>()) << " N (sensed)"
-       << (result.connected_at_end ? "" : "; device DISCONNECTED at the end")
+       << summary.at("stale_periods") << " stale periods, " << summary.at("sessions") << " sessions"
+       << HandText(summary) << "; peak grip " << FormatNewtons(summary.at("peak_total_fn_n").get<double>())
+       << " N (sensed)" << (result.connected_at_end ? "" : "; device DISCONNECTED at the end")
        << (result.log_error.empty() ? "" : "; log: " + result.log_error) << '\n';
   if (summary.contains("latency")) {
     const nlohmann::json& latency = summary.at("latency");

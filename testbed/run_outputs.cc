@@ -98,7 +98,8 @@ constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 
 double Flag(bool known, bool value) { return known ? (value ? 1.0 : 0.0) : kUnknown; }
 
-/// The hand columns of `row` from `hand` (unknown fields NaN).
+}  // namespace
+
 void WriteHandCells(double* row, const hand::HandState& hand) {
   const bool any = hand.digit_count > 0 && hand.time_s >= 0.0;
   row[kHandTime] = any ? hand.time_s : kUnknown;
@@ -120,8 +121,6 @@ void WriteHandCells(double* row, const hand::HandState& hand) {
     cells[kDigitEncoderFault] = Flag(present, digit.encoder_fault);
   }
 }
-
-}  // namespace
 
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry) {

@@ -87,6 +87,13 @@ extern const char* const kLoopColumnNames[kLoopColumnCount];
 /// Fills the kLoopColumnCount loop cells of `row` for the tick at `time_s` [s] that just ran.
 void WriteLoopCells(double* row, double time_s, const controller::ControlLoop& loop,
                     const controller::ControllerTelemetry& telemetry);
+/// Fills the hand columns of `row` (loop columns first: row[kHandTime] on) from `hand`, unknown
+/// fields NaN (what WriteLoopCells writes for the loop's hand state; the frame log's too).
+void WriteHandCells(double* row, const hand::HandState& hand);
+/// The names of the hand columns, kHandTime to kLoopColumnCount (hand_time_s first).
+inline std::span<const char* const> HandColumnNames() {
+  return std::span<const char* const>(kLoopColumnNames + kHandTime, kLoopColumnCount - kHandTime);
+}
 /// The hand state the hand columns of `row` (a signals.csv row, loop columns first) hold: what
 /// WriteLoopCells wrote, NaN cells unknown. A row without them (`has_columns` false: a recording
 /// made before they existed) gives a hand with no proprioception.

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -165,6 +166,55 @@ bool WaitForErr(const ChildProcess& child, const std::string& text, size_t occur
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   return false;
+}
+
+/// A CSV's cells as text, by column name (an unknown value is `nan`).
+std::map<std::string, std::vector<std::string>> ReadCells(const std::string& path) {
+  std::map<std::string, std::vector<std::string>> columns;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream split(line);
+  for (std::string name; std::getline(split, name, ',');) header.push_back(name);
+  while (std::getline(in, line)) {
+    size_t begin = 0;
+    for (size_t c = 0; c < header.size(); ++c) {
+      const size_t comma = std::min(line.find(',', begin), line.size());
+      columns[header[c]].push_back(line.substr(begin, comma - begin));
+      begin = comma + 1;
+    }
+  }
+  return columns;
+}
+
+/// Writes `path` less the columns whose names `drop` accepts: a recording from before them.
+void WriteWithout(const std::string& path, const std::string& out,
+                  const std::function<bool(const std::string&)>& drop) {
+  std::ifstream in(path);
+  std::ofstream to(out);
+  std::string line;
+  std::vector<bool> keep;
+  bool first = true;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    size_t begin = 0;
+    for (;;) {
+      const size_t comma = line.find(',', begin);
+      cells.push_back(line.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin));
+      if (comma == std::string::npos) break;
+      begin = comma + 1;
+    }
+    if (first) {
+      for (const std::string& name : cells) keep.push_back(!drop(name));
+      first = false;
+    }
+    std::string row;
+    for (size_t c = 0; c < cells.size(); ++c) {
+      if (keep[c]) row += (row.empty() ? "" : ",") + cells[c];
+    }
+    to << row << '\n';
+  }
 }
 
 // Between two commands, so that each runs for some ticks of its own even on a loaded machine.
@@ -537,6 +587,114 @@ TEST_F(BenchRunTest, KeysOnATerminalChangeTheIntentAndQEndsTheSession) {
   EXPECT_LE(TicksLate(csv, bench.at("intent_events")[0].at("received_s").get<double>(), "close"), 1);
   EXPECT_LE(TicksLate(csv, bench.at("intent_events")[1].at("received_s").get<double>(), "open"), 1);
   EXPECT_LT(csv.numeric.at("time_s").back(), 10.0) << "q did not end the session";
+}
+
+// ---- The hand's proprioception over the wire (protocol version 2) and in replays ----
+
+constexpr char kHandScenario[] = "scenarios/default.yaml";
+// Holding the default box, the index's MCP is flexed about 0.07 rad and its motor draws about
+// 0.085 A (the realistic profile's 0.01 A offset at rest): well above these.
+constexpr double kHeldFingerFlexionRad = 0.03;
+constexpr double kHeldMotorCurrentA = 0.03;
+
+bool IsHandColumn(const std::string& name) {
+  for (const char* hand : testbed::internal::HandColumnNames()) {
+    if (name == hand) return true;
+  }
+  return false;
+}
+
+/// The emulator's simulated encoders and motor current reach the host's loop over the pty: its
+/// HandState is known and plausible while it holds the box; replaying the recording feeds the loop
+/// the same HandState tick for tick (the hand columns come back cell for cell), a frame log carries
+/// it too, and the same recording less its hand columns (a recording from before them) replays with
+/// the hand unknown, never zero.
+TEST_F(BenchRunTest, TheHandStateCrossesTheWireAndReplaysTickForTick) {
+  auto emulator = StartEmulator({kHandScenario, "--duration", "3.0", "--json"});
+  ChildProcess host({binary_, "run", kHandScenario, "--backend", "serial", "--port", Path("dev"),
+                     "--prompt-actions", "--no-plots", "--log", Path("frames.csv"), "--out", Path("serial")},
+                    Path("host.out"), Path("host.err"));
+  ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
+  ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
+  const nlohmann::json bench = nlohmann::json::parse(ReadText(Path("serial") + "/summary.json")).at("bench");
+  EXPECT_EQ(bench.at("protocol_version").get<int>(), 2) << bench.dump(2);
+  EXPECT_GT(bench.at("hand_messages").get<uint64_t>(), 1000u);
+  EXPECT_GT(bench.at("hand_readings").get<uint64_t>(), 1000u);
+  EXPECT_EQ(bench.at("hand_malformed").get<uint64_t>(), 0u);
+  EXPECT_EQ(bench.at("corrupt").get<uint64_t>(), 0u);
+
+  auto recorded = ReadCells(Path("serial") + "/signals.csv");
+  const size_t rows = recorded.at("time_s").size();
+  ASSERT_GT(rows, 1000u);
+  // The hold at the end: the index flexed round the box, its motor drawing current, both known.
+  const std::string& q1 = recorded.at("finger_q1").back();
+  const std::string& current = recorded.at("finger_current_a").back();
+  ASSERT_FALSE(q1 == "nan" || current == "nan") << "the hand is unknown at the end of the hold";
+  EXPECT_GT(std::stod(q1), kHeldFingerFlexionRad);
+  EXPECT_GT(std::stod(current), kHeldMotorCurrentA);
+  EXPECT_EQ(recorded.at("hand_stale").back(), "0");
+
+  // Replayed: the loop's HandState is the recorded one at every tick.
+  const auto replay = [&](const std::string& log, const std::string& out) {
+    const CliResult run = RunCli("run " + Path("serial") + "/config.yaml --backend replay --log " + log +
+                                 " --no-plots --out " + Path(out));
+    EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+    return nlohmann::json::parse(ReadText(Path(out) + "/summary.json")).at("bench");
+  };
+  const nlohmann::json same = replay(Path("serial") + "/signals.csv", "replay");
+  EXPECT_TRUE(same.at("hand_recorded").get<bool>());
+  EXPECT_EQ(same.at("commands_differing").get<size_t>(), 0u) << same.dump(2);
+  const auto replayed = ReadCells(Path("replay") + "/signals.csv");
+  for (const char* column : testbed::internal::HandColumnNames()) {
+    EXPECT_EQ(replayed.at(column), recorded.at(column)) << column;
+  }
+
+  // The frame log carries the hand too: its replay's loop holds the box with the index known.
+  const nlohmann::json from_log = replay(Path("frames.csv"), "replay_log");
+  EXPECT_TRUE(from_log.at("hand_recorded").get<bool>());
+  const auto log_replayed = ReadCells(Path("replay_log") + "/signals.csv");
+  ASSERT_NE(log_replayed.at("finger_q1").back(), "nan");
+  EXPECT_GT(std::stod(log_replayed.at("finger_q1").back()), kHeldFingerFlexionRad);
+
+  // An old recording: no hand columns, so every hand cell of its replay is unknown (nan), never 0.
+  WriteWithout(Path("serial") + "/signals.csv", Path("old_signals.csv"), IsHandColumn);
+  const nlohmann::json old = replay(Path("old_signals.csv"), "replay_old");
+  EXPECT_FALSE(old.at("hand_recorded").get<bool>());
+  EXPECT_EQ(old.at("hand_readings").get<uint64_t>(), 0u);
+  const auto old_replayed = ReadCells(Path("replay_old") + "/signals.csv");
+  for (const char* column : testbed::internal::HandColumnNames()) {
+    const std::vector<std::string>& cells = old_replayed.at(column);
+    EXPECT_EQ(std::count(cells.begin(), cells.end(), std::string("nan")), static_cast<long>(cells.size()))
+        << column;
+  }
+}
+
+/// A device from before HAND (`emulate --protocol-version 1`): the host negotiates version 1, sends
+/// no PROTOCOL_SELECT, and runs the scenario with the hand unknown in every row (never zero).
+TEST_F(BenchRunTest, AVersionOneDeviceRunsTheScenarioWithTheHandUnknown) {
+  auto emulator = StartEmulator({kHandScenario, "--duration", "3.0", "--json", "--protocol-version", "1"});
+  ChildProcess host({binary_, "run", kHandScenario, "--backend", "serial", "--port", Path("dev"),
+                     "--prompt-actions", "--no-plots", "--out", Path("serial")},
+                    Path("host.out"), Path("host.err"));
+  ASSERT_EQ(host.Wait(kRunDeadlineS), std::optional<int>(0)) << host.out() << host.err();
+  ASSERT_TRUE(emulator->Wait(kRunDeadlineS).has_value()) << emulator->err();
+  const nlohmann::json device = nlohmann::json::parse(emulator->out());
+  EXPECT_EQ(device.at("selects").get<uint64_t>(), 0u);
+  EXPECT_EQ(device.at("hand_sent").get<uint64_t>(), 0u);
+  EXPECT_EQ(device.at("protocol_version").get<int>(), 1);
+  const nlohmann::json bench = nlohmann::json::parse(ReadText(Path("serial") + "/summary.json")).at("bench");
+  EXPECT_EQ(bench.at("protocol_version").get<int>(), 1);
+  EXPECT_EQ(bench.at("hand_messages").get<uint64_t>(), 0u);
+  EXPECT_EQ(bench.at("hand_readings").get<uint64_t>(), 0u);
+  EXPECT_EQ(bench.at("unknown_packets").get<uint64_t>(), 0u);
+  EXPECT_GT(bench.at("peak_est_total_fn_n").get<double>(), 1.0) << "the tactile loop ran as before";
+  const auto cells = ReadCells(Path("serial") + "/signals.csv");
+  for (const char* column : testbed::internal::HandColumnNames()) {
+    const std::vector<std::string>& values = cells.at(column);
+    ASSERT_GT(values.size(), 1000u);
+    EXPECT_EQ(std::count(values.begin(), values.end(), std::string("nan")), static_cast<long>(values.size()))
+        << column;
+  }
 }
 
 }  // namespace

@@ -314,7 +314,7 @@ std::vector<uint8_t> RawPacket(std::vector<uint8_t> body) {
 TEST_F(DecoderResync, UnknownTypeCountedUnknownVersionRejectedBadLengthCorrupt) {
   std::vector<uint8_t> bytes = RawPacket({0x33, 0x01, 0x00, 0x00, 0xAA});  // unknown type
   auto add = [&](const std::vector<uint8_t>& more) { bytes.insert(bytes.end(), more.begin(), more.end()); };
-  add(RawPacket({0x01, 0x02, 0x05, 0x00}));        // version 2
+  add(RawPacket({0x01, 0x03, 0x05, 0x00}));        // version 3
   add(RawPacket({0x02, 0x01, 0x00, 0x00, 0x01}));  // HELLO of 5 bytes
   std::vector<uint8_t> frame_body(10 + 8 * 3, 0x11);
   frame_body[0] = 0x01;
@@ -380,6 +380,190 @@ TEST_F(DecoderResync, ByteByByteFeedingMatchesBulk) {
   EXPECT_EQ(got, expected);
   EXPECT_EQ(single.stats().corrupt(), bulk.stats().corrupt());
   EXPECT_GE(expected.size(), 40u);
+}
+
+// ---- HAND and PROTOCOL_SELECT (protocol version 2) ----
+
+hand::HandState ExampleHand() {
+  hand::HandState state;
+  state.digit_count = 2;
+  hand::DigitState& index = state.digits[0];
+  index.joint_count = 2;
+  index.position_known = index.velocity_known = index.current_known = index.stops_known = true;
+  index.joint_position = {0.612, 0.305};  // [rad]
+  index.joint_velocity = {-0.0015, 0.00004};
+  index.motor_current_a = 0.412;
+  index.stall_current_a = 1.0;
+  hand::DigitState& thumb = state.digits[1];
+  thumb.joint_count = 1;
+  thumb.current_known = true;  // its encoder failed: position unknown, never 0
+  thumb.encoder_fault = true;
+  thumb.motor_current_a = -0.02;
+  return state;
+}
+
+TEST(ProtocolHand, HandRoundTripsWithinTheWiresResolution) {
+  constexpr double kMicroTol = 0.5e-6;  // positions [rad], velocities [rad/s], currents [A]: 1e-6 steps
+  HandPacket packet;
+  FromHandState(ExampleHand(), 0x1234, 0xABCDEF01u, &packet);
+  const auto wire = Wire(packet);
+  StreamDecoder decoder;
+  DecodedPacket decoded;
+  const FeedResult fed = decoder.Feed(wire, &decoded);
+  ASSERT_TRUE(fed.packet);
+  EXPECT_EQ(fed.consumed, wire.size());
+  ASSERT_EQ(decoded.type, PacketType::kHand);
+  EXPECT_EQ(decoded.hand.sequence, 0x1234);
+  EXPECT_EQ(decoded.hand.device_time_us, 0xABCDEF01u);
+  hand::HandState state;
+  ToHandState(decoded.hand, &state);
+  ASSERT_EQ(state.digit_count, 2);
+  const hand::DigitState& index = state.digits[0];
+  EXPECT_TRUE(index.position_known && index.velocity_known && index.current_known && index.stops_known);
+  EXPECT_EQ(index.joint_count, 2);
+  EXPECT_NEAR(index.joint_position[0], 0.612, kMicroTol);
+  EXPECT_NEAR(index.joint_position[1], 0.305, kMicroTol);
+  EXPECT_NEAR(index.joint_velocity[0], -0.0015, kMicroTol);
+  EXPECT_NEAR(index.motor_current_a, 0.412, kMicroTol);
+  EXPECT_NEAR(index.stall_current_a, 1.0, kMicroTol);
+  const hand::DigitState& thumb = state.digits[1];
+  EXPECT_FALSE(thumb.position_known);
+  EXPECT_FALSE(thumb.velocity_known);
+  EXPECT_FALSE(thumb.stops_known);
+  EXPECT_TRUE(thumb.encoder_fault);
+  EXPECT_NEAR(thumb.motor_current_a, -0.02, kMicroTol);
+  EXPECT_EQ(thumb.stall_current_a, 0.0);  // 0 on the wire: unknown
+  // 66 body bytes + 2 CRC, one COBS code byte (no run of 254) and the delimiter: docs/protocol.md's
+  // 70 bytes on the wire per HAND.
+  EXPECT_EQ(HandBodySize(2), 66u);
+  EXPECT_EQ(wire.size(), 70u);
+}
+
+TEST(ProtocolHand, ACorruptedHandIsOneCrcErrorAndTheNextDecodes) {
+  HandPacket packet;
+  FromHandState(ExampleHand(), 1, 1000, &packet);
+  std::vector<uint8_t> bytes = Wire(packet);
+  bytes[bytes.size() / 2] ^= 0x5A;
+  if (bytes[bytes.size() / 2] == 0) bytes[bytes.size() / 2] = 0x11;
+  packet.sequence = 2;
+  const auto next = Wire(packet);
+  bytes.insert(bytes.end(), next.begin(), next.end());
+  StreamDecoder decoder;
+  DecodedPacket decoded;
+  std::vector<uint16_t> hands;
+  std::span<const uint8_t> rest(bytes);
+  while (!rest.empty()) {
+    const FeedResult fed = decoder.Feed(rest, &decoded);
+    rest = rest.subspan(fed.consumed);
+    if (fed.packet && decoded.type == PacketType::kHand) hands.push_back(decoded.hand.sequence);
+  }
+  EXPECT_EQ(hands, (std::vector<uint16_t>{2}));
+  EXPECT_EQ(decoder.stats().corrupt(), 1u);
+  EXPECT_EQ(decoder.stats().crc_errors + decoder.stats().cobs_errors, 1u);
+}
+
+TEST(ProtocolHand, MalformedHandsAreCorruptAndCountedAsHandErrors) {
+  std::vector<uint8_t> three_digits(HandBodySize(3), 0);
+  three_digits[0] = 0x03;
+  three_digits[1] = 2;
+  three_digits[8] = 3;  // digit count 3: more than the wire carries
+  std::vector<uint8_t> three_joints(HandBodySize(1), 0);
+  three_joints[0] = 0x03;
+  three_joints[1] = 2;
+  three_joints[8] = 1;
+  three_joints[10] = 3;  // joint count 3
+  std::vector<uint8_t> short_body(HandBodySize(2) - 1, 0);
+  short_body[0] = 0x03;
+  short_body[1] = 2;
+  short_body[8] = 2;  // says 2 digits, carries one byte less
+  std::vector<uint8_t> version_1(HandBodySize(1), 0);
+  version_1[0] = 0x03;
+  version_1[1] = 1;  // HAND is not a type of version 1
+  version_1[8] = 1;
+  std::vector<uint8_t> bytes;
+  for (const auto& body : {three_digits, three_joints, short_body, version_1}) {
+    const auto packet = RawPacket(body);
+    bytes.insert(bytes.end(), packet.begin(), packet.end());
+  }
+  StreamDecoder decoder;
+  DecodedPacket decoded;
+  std::span<const uint8_t> rest(bytes);
+  int delivered = 0;
+  while (!rest.empty()) {
+    const FeedResult fed = decoder.Feed(rest, &decoded);
+    rest = rest.subspan(fed.consumed);
+    delivered += fed.packet ? 1 : 0;
+  }
+  EXPECT_EQ(delivered, 0);
+  EXPECT_EQ(decoder.stats().length_errors, 3u);
+  EXPECT_EQ(decoder.stats().hand_errors, 3u);
+  EXPECT_EQ(decoder.stats().unknown_type, 1u);
+  EXPECT_EQ(ParseBody(three_digits, &decoded), PacketError::kBadHandCount);
+  EXPECT_STREQ(ToString(PacketError::kBadHandCount), "bad digit or joint count");
+}
+
+TEST(ProtocolHand, EncoderRefusesWhatTheWireCannotCarry) {
+  std::array<uint8_t, kMaxWirePacketSize> out{};
+  HandPacket packet;
+  packet.digit_count = 0;
+  EXPECT_EQ(EncodePacket(packet, out), 0u);
+  packet.digit_count = 3;
+  EXPECT_EQ(EncodePacket(packet, out), 0u);
+  packet.digit_count = 1;
+  packet.digits[0].joint_count = 3;
+  EXPECT_EQ(EncodePacket(packet, out), 0u);
+  // Unknown and non-finite values go as 0 with their flag clear.
+  hand::HandState state = ExampleHand();
+  state.digits[0].joint_position[0] = std::nan("");
+  state.digits[0].position_known = false;
+  FromHandState(state, 0, 0, &packet);
+  EXPECT_EQ(packet.digits[0].position[0], 0);
+  EXPECT_EQ(packet.digits[0].flags & kHandPositionKnown, 0);
+}
+
+// docs/protocol.md, "Check values for implementers": the version-2 examples, byte for byte.
+TEST(ProtocolHand, DocumentedExamplePacketsOnTheWire) {
+  std::array<uint8_t, kMaxWirePacketSize> out{};
+  size_t size = EncodePacket(ProtocolSelectPacket{.sequence = 0, .version = 2}, out);
+  EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
+            (std::vector<uint8_t>{0x03, 0x83, 0x02, 0x01, 0x02, 0x02, 0x03, 0x31, 0x36, 0x00}));
+  HandPacket hand;
+  hand.sequence = 5;
+  hand.device_time_us = 5000;
+  hand.digit_count = 1;
+  hand.digits[0] = {.joint_count = 2,
+                    .flags = kHandPositionKnown | kHandVelocityKnown | kHandCurrentKnown | kHandStopsKnown,
+                    .position = {500'000, 250'000},
+                    .velocity = {0, 0},
+                    .motor_current_ua = 300'000,
+                    .stall_current_ua = 1'000'000};
+  size = EncodePacket(hand, out);
+  EXPECT_EQ(std::vector<uint8_t>(out.begin(), out.begin() + size),
+            (std::vector<uint8_t>{0x04, 0x03, 0x02, 0x05, 0x03, 0x88, 0x13, 0x01, 0x02, 0x01, 0x03,
+                                  0x02, 0x1E, 0x01, 0x04, 0x20, 0xA1, 0x07, 0x04, 0x90, 0xD0, 0x03,
+                                  0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x04, 0xE0, 0x93,
+                                  0x04, 0x04, 0x40, 0x42, 0x0F, 0x03, 0xAC, 0x4F, 0x00}));
+}
+
+TEST(ProtocolHand, HelloCarriesTheDevicesVersionAndAVersionOneHelloReadsAsOne) {
+  HelloPacket hello{.sequence = 1,
+                    .firmware_version = 0x0200,
+                    .unit_count = 20,
+                    .max_version = 2,
+                    .nominal_rate_hz = 1000,
+                    .nominal_r0_milliohm = 3'400'000};
+  StreamDecoder decoder;
+  DecodedPacket decoded;
+  ASSERT_TRUE(decoder.Feed(Wire(hello), &decoded).packet);
+  EXPECT_EQ(decoded.hello.max_version, 2);
+  EXPECT_EQ(DeviceVersion(decoded.hello), 2);
+  hello.max_version = 0;  // a version-1 device: reserved byte 7
+  ASSERT_TRUE(decoder.Feed(Wire(hello), &decoded).packet);
+  EXPECT_EQ(DeviceVersion(decoded.hello), 1);
+  ASSERT_TRUE(decoder.Feed(Wire(ProtocolSelectPacket{.sequence = 9, .version = 2}), &decoded).packet);
+  ASSERT_EQ(decoded.type, PacketType::kProtocolSelect);
+  EXPECT_EQ(decoded.select.version, 2);
+  EXPECT_EQ(decoded.select.sequence, 9);
 }
 
 }  // namespace

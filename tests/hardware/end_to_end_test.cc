@@ -19,6 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "testbed/run_outputs.h"
+
 #include "tests/support/child_process.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/files.h"
@@ -132,6 +134,11 @@ class EndToEndTest : public ::testing::Test {
   const std::string binary_ = CliBinary();
   const TempDir dir_{"e2e"};
 };
+
+// Holding the default box, the index's MCP is flexed about 0.07 rad and its motor draws about
+// 0.085 A (sim/proprioception.h, the realistic profile; 0.01 A offset at rest): well above these.
+constexpr double kHeldFingerFlexionRad = 0.03;
+constexpr double kHeldMotorCurrentA = 0.03;
 
 TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // 1. The reference: the same scenario purely in simulation, with the one frame period of latency
@@ -255,7 +262,16 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
     const std::string n = std::to_string(k);
     expected += ",r1_" + n + ",r2_" + n + ",fn_" + n + ",ft_" + n + ",valid_" + n;
   }
+  // Then the hand state the link held with each frame (HAND, protocol version 2): signals.csv's columns.
+  for (const char* name : testbed::internal::HandColumnNames()) expected += std::string(",") + name;
   EXPECT_EQ(header, expected);
+  const size_t hand_first = 2u + 5u * kUnits;
+  const size_t finger_q1 = hand_first + testbed::internal::kHandDigits + testbed::internal::kDigitQ1 -
+                           testbed::internal::kHandTime;
+  const size_t finger_current = hand_first + testbed::internal::kHandDigits +
+                                testbed::internal::kDigitCurrent - testbed::internal::kHandTime;
+  std::string last_finger_q1;
+  std::string last_finger_current;
   uint64_t rows = 0;
   uint64_t gaps = 0;
   long previous_seq = -1;
@@ -265,7 +281,9 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
     std::vector<std::string> cells;
     std::stringstream split(line);
     for (std::string cell; std::getline(split, cell, ',');) cells.push_back(cell);
-    ASSERT_EQ(cells.size(), 2u + 5u * kUnits) << "row " << rows;
+    ASSERT_EQ(cells.size(), hand_first + testbed::internal::HandColumnNames().size()) << "row " << rows;
+    last_finger_q1 = cells[finger_q1];
+    last_finger_current = cells[finger_current];
     const long seq = std::stol(cells[0]);
     if (previous_seq >= 0 && seq != (previous_seq + 1) % 65536) ++gaps;
     previous_seq = seq;
@@ -285,6 +303,17 @@ TEST_F(EndToEndTest, EmulatorAndHwHoldALiftedObjectLikeTheSimulation) {
   // inversion), so it is not above the log's peak.
   EXPECT_LE(hw.at("peak_total_fn_n").get<double>(), peak_row_fn_n + kLogRoundingN);
   EXPECT_GT(hw.at("peak_total_fn_n").get<double>(), 0.0);
+  // Proprioception over the wire: version 2 chosen, the hand's HANDs taken by the loop, and at the end
+  // of the hold the index flexed round the box with its motor drawing current (the simulation's
+  // realistic profile: about 0.07 rad and 0.085 A; 0.01 A at rest).
+  EXPECT_EQ(hw.at("protocol_version").get<int>(), 2) << hw.dump(2);
+  EXPECT_GT(hw.at("hand_messages").get<uint64_t>(), kMinRealTimeFrames / 2);
+  EXPECT_GT(hw.at("hand_readings").get<uint64_t>(), kMinRealTimeFrames / 2);
+  EXPECT_EQ(hw.at("hand_malformed").get<uint64_t>(), 0u);
+  ASSERT_NE(last_finger_q1, "nan") << "the index joint is unknown in the frame log's last row";
+  ASSERT_NE(last_finger_current, "nan") << "the index motor current is unknown in the frame log's last row";
+  EXPECT_GT(std::stod(last_finger_q1), kHeldFingerFlexionRad);
+  EXPECT_GT(std::stod(last_finger_current), kHeldMotorCurrentA);
 
   if (!kept_pace) {
     GTEST_SKIP() << "the hardware path fell behind real time (" << frames << " frames, " << device_sim_s

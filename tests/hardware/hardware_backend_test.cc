@@ -322,7 +322,7 @@ TEST_F(HardwareTest, ScriptedFaultsGiveExactCounters) {
   step([&] { emulator_->InjectOversize(2000); }, 6, 0);      // over 512 bytes: corrupt 1
   step([&] { emulator_->TruncateNextFrame(7); }, 7, 1);      // bytes lost mid-packet: corrupt 1, dropped 1
   step([&] { emulator_->InjectUnknownType(0x33); }, 7, 0);   // unknown 1
-  step([&] { emulator_->InjectBadVersion(2); }, 7, 0);       // unknown 1 (rejected version)
+  step([&] { emulator_->InjectBadVersion(3); }, 7, 0);       // unknown 1 (rejected version)
 
   emulator_->PauseFrames(true);
   const auto emu = emulator_->stats();
