@@ -25,9 +25,10 @@ struct MotorSqueezeConfig {
   /// ... and every known joint turns slower than this [rad/s] (back-EMF then costs < 1 % of the
   /// current at the default 1.6 rad/s no-load speed) ...
   double max_joint_speed_rad_s = 0.05;
-  /// ... and is kept in [min_sensed_share, 1]: below it the object is mostly off the pad, and a
-  /// grip scaled by it would squeeze blindly [-].
-  double min_sensed_share = 0.25;
+  /// ... and is kept in [min_sensed_share, 1]: below half the object is mostly off the pad, and a
+  /// grip scaled further keeps it there (narrow_box: the units saw nothing for the first 0.3 s of
+  /// contact, a share of 0.25 quartered the grip and the box stayed off the pad) [-].
+  double min_sensed_share = 0.5;
   /// A share above this counts as 1: the motor's squeeze is known to +-10 % (the current sensing's
   /// gain error and noise, the pad's lever arm moving with the posture), and a grip scaled by a
   /// share of 0.9 would be a 10 % weaker grip on an object the units see whole [-].
