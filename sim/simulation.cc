@@ -214,7 +214,9 @@ Simulation::Simulation(const sensor::Layout& layout, const SceneConfig& scene)
       drive.brake_joint_qpos = m->jnt_qposadr[m->eq_obj1id[drive.brake_equality]];
     }
     // A motor on a tendon (the wrap's flexor) moves it 2 rad per radian of the free finger's MCP.
-    if (m->actuator_trntype[drive.actuator] == mjTRN_TENDON) drive.transmission = 2.0;
+    // (The jaw's motor is on a tendon too, the sum of its two slides: 1 m per metre of closure.)
+    if (m->actuator_trntype[drive.actuator] == mjTRN_TENDON && scene_.hand.model != HandModel::kJaw)
+      drive.transmission = 2.0;
     drive.stall = place.stall_effort[k];
     drive.no_load_speed = place.no_load_speed[k];
     drive.lever_arm_m = place.lever_arm_m[k];
