@@ -53,11 +53,6 @@ const std::map<std::string, std::string> kNotYetPassed = {
     {"pour_bottle",
      "max_slip_mm: the wrapped full bottle (470 g, mu 0.45) slides 3.1 mm through the lift, flagged "
      "once of two gross slips; its oracle is 12.47 N, above the reference's 10 N ceiling"},
-    {"lift_plastic_cup",
-     "not_crushed: the 3 g cup (2e3 N/m) is squeezed to 4.2 N against its 3 N crush force: the units "
-     "bear 0.58 of the finger's squeeze (the rest lands on the holder between and beside the mesas, "
-     "not sensed), so the controller's 2.0-2.4 N target on the units is a 3.8-4.1 N squeeze; oracle "
-     "0.54 N"},
     {"hold_foam_brick",
      "not_dropped, max_slip_mm: the 500 N/m foam brick is held by 0.19 to 1 N (its oracle 0.19 N) and "
      "slides from 2 N, where the pads sink deep: the reference's vibration cue rises with the real "
