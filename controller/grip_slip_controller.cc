@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "common/config_error.h"
+#include "controller/learned_slip_controller.h"
 
 namespace graspbed::controller {
 namespace {
@@ -28,11 +29,24 @@ constexpr double kTimeToleranceS = 1e-9;
 constexpr double kCalmAfterSlipS = 0.2;
 
 /// Static name of the cues that count as slip (telemetry; no allocation).
-const char* CueNames(bool ratio, bool vibration, bool centroid) {
-  static constexpr const char* kNames[8] = {
-      "",         "ratio",          "vibration",          "ratio+vibration",
-      "centroid", "ratio+centroid", "vibration+centroid", "ratio+vibration+centroid"};
-  return kNames[(ratio ? 1 : 0) | (vibration ? 2 : 0) | (centroid ? 4 : 0)];
+const char* CueNames(bool ratio, bool vibration, bool centroid, bool learned) {
+  static constexpr const char* kNames[16] = {"",
+                                             "ratio",
+                                             "vibration",
+                                             "ratio+vibration",
+                                             "centroid",
+                                             "ratio+centroid",
+                                             "vibration+centroid",
+                                             "ratio+vibration+centroid",
+                                             "learned",
+                                             "ratio+learned",
+                                             "vibration+learned",
+                                             "ratio+vibration+learned",
+                                             "centroid+learned",
+                                             "ratio+centroid+learned",
+                                             "vibration+centroid+learned",
+                                             "ratio+vibration+centroid+learned"};
+  return kNames[(ratio ? 1 : 0) | (vibration ? 2 : 0) | (centroid ? 4 : 0) | (learned ? 8 : 0)];
 }
 
 /// One declared parameter bound to its field of GripSlipConfig.
@@ -238,6 +252,9 @@ const std::vector<Binding>& Bindings() {
                     "1: use the hand's motor current and joints where it reports them (the squeeze's absolute "
                     "limits on the object's real squeeze, a closing that found nothing stops); 0: the units "
                     "alone"),
+      GRASPBED_BIND("learned_cue", learned_cue, 0, 1, "",
+                    "1: the learned slip cue (model $GRASPBED_SLIP_MODEL, else the shipped "
+                    "models/slip/default_20.json) also counts as slip, beside the hand-tuned cues"),
       GRASPBED_BIND("motor_stall_pinch_n", motor.stall_pinch_n, 1.0, 1000.0, "N",
                     "pinch force of a digit at stall with full effort (the hand's rating): motor current / "
                     "stall current x this is the squeeze the motor makes"),
@@ -320,6 +337,10 @@ GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& para
 
 GripSlipController::GripSlipController(const GripSlipConfig& config)
     : config_(config), detector_(ValidatedSlipConfig(config)), motor_(config.motor) {
+  if (config_.learned_cue) {
+    learned_ = std::make_unique<LearnedSlipCue>(
+        LoadSlipModel(LearnedSlipController::DefaultModelPath(), {.layout_name = "", .units = 0}));
+  }
   grip_filter_ = LowPassFilter(config_.grip_filter_s, 1.0 / config_.slip.sample_rate_hz);
   Reset();
 }
@@ -349,6 +370,8 @@ const char* GripSlipController::PhaseName(Phase phase) {
 void GripSlipController::Reset() {
   detector_.Reset();
   motor_.Reset();
+  if (learned_) learned_->Reset();
+  learned_counts_ = false;
   grip_filter_.Clear();
   intent_ = GraspIntent::kIdle;
   phase_ = Phase::kIdle;
@@ -597,6 +620,7 @@ bool GripSlipController::TakeFrame(const TactileState& state, bool data_ok, doub
   diagnostics_.measured_grip_n = grip_filter_.Update(state.total_fn_n + saturated * config_.unit_range_n);
   const bool armed = phase_ == Phase::kLoading || phase_ == Phase::kHolding || phase_ == Phase::kSlip;
   detector_.Update(state, diagnostics_.measured_grip_n, friction_, armed, phase_ != Phase::kSlip);
+  if (learned_) learned_counts_ = armed && learned_->Update(state, time_s).flag;
   return true;
 }
 
@@ -643,7 +667,7 @@ bool GripSlipController::CountCues(double time_s) {
       signals.ratio_slip && at_ceiling && time_s - ratio_rise_s_ >= config_.ratio_ceiling_count_s;
   ratio_counts_ = signals.ratio_slip && !ratio_held;
   centroid_counts_ = signals.centroid_slip && !ratio_held;
-  return ratio_counts_ || signals.vibration_slip || centroid_counts_;
+  return ratio_counts_ || signals.vibration_slip || centroid_counts_ || learned_counts_;
 }
 
 void GripSlipController::FollowSlip(bool slip_now, double time_s, double dt_s) {
@@ -717,6 +741,7 @@ hand::HandCommand GripSlipController::Report(const hand::HandCommand& command, b
     ratio_fall_s_ = kNeverS;
     ratio_counts_ = false;
     centroid_counts_ = false;
+    learned_counts_ = false;
     flag_until_s_ = kNeverS;
   }
   // The reported flag is held past the last frame a cue counted (slip_flag_hold_s): a cue flickering
@@ -724,7 +749,7 @@ hand::HandCommand GripSlipController::Report(const hand::HandCommand& command, b
   const SlipSignals& signals = detector_.signals();
   if (slip_now) {
     flag_until_s_ = time_s + config_.slip_flag_hold_s;
-    flag_cues_ = CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_);
+    flag_cues_ = CueNames(ratio_counts_, signals.vibration_slip, centroid_counts_, learned_counts_);
   }
   const bool flag_up = slip_now || time_s < flag_until_s_ - kTimeToleranceS;
   if (data_ok) last_good_command_ = command;

@@ -18,11 +18,13 @@
 /// Without it, or on a hand that does not report them, it behaves as before.
 
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "controller/filters.h"
 #include "controller/grasp_controller.h"
+#include "controller/learned_slip_cue.h"
 #include "controller/motor_squeeze.h"
 #include "controller/slip_detector.h"
 
@@ -113,6 +115,10 @@ struct GripSlipConfig {
   /// Use the hand's proprioception (motor current, joints) where the hand reports it.
   bool use_proprioception = true;
   MotorSqueezeConfig motor;  ///< the motor's squeeze estimate
+  /// Also count the learned slip cue (controller/learned_slip_cue.h; the model file
+  /// $GRASPBED_SLIP_MODEL, else the shipped models/slip/default_20.json) as slip, beside the
+  /// hand-tuned cues.
+  bool learned_cue = false;
 
   /// @throws common::ConfigError keyed by the offending parameter (its name among Parameters(),
   /// also for a detector field: "detector_settle_s" for slip.settle_s), with its value, in the
@@ -198,6 +204,8 @@ class GripSlipController final : public GraspController {
   GripSlipConfig config_;
   SlipDetector detector_;
   MotorSqueeze motor_;
+  std::unique_ptr<LearnedSlipCue> learned_;  ///< null unless config_.learned_cue
+  bool learned_counts_ = false;              ///< the learned cue counts as slip now
   LowPassFilter grip_filter_;
 
   GraspIntent intent_ = GraspIntent::kIdle;

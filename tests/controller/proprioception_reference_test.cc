@@ -96,5 +96,26 @@ TEST(ProprioceptionReferenceTest, AClosingThatFindsNothingStopsAtTheClosedStop) 
   EXPECT_GT(std::stod(Cell(blind, "grip_effort")), 0.0);
 }
 
+/// How many rows of `dir`'s signals.csv name `cue` among their slip cues.
+int RowsFlaggedBy(const std::string& dir, const std::string& cue) {
+  std::ifstream in(dir + "/signals.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(in, line)) rows += line.find(cue) != std::string::npos ? 1 : 0;
+  return rows;
+}
+
+TEST(LearnedCueInTheReferenceTest, TheShippedModelFlagsTheAddedMassBesideTheHandTunedCues) {
+  TempDir dir;
+  const std::string with_dir = (dir.path() / "with").string();
+  const nlohmann::json with =
+      RunScenario("added_mass_step", {"controller.params.learned_cue=1"}, with_dir);
+  EXPECT_TRUE(Passed(with, "not_dropped"));
+  EXPECT_GT(RowsFlaggedBy(with_dir, "learned"), 0);  // the cue's own label in slip_cues
+  const std::string without_dir = (dir.path() / "without").string();
+  RunScenario("added_mass_step", {}, without_dir);
+  EXPECT_EQ(RowsFlaggedBy(without_dir, "learned"), 0);
+}
+
 }  // namespace
 }  // namespace graspbed::controller
