@@ -18,6 +18,7 @@
 #include "controller/grip_slip_controller.h"
 #include "controller/slip_detector.h"
 #include "controller/slip_features.h"
+#include "testbed/run_outputs.h"
 #include "testbed/schedule.h"
 
 namespace graspbed::testbed {
@@ -47,6 +48,7 @@ struct RunTicks {
   int units = 0;
   std::vector<double> time_s;
   std::vector<float> fn, ft, total_fn, shear_axial, shear_circ, effort, features, slip_speed, slip_distance;
+  std::vector<float> hand;  ///< the hand state's columns per tick (HandColumnNames), NaN unknown
   std::vector<float> handtuned_score;
   std::vector<float> replayed_score;
   std::vector<uint8_t> replayed_flag;
@@ -182,6 +184,8 @@ RunTicks ExtractRun(const common::SignalLog& log, const ScenarioConfig& config) 
   const size_t time = log.Column("time_s"), effort = log.Column("grip_effort"), flag = log.Column("slip_flag");
   const size_t speed = log.Column("sliding_speed_mm_s"), distance = log.Column("slip_distance_mm");
   const size_t holding = log.Column("holding");
+  std::vector<size_t> hand_columns;
+  for (const char* name : internal::HandColumnNames()) hand_columns.push_back(log.Column(name));
   for (size_t row = 0; row < run.ticks; ++row) {
     StateAt(log, row, unit_columns, units, state);
     const double t = log.At(row, time);
@@ -198,6 +202,7 @@ RunTicks ExtractRun(const common::SignalLog& log, const ScenarioConfig& config) 
     run.shear_axial.push_back(static_cast<float>(state.total_shear_axial_n));
     run.shear_circ.push_back(static_cast<float>(state.total_shear_circumferential_n));
     run.effort.push_back(static_cast<float>(log.At(row, effort)));
+    for (const size_t column : hand_columns) run.hand.push_back(static_cast<float>(log.At(row, column)));
     run.controller_flag.push_back(log.At(row, flag) != 0.0 ? 1 : 0);
     run.slip_speed.push_back(static_cast<float>(log.At(row, speed)));
     run.slip_distance.push_back(static_cast<float>(log.At(row, distance)));
@@ -340,7 +345,7 @@ std::vector<NpyArray> TickArrays(const std::vector<DatasetRun>& runs, const std:
     if (part.ticks == 0) continue;
     units = part.units;
     for (std::vector<float> RunTicks::*field : {&RunTicks::fn, &RunTicks::ft, &RunTicks::total_fn, &RunTicks::shear_axial,
-                        &RunTicks::shear_circ, &RunTicks::effort, &RunTicks::features, &RunTicks::slip_speed,
+                        &RunTicks::shear_circ, &RunTicks::effort, &RunTicks::hand, &RunTicks::features, &RunTicks::slip_speed,
                         &RunTicks::slip_distance, &RunTicks::handtuned_score,
                                                  &RunTicks::replayed_score})
       Append(all.*field, part.*field);
@@ -366,6 +371,7 @@ std::vector<NpyArray> TickArrays(const std::vector<DatasetRun>& runs, const std:
       MakeNpyArray("validity", all.validity, {n, u}), MakeNpyArray("stale", all.stale, {n}),
       MakeNpyArray("total_fn_n", all.total_fn, {n}), MakeNpyArray("shear_axial_n", all.shear_axial, {n}),
       MakeNpyArray("shear_circumferential_n", all.shear_circ, {n}), MakeNpyArray("grip_effort", all.effort, {n}),
+      MakeNpyArray("hand", all.hand, {n, internal::HandColumnNames().size()}),
       MakeNpyArray("features", all.features, {n, controller::kSlipFeatureCount}),
       MakeNpyArray("controller_slip_flag", all.controller_flag, {n}),
       MakeNpyArray("handtuned_score", all.handtuned_score, {n}),
@@ -373,7 +379,7 @@ std::vector<NpyArray> TickArrays(const std::vector<DatasetRun>& runs, const std:
       MakeNpyArray("handtuned_replayed_flag", all.replayed_flag, {n}), MakeNpyArray("holding", all.holding, {n}),
       MakeNpyArray("contact_state", all.labels.contact_state, {n}),
       MakeNpyArray("slip_speed_mm_s", all.slip_speed, {n}), MakeNpyArray("slip_distance_mm", all.slip_distance, {n})};
-  static_assert(std::size(kDatasetInputs) == 8, "kDatasetInputs and the arrays written here must match");
+  static_assert(std::size(kDatasetInputs) == 9, "kDatasetInputs and the arrays written here must match");
   for (size_t h = 0; h < within.size(); ++h) {
     const std::string suffix = std::to_string(options.horizons_ms[h]) + "ms";
     arrays.push_back(MakeNpyArray("gross_within_" + suffix, within[h], {n}));
@@ -398,6 +404,8 @@ nlohmann::json Manifest(const std::vector<SweepSpec>& specs, const std::vector<D
   nlohmann::json inputs = nlohmann::json::array();
   for (const DatasetInput& input : kDatasetInputs)
     inputs.push_back({{"array", input.array}, {"doc", input.doc}, {"per_unit", input.per_unit}});
+  nlohmann::json hand_columns = nlohmann::json::array();
+  for (const char* name : internal::HandColumnNames()) hand_columns.push_back(name);
   nlohmann::json run_list = nlohmann::json::array();
   nlohmann::json counts = nlohmann::json::object();
   for (const char* split : kSplitNames) {
@@ -436,7 +444,7 @@ nlohmann::json Manifest(const std::vector<SweepSpec>& specs, const std::vector<D
           {"layout", {{"name", first.sensor.layout}, {"units", ticks.empty() ? 0 : ticks.front().units},
                       {"columns", controller::SlipFeatureLayoutFor(ticks.empty() ? 0 : ticks.front().units).columns}}},
           {"tick_period_s", 1.0 / first.controller.rate_hz}, {"feature_set", controller::kSlipFeatureSet},
-          {"features", features}, {"inputs", inputs}, {"horizons_ms", options.horizons_ms},
+          {"features", features}, {"inputs", inputs}, {"hand_columns", hand_columns}, {"horizons_ms", options.horizons_ms},
           {"contact_states", kContactStateNames},
           {"split", {{"by", "run group: one sweep run (scenario, seed, drawn parameters) under every profile"},
                      {"seed", options.split_seed}, {"validation_fraction", options.validation_fraction},

@@ -53,6 +53,8 @@ inline constexpr DatasetInput kDatasetInputs[] = {
     {"shear_axial_n", "summed shear of the axial units (float32) [N]", false},
     {"shear_circumferential_n", "summed shear of the circumferential units (float32) [N]", false},
     {"grip_effort", "the controller's command: grip motor effort (float32) [-]", false},
+    {"hand", "the hand state the controller saw (proprioception), one column per signals.csv hand column, "
+             "manifest key hand_columns, NaN unknown (float32) [rad, m, A as signals.csv]", false},
 };
 
 /// Settings of a dataset build.

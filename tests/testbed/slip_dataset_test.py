@@ -58,6 +58,14 @@ def build_dataset(graspbed, source, out):
         groups = {r["group"] for r in manifest["runs"] if r["split"] == split}
         check(len(groups) >= 1 and int((data["split"] == index).sum()) == manifest["counts"][split]["ticks"],
               f"split {split}: {len(groups)} run group(s), its ticks as counted")
+    # The hand state the controller saw: one column per signals.csv hand column, the index's motor
+    # current known on every tick of a simulated run and drawing current while something is held.
+    hand, columns = data["hand"], manifest["hand_columns"]
+    check(hand.shape == (n, len(columns)) and columns[0] == "hand_time_s", f"hand array {hand.shape}, {len(columns)} columns")
+    current = hand[:, columns.index("finger_current_a")]
+    held = data["holding"] == 1
+    check(not np.isnan(current).any() and float(np.median(current[held])) > 0.02,
+          "the index motor's current is known on every tick and flows while holding")
     by_group = {}
     for r in manifest["runs"]:
         by_group.setdefault(r["group"], set()).add(r["split"])
