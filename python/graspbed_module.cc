@@ -19,6 +19,8 @@
 #include "common/signal_log.h"
 #include "controller/controller_api.h"
 #include "controller/grasp_controller.h"
+#include "controller/learned_slip_controller.h"
+#include "controller/learned_slip_cue.h"
 #include "controller/plugin_loader.h"
 #include "python/python_controller.h"
 #include "testbed/runner.h"
@@ -410,6 +412,31 @@ PYBIND11_MODULE(_graspbed, m) {
       });
 
   BindHandState(m);
+
+  // The learned slip cue (controller/learned_slip_cue.h) for Python controllers: the same C++ code,
+  // fed the TactileState the controller was given.
+  py::class_<controller::LearnedSlipCue>(
+      m, "LearnedSlipCue",
+      "The learned slip cue (docs/training-slip-detector.md): update(state, time_s) -> (score, flag) once per tick")
+      .def(py::init([](const std::string& model, double threshold) {
+             const std::string path = model.empty() ? controller::LearnedSlipController::DefaultModelPath() : model;
+             return std::make_unique<controller::LearnedSlipCue>(
+                 controller::LoadSlipModel(path, {.layout_name = "", .units = 0}), threshold);
+           }),
+           py::arg("model") = "", py::arg("threshold") = -1.0,
+           "model: a model file ('' = $GRASPBED_SLIP_MODEL, else the shipped one); threshold < 0: the model's own")
+      .def("reset", &controller::LearnedSlipCue::Reset, "forget the filters' state (a new grasp)")
+      .def(
+          "update",
+          [](controller::LearnedSlipCue& cue, const TactileStateView& state, double time_s) {
+            const controller::LearnedSlipOutput output = cue.Update(*state.state, time_s);
+            return py::make_tuple(output.score, output.flag);
+          },
+          py::arg("state"), py::arg("time_s"), "(score [0, 1], flag) for this tick's state")
+      .def_property_readonly("threshold", &controller::LearnedSlipCue::threshold)
+      .def_property_readonly("label", [](const controller::LearnedSlipCue& cue) { return cue.model().label; })
+      .def_property_readonly("layout_name",
+                             [](const controller::LearnedSlipCue& cue) { return cue.model().layout_name; });
 
   m.def("_run", &Run, py::arg("scenario"), py::arg("overrides"), py::arg("controller"), py::arg("out_dir"),
         py::arg("plots"), py::arg("prompt_actions"), py::arg("intent_fifo"));

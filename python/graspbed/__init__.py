@@ -31,6 +31,7 @@ import os
 import tempfile
 
 from ._graspbed import (CONTROLLER_API_VERSION, ConfigError, ControllerError, DigitState, HandCommand, HandState,
+                        LearnedSlipCue,
                         TactileState, __version__, controller_names, controller_parameters, data_dir,
                         list_scenarios)
 
