@@ -4,12 +4,11 @@
 // instead of stalling the motor there. Each is run with the part switched off (the strawman).
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "common/signal_log.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
 
@@ -40,25 +39,9 @@ bool Passed(const nlohmann::json& run, const std::string& name) {
   return false;
 }
 
-/// The last row of signals.csv in `dir`: column name -> cell text.
-std::vector<std::pair<std::string, std::string>> LastRow(const std::string& dir) {
-  std::ifstream in(dir + "/signals.csv");
-  std::string header, line, last;
-  std::getline(in, header);
-  while (std::getline(in, line)) last = line;
-  std::vector<std::pair<std::string, std::string>> cells;
-  std::stringstream names(header), values(last);
-  for (std::string name, value; std::getline(names, name, ',') && std::getline(values, value, ',');)
-    cells.emplace_back(name, value);
-  return cells;
-}
-
-std::string Cell(const std::vector<std::pair<std::string, std::string>>& row, const std::string& name) {
-  for (const auto& [column, value] : row) {
-    if (column == name) return value;
-  }
-  ADD_FAILURE() << "no column " << name;
-  return "";
+/// The last row's cell in column `name` of signals.csv in `dir`.
+std::string LastCell(const common::CsvTable& signals, const std::string& name) {
+  return signals.rows.back()[signals.Column(name)];
 }
 
 TEST(ProprioceptionReferenceTest, TheMotorsSqueezeKeepsTheCupUncrushedWhereTheUnitsAloneCrushIt) {
@@ -84,24 +67,24 @@ TEST(ProprioceptionReferenceTest, AClosingThatFindsNothingStopsAtTheClosedStop) 
   const std::string away = "hand.initial_wrist_position_m=[0.15,0,0.2]";
   const std::string feeling_dir = (dir.path() / "feeling").string();
   RunScenario("default", {away, "duration_s=2.6"}, feeling_dir);
-  const auto feeling = LastRow(feeling_dir);
-  EXPECT_EQ(Cell(feeling, "phase"), "missed");
-  EXPECT_EQ(std::stod(Cell(feeling, "grip_effort")), 0.0);
-  EXPECT_GT(std::stod(Cell(feeling, "finger_q1")), 0.9);  // the index flexed all the way [rad]
+  const common::CsvTable feeling = common::ReadCsvTable(feeling_dir + "/signals.csv");
+  EXPECT_EQ(LastCell(feeling, "phase"), "missed");
+  EXPECT_EQ(std::stod(LastCell(feeling, "grip_effort")), 0.0);
+  EXPECT_GT(std::stod(LastCell(feeling, "finger_q1")), 0.9);  // the index flexed all the way [rad]
 
   const std::string blind_dir = (dir.path() / "blind").string();
   RunScenario("default", {away, "duration_s=2.6", "controller.params.proprioception=0"}, blind_dir);
-  const auto blind = LastRow(blind_dir);
-  EXPECT_EQ(Cell(blind, "phase"), "closing");  // stalls the motor against the stop for ever
-  EXPECT_GT(std::stod(Cell(blind, "grip_effort")), 0.0);
+  const common::CsvTable blind = common::ReadCsvTable(blind_dir + "/signals.csv");
+  EXPECT_EQ(LastCell(blind, "phase"), "closing");  // stalls the motor against the stop for ever
+  EXPECT_GT(std::stod(LastCell(blind, "grip_effort")), 0.0);
 }
 
 /// How many rows of `dir`'s signals.csv name `cue` among their slip cues.
 int RowsFlaggedBy(const std::string& dir, const std::string& cue) {
-  std::ifstream in(dir + "/signals.csv");
-  std::string line;
+  const common::CsvTable signals = common::ReadCsvTable(dir + "/signals.csv");
+  const size_t cues = signals.Column("slip_cues");
   int rows = 0;
-  while (std::getline(in, line)) rows += line.find(cue) != std::string::npos ? 1 : 0;
+  for (const std::vector<std::string>& row : signals.rows) rows += row[cues].find(cue) != std::string::npos ? 1 : 0;
   return rows;
 }
 

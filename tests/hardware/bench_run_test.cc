@@ -27,6 +27,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/signal_log.h"
 #include "testbed/run_outputs.h"
 #include "tests/support/child_process.h"
 #include "tests/support/cli_runner.h"
@@ -191,30 +192,18 @@ std::map<std::string, std::vector<std::string>> ReadCells(const std::string& pat
 /// Writes `path` less the columns whose names `drop` accepts: a recording from before them.
 void WriteWithout(const std::string& path, const std::string& out,
                   const std::function<bool(const std::string&)>& drop) {
-  std::ifstream in(path);
-  std::ofstream to(out);
-  std::string line;
-  std::vector<bool> keep;
-  bool first = true;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    size_t begin = 0;
-    for (;;) {
-      const size_t comma = line.find(',', begin);
-      cells.push_back(line.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin));
-      if (comma == std::string::npos) break;
-      begin = comma + 1;
-    }
-    if (first) {
-      for (const std::string& name : cells) keep.push_back(!drop(name));
-      first = false;
-    }
-    std::string row;
-    for (size_t c = 0; c < cells.size(); ++c) {
-      if (keep[c]) row += (row.empty() ? "" : ",") + cells[c];
-    }
-    to << row << '\n';
+  const common::CsvTable table = common::ReadCsvTable(path);
+  std::vector<size_t> kept;
+  for (size_t c = 0; c < table.header.size(); ++c) {
+    if (!drop(table.header[c])) kept.push_back(c);
   }
+  std::ofstream to(out);
+  const auto write = [&to, &kept](const std::vector<std::string>& cells) {
+    for (size_t k = 0; k < kept.size(); ++k) to << (k > 0 ? "," : "") << cells[kept[k]];
+    to << '\n';
+  };
+  write(table.header);
+  for (const std::vector<std::string>& row : table.rows) write(row);
 }
 
 // Between two commands, so that each runs for some ticks of its own even on a loaded machine.
