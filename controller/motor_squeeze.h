@@ -59,8 +59,6 @@ class MotorSqueeze {
   double sensed_share() const {
     return share_measured_ && share_ <= config_.full_share_above ? share_ : 1.0;
   }
-  /// True once the sensed share has been measured in this grasp.
-  bool share_measured() const { return share_measured_; }
   /// The index (or the jaw's finger) rests at its closed end stop: a closing found nothing.
   bool closed_on_nothing() const { return closed_on_nothing_; }
   /// Forgets the sensed share (a new grasp: another object, another share).
