@@ -45,7 +45,7 @@ void AddOracleCommand(CLI::App& root) {
   CLI::App* command = root.add_subcommand(
       "oracle",
       "The scenario's oracle grip: the lightest constant grip (controller constant_grip on the ideal "
-      "sensor) with which it is not dropped and has no gross slip: doubled from 2 N up to the stall "
+      "sensor) with which it is not dropped, has no gross slip and is held on the sensorised pad: doubled from 2 N up to the stall "
       "pinch, halved down to 0.125 N when nothing above held, then bisected to 2 % or 0.02 N; also "
       "the lightest that holds it until its first disturbance action; exit 0, 2 on bad input");
   command->add_option("scenario", options->scenario, "scenario YAML file")->required();

@@ -705,6 +705,13 @@ std::string DescribeHand(const sensor::Layout& layout, const SceneConfig& scene)
         << deg(kin.IndexPad(joints[0]).normal_angle_rad) << "\n";
     }
   };
+  o << "object contacts: condim " << scene.object.ContactCondim(scene.physics.condim) << ", impratio "
+    << scene.Impratio();
+  if (std::isnan(scene.physics.impratio)) {
+    o << " (auto, the object's stiffness "
+      << scene.object.stiffness_n_m.value_or(StiffnessOfSolref(scene.object)) << " N/m)";
+  }
+  o << "\n";
   if (place.wrap) {
     const WrapPose& wrap = *place.wrap;
     o << "wrap: palm sideways (H z -> world -y, H y -> world z); cylinder axis at H x "
@@ -773,7 +780,7 @@ std::string GenerateMjcf(const sensor::Layout& layout, const SceneConfig& scene)
   o << "  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n";
   o << "  <option timestep=\"" << w.Num(physics.timestep_s) << "\" gravity=\"0 0 "
     << w.Num(-physics.gravity_m_s2) << "\" cone=\"" << (physics.elliptic_cones ? "elliptic" : "pyramidal")
-    << "\" impratio=\"" << w.Num(physics.impratio) << "\" noslip_iterations=\"" << physics.noslip_iterations
+    << "\" impratio=\"" << w.Num(scene.Impratio()) << "\" noslip_iterations=\"" << physics.noslip_iterations
     << "\" iterations=\"" << physics.solver_iterations << "\" tolerance=\"" << w.Num(physics.tolerance)
     << "\" solver=\"Newton\" integrator=\"Euler\" collision=\""
     << (physics.contact_pairs ? "predefined" : "dynamic") << "\"/>\n";

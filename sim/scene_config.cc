@@ -1,5 +1,6 @@
 #include "sim/scene_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -123,6 +124,12 @@ std::string FormatConfigTriple(const std::array<double, 3>& values) {
 double SceneConfig::TorsionalFrictionM(double friction) const {
   if (!std::isnan(object.torsional_friction)) return object.torsional_friction;
   return 2.0 / 3.0 * friction * hand.contact_patch_radius_m;
+}
+
+double SceneConfig::Impratio() const {
+  if (!std::isnan(physics.impratio)) return physics.impratio;
+  const double stiffness = object.stiffness_n_m.value_or(StiffnessOfSolref(object));
+  return std::clamp(kMaxImpratio * stiffness / kHardFrictionStiffnessNM, kMinAutoImpratio, kMaxImpratio);
 }
 
 double ObjectConfig::RestHalfHeightM() const {
@@ -437,9 +444,11 @@ const common::FieldTable<PhysicsConfig>& PhysicsConfigFields() {
                         "physics step"),
           Table::Bool("elliptic_cones", &C::elliptic_cones,
                       "elliptic friction cones; pyramidal cones drop held objects (docs/simulation.md)"),
-          Table::Number(
-              "impratio", &C::impratio, NumberRule::Between(1.0, kMaxImpratio), "-",
-              "friction-to-normal impedance ratio; 1000 keeps soft-contact creep near 1 um/s without noslip"),
+          Table::Number("impratio", &C::impratio, NumberRule::Between(1.0, kMaxImpratio), "-",
+                        "friction-to-normal impedance ratio; auto: 1000 for an object at least 2.5e6 N/m "
+                        "stiff (soft-contact creep near 1 um/s without noslip), 1000 x stiffness / 2.5e6 N/m "
+                        "for a softer one, at least 10 (docs/simulation.md, \"Friction on a sunk pad\")")
+              .NanIsAuto(),
           Table::Integer(
               "noslip_iterations", &C::noslip_iterations, 0, kMaxNoslipIterations, "",
               "post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step)"),

@@ -51,6 +51,11 @@ inline constexpr double kMaxMotorDampingNSM = 1e4;     ///< [N s/m]
 inline constexpr double kMinTimestepS = 1e-5;          ///< physics.timestep_s [s]
 inline constexpr double kMaxTimestepS = 0.01;          ///< [s]
 inline constexpr double kMaxImpratio = 1000.0;         ///< [-]
+/// physics.impratio auto: objects at least this stiff keep kMaxImpratio; softer ones get
+/// kMaxImpratio x stiffness / this (SceneConfig::Impratio) [N/m].
+inline constexpr double kHardFrictionStiffnessNM = 2.5e6;
+/// physics.impratio auto never goes below this [-].
+inline constexpr double kMinAutoImpratio = 10.0;
 inline constexpr int kMaxNoslipIterations = 1000;
 inline constexpr int kMaxSolverIterations = 1000;
 inline constexpr double kMinTolerance = 1e-15;   ///< physics.tolerance [-]
@@ -271,8 +276,9 @@ GraspType DefaultGrasp(const ObjectConfig& object, const HandConfig& hand);
 struct PhysicsConfig {
   double timestep_s = 0.001;   ///< physics step [s]
   bool elliptic_cones = true;  ///< elliptic friction cones (pyramidal drops held objects)
-  /// Friction-to-normal impedance ratio: 1000 keeps soft-contact creep near 1 um/s without noslip.
-  double impratio = 1000.0;
+  /// Friction-to-normal impedance ratio [-]. NaN: from the object's stiffness,
+  /// SceneConfig::Impratio (1000 keeps a rigid object's creep near 1 um/s without noslip).
+  double impratio = std::numeric_limits<double>::quiet_NaN();
   /// Post-solve friction projection (removes soft-contact creep; costs a J M^-1 J' per step).
   int noslip_iterations = 0;
   int solver_iterations = 100;  ///< Newton iterations
@@ -309,6 +315,12 @@ struct SceneConfig {
   double TorsionalFrictionM(double friction) const;
   /// Thumb opposition in use [rad].
   double ThumbOppositionRad() const;
+  /// MuJoCo's impratio in use [-]: physics.impratio, or when it is NaN kMaxImpratio scaled down by
+  /// the object's stiffness against a rigid surface below kHardFrictionStiffnessNM, at least
+  /// kMinAutoImpratio. Friction that hard locks in the tangential motion of an object sinking into
+  /// the tilted mesas, which a soft object's flesh takes up (docs/simulation.md, "Friction on a
+  /// sunk pad").
+  double Impratio() const;
 
   /// Checks every field against SceneConfigFields() and the cross-field rules (time constant vs
   /// timestep, pre-shape wider than the object).

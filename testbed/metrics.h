@@ -54,8 +54,8 @@ struct SlipClassCounts {
 
 /// The oracle's figures for a run (graspbed oracle; docs/scenarios.md, "The oracle grip").
 struct OracleGrip {
-  /// The lightest constant grip that holds the scenario (no drop, no gross slip) on the ideal
-  /// sensor: the mean true squeeze over the held time of that constant_grip run [N]; nullopt when
+  /// The lightest constant grip that holds the scenario (no drop, no gross slip, on the sensorised
+  /// pad) on the ideal sensor: the mean true squeeze over the held time of that constant_grip run [N]; nullopt when
   /// the motor's stall force does not hold it (reason says so).
   std::optional<double> grip_n;
   std::string reason;  ///< why grip_n is absent ("" when present)

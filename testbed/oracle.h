@@ -53,8 +53,10 @@ struct RunResult;  // testbed/runner.h
 
 /// The oracle's hold rule on one finished constant_grip run at `setpoint_n`: held when it had no
 /// physics fault, grasped at every close command, dropped nothing, had no gross slip
-/// (Metrics::gross, a slip >= metrics.gross_slip_m after the grasp was established) and ran to its
-/// end; otherwise the first of those that failed, in that order, is the outcome.
+/// (Metrics::gross, a slip >= metrics.gross_slip_m after the grasp was established), held it on the
+/// sensorised pad (the mesas carried at least metrics.min_sensed_grip_share of the finger's squeeze,
+/// where the scenario checks grasped_on_sensor) and ran to its end;
+/// otherwise the first of those that failed, in that order, is the outcome.
 OracleStep JudgeOracleStep(double setpoint_n, const RunResult& result);
 
 /// The result of one search.

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -22,6 +23,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/config_error.h"
@@ -32,7 +34,9 @@
 #include "sim/object_shapes.h"
 #include "sim/scene_config.h"
 #include "sim/simulation.h"
+#include "testbed/runner.h"
 #include "testbed/scenario_config.h"
+#include "sim/sim_rig.h"
 #include "tests/support/cli_runner.h"
 #include "tests/support/temp_dir.h"
 #include "tests/testbed/scenario_test_util.h"
@@ -418,14 +422,15 @@ TEST(ObjectScenarioTest, AnEggSqueezedPastItsCrushForceIsCrushedAndBelowItIsNot)
   EXPECT_GT(gentle.result.metrics.peak_grip_n, 5.0) << "it was held";
 }
 
-// The foam brick and a rigid brick of the same size, squeezed alike: the pad sinks into the foam
-// and more of its units bear.
+// The foam brick and a rigid brick of the same size, squeezed alike (about 4 N; at 10 N the thumb
+// pushes the foam brick down into the table and only the pad's tip row meets it): the pad sinks into
+// the foam and more of its units bear.
 std::string BrickScenario(const std::string& stiffness) {
   return "duration_s: 0.6\n"
          "object: {name: foam_brick, stiffness_n_m: " +
          stiffness +
          "}\n"
-         "controller: {name: open_loop, params: {close_effort: 0.5}}\n"
+         "controller: {name: open_loop, params: {close_effort: 0.2}}\n"
          "script:\n"
          "  - {at_s: 0.05, action: close}\n";
 }
@@ -447,14 +452,15 @@ TEST(ObjectScenarioTest, ASoftObjectLoadsMoreUnitsThanARigidOneAtTheSameGrip) {
   EXPECT_GT(rigid_units, 0);
 }
 
-// The foam brick held at a constant 1 N through a 40 mm lift: at condim 3 it rolls about the two
-// point contacts while the lift accelerates and brakes (its finger-side contact slides mm), at the
-// library's condim 6 the rolling friction stands for the sunk pad's patch and it stays put.
-std::string LiftedBrickScenario(int condim) {
+// The foam brick held at a constant 1 N through a 40 mm lift at condim 3 (point contacts, no spin
+// or rolling friction): with friction 1000 times harder than its 500 N/m contacts (physics.impratio
+// 1000, every object's until 2026-11-28) the friction locks in the tangential motion of the pad
+// sinking into it, and the brick rolls about the two contacts while the lift accelerates and brakes
+// (its finger-side contact slides mm); with impratio auto (10 for it) it stays put.
+std::string LiftedBrickScenario(const std::string& physics) {
   return "duration_s: 2.0\n"
-         "object: {name: foam_brick, condim: " +
-         std::to_string(condim) +
-         "}\n"
+         "object: {name: foam_brick, condim: 3}\n" +
+         physics +
          "sensor: {profile: ideal}\n"
          "controller: {name: constant_grip, params: {grip_n: 1.0}}\n"
          "script:\n"
@@ -462,16 +468,91 @@ std::string LiftedBrickScenario(int condim) {
          "  - {at_s: 0.8, action: lift, height_m: 0.04, duration_s: 0.8}\n";
 }
 
-TEST(ObjectScenarioTest, TheFoamBricksCondimSixKeepsItFromRollingAboutThePointContacts) {
+TEST(ObjectScenarioTest, TheFoamBrickRollsAboutPointContactsOnlyUnderFrictionHarderThanItsFlesh) {
   test_support::TempDir dir;
-  const auto point = testbed::test_support::RunScenarioText(dir, "condim3", LiftedBrickScenario(3));
-  const auto patch = testbed::test_support::RunScenarioText(dir, "condim6", LiftedBrickScenario(6));
-  std::printf("[ measure ] foam brick at 1 N: slip %.2f mm at condim 3, %.2f mm at condim 6\n",
-              point.result.metrics.max_slip_mm, patch.result.metrics.max_slip_mm);
-  EXPECT_FALSE(patch.result.metrics.dropped);
-  EXPECT_FALSE(patch.result.metrics.physics_fault);
-  EXPECT_LT(patch.result.metrics.max_slip_mm, 0.5);   // micro-slip at most
-  EXPECT_GT(point.result.metrics.max_slip_mm, 3.0);   // the scenario's own limit
+  const auto hard = testbed::test_support::RunScenarioText(dir, "hard", LiftedBrickScenario("physics: {impratio: 1000}\n"));
+  const auto automatic = testbed::test_support::RunScenarioText(dir, "auto", LiftedBrickScenario(""));
+  std::printf("[ measure ] foam brick at 1 N, condim 3: slip %.2f mm at impratio 1000, %.2f mm at auto\n",
+              hard.result.metrics.max_slip_mm, automatic.result.metrics.max_slip_mm);
+  EXPECT_FALSE(automatic.result.metrics.dropped);
+  EXPECT_FALSE(automatic.result.metrics.physics_fault);
+  EXPECT_LT(automatic.result.metrics.max_slip_mm, 0.5);  // micro-slip at most
+  EXPECT_GT(hard.result.metrics.max_slip_mm, 3.0);       // the scenario's own limit
+}
+
+// The finger's contacts with the object at one instant: the sum of their tangential forces' magnitudes
+// and the magnitude of their sum (world frame) [N], and the largest share of its friction limit one uses.
+struct PadFriction {
+  double sum_of_magnitudes_n = 0.0;
+  double magnitude_of_sum_n = 0.0;
+  double max_utilisation = 0.0;
+  int contacts = 0;
+};
+
+PadFriction FingerFrictionOnTheObject(const mjModel* m, const mjData* d) {
+  const int object = mj_name2id(m, mjOBJ_BODY, "object");
+  PadFriction f;
+  double sum[3] = {0.0, 0.0, 0.0};
+  for (int c = 0; c < d->ncon; ++c) {
+    const mjContact& contact = d->contact[c];
+    const bool first = m->geom_bodyid[contact.geom1] == object;
+    const int other = first ? contact.geom2 : contact.geom1;
+    if (!first && m->geom_bodyid[contact.geom2] != object) continue;
+    const char* name = mj_id2name(m, mjOBJ_GEOM, other);
+    if (name == nullptr || std::strncmp(name, "unit_", 5) != 0) continue;  // the pad's mesas only
+    double local[6];
+    mj_contactForce(m, d, c, local);
+    double world[3];
+    for (int k = 0; k < 3; ++k) world[k] = local[1] * contact.frame[3 + k] + local[2] * contact.frame[6 + k];
+    const double tangential = std::hypot(local[1], local[2]);
+    f.sum_of_magnitudes_n += tangential;
+    for (int k = 0; k < 3; ++k) sum[k] += world[k];
+    if (local[0] > 0.0) f.max_utilisation = std::max(f.max_utilisation, tangential / (contact.friction[0] * local[0]));
+    ++f.contacts;
+  }
+  f.magnitude_of_sum_n = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+  return f;
+}
+
+// The apple (180 g, 5e4 N/m) pinched at a constant 8 N, sunk 0.1 to 0.4 mm into six mesas whose
+// normals differ by up to 12 degrees: with friction 1000 times harder than its contacts
+// (physics.impratio 1000, every object's until 2026-11-28) the friction locks in the tangential
+// motion of its sinking, so before the lift the mesas pull against one another near their friction
+// limits and what they have left does not carry the weight (a gross slip as the lift starts, at every
+// grip). With impratio auto (20 for it) they share the weight: docs/simulation.md, "Friction on a
+// sunk pad".
+TEST(ObjectScenarioTest, TheApplesMesasSpendTheirFrictionOnEachOtherOnlyUnderFrictionHarderThanItsFlesh) {
+  const auto run = [](const std::string& physics) {
+    const testbed::ScenarioConfig config = testbed::LoadScenarioFromString(
+        "duration_s: 2.0\nobject: {name: apple}\n" + physics +
+            "sensor: {profile: ideal}\ncontroller: {name: constant_grip, params: {grip_n: 8.0}}\n"
+            "script:\n  - {at_s: 0.15, action: close}\n  - {at_s: 0.8, action: lift, height_m: 0.05, duration_s: 0.8}\n",
+        "apple.yaml");
+    testbed::RunOptions options;
+    options.write_plots = false;
+    PadFriction before_lift;
+    options.instants_s = {0.79};
+    options.at_instant = [&](double, sim::SimRig& rig) {
+      before_lift = FingerFrictionOnTheObject(rig.simulation().model(), rig.simulation().data());
+    };
+    const testbed::RunResult result = testbed::RunScenario(config, options);
+    return std::pair{before_lift, result};
+  };
+  const auto [hard, hard_run] = run("physics: {impratio: 1000}\n");
+  const auto [soft, soft_run] = run("");
+  for (const auto& [label, f, r] : {std::tuple{"impratio 1000", hard, &hard_run}, {"impratio auto", soft, &soft_run}}) {
+    std::printf("[ measure ] apple at 8 N, %s, before the lift: mesas' |ft| summed %.2f N, their sum %.2f N, "
+                "the most used %.2f of its friction limit (%d mesas); gross slips %d, slip %.2f mm\n",
+                label, f.sum_of_magnitudes_n, f.magnitude_of_sum_n, f.max_utilisation, f.contacts, r->metrics.gross.events,
+                r->metrics.max_slip_mm);
+  }
+  ASSERT_GE(hard.contacts, 4);
+  ASSERT_GE(soft.contacts, 4);
+  EXPECT_GT(hard.sum_of_magnitudes_n, 3.0 * hard.magnitude_of_sum_n);  // mostly internal
+  EXPECT_GT(hard_run.metrics.gross.events, 0);
+  EXPECT_LT(soft.sum_of_magnitudes_n, 1.5 * soft.magnitude_of_sum_n);  // mostly the weight's share
+  EXPECT_EQ(soft_run.metrics.gross.events, 0);
+  EXPECT_FALSE(soft_run.metrics.dropped);
 }
 
 // The marker (18 mm, 15.8 g, standing) pinched at a constant 1 N and lifted: met by a pad tilted 17

@@ -148,6 +148,17 @@ TEST(OracleTest, TheHoldRuleRefusesAGrossSlipWithoutADropAndEachOtherFailureInIt
   RunResult stopped = HeldRun();
   stopped.completed = false;
   EXPECT_EQ(JudgeOracleStep(2.0, stopped).outcome, "stopped");
+  // Held with the mesas carrying less of the finger's squeeze than grasped_on_sensor's floor: no
+  // controller of this sensor could feel that grip. Unless the scenario does not check it.
+  RunResult beside = stopped;
+  beside.metrics.sensed_grip_share = 0.02;
+  EXPECT_EQ(JudgeOracleStep(2.0, beside).outcome,
+            "held beside the units: they carried 0.02 of the finger's squeeze (floor 0.25)");
+  beside.config.expectations.grasped_on_sensor = false;
+  EXPECT_EQ(JudgeOracleStep(2.0, beside).outcome, "stopped");
+  beside.config.expectations.grasped_on_sensor = true;
+  beside.metrics.sensed_grip_share = 0.25;
+  EXPECT_EQ(JudgeOracleStep(2.0, beside).outcome, "stopped");
   for (const RunResult* failed : {&gross, &dropped, &regrasp, &never, &fault, &stopped}) {
     EXPECT_FALSE(JudgeOracleStep(2.0, *failed).held);
   }
@@ -195,9 +206,11 @@ TEST(OracleTest, AnObjectTheStallPinchCannotHoldHasNoOracleAndSaysWhy) {
 }
 
 TEST(OracleTest, AnObjectAFirmSqueezePushesOutHasTheLightestGripThatHoldsItAsItsOracle) {
-  // The 28 g foam brick (500 N/m, mu 1): from 2 N up the pads sink so deep that it slides and is
-  // squeezed out; a fraction of a newton holds it. Its weight needs m g / (2 mu) = 0.14 N.
-  const ScenarioConfig config = LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/hold_foam_brick.yaml");
+  // The 28 g foam brick (500 N/m, mu 1) under friction 1000 times harder than its contacts, with
+  // rolling friction (its physics until 2026-11-28): from 2 N up the pads sink so deep that it slides
+  // and is squeezed out; a fraction of a newton holds it. Its weight needs m g / (2 mu) = 0.14 N.
+  const ScenarioConfig config = LoadScenario(std::string(GRASPBED_SOURCE_DIR) + "/scenarios/hold_foam_brick.yaml",
+                                             {{"physics.impratio", "1000"}, {"object.condim", "6"}});
   const OracleSearch search = FindOracleGrip(config);
   ASSERT_TRUE(search.grip.grip_n.has_value()) << search.grip.reason;
   std::printf("[ measure ] hold_foam_brick: oracle grip %.3f N (setpoint %.3f N) in %zu runs\n", *search.grip.grip_n,
