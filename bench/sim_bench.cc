@@ -15,6 +15,7 @@
 
 #include <chrono>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -203,10 +204,13 @@ PhysicsConfig PhysicsBefore() {
 }
 
 std::vector<testbed::Override> PhysicsOverrides(const PhysicsConfig& physics) {
-  return {{"physics.timestep_s", std::to_string(physics.timestep_s)},
-          {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
-          {"physics.impratio", std::to_string(physics.impratio)},
-          {"physics.contact_pairs", physics.contact_pairs ? "true" : "false"}};
+  std::vector<testbed::Override> overrides = {
+      {"physics.timestep_s", std::to_string(physics.timestep_s)},
+      {"physics.noslip_iterations", std::to_string(physics.noslip_iterations)},
+      {"physics.contact_pairs", physics.contact_pairs ? "true" : "false"}};
+  // NaN is auto (the scene's object decides), which a scenario says by leaving the key out.
+  if (!std::isnan(physics.impratio)) overrides.push_back({"physics.impratio", std::to_string(physics.impratio)});
+  return overrides;
 }
 
 double Median(std::vector<double> values) {
@@ -339,11 +343,11 @@ void PrintScenarioSpeeds(const std::string& cli) {
   std::vector<SpeedRow> rows(4);
   rows[0].label = "before: 0.5 ms, noslip 3, impratio 10";
   rows[0].physics = PhysicsBefore();
-  rows[1].label = "0.5 ms, noslip 0, impratio 1000";
+  rows[1].label = "0.5 ms, noslip 0, impratio auto";
   rows[1].physics = half_ms;
   rows[2].label = "1 ms, ..., broad phase (contact_pairs false)";
   rows[2].physics = broad_phase;
-  rows[3].label = "now: 1 ms, noslip 0, impratio 1000, pairs";
+  rows[3].label = "now: 1 ms, noslip 0, impratio auto, pairs";
   rows[3].physics = PhysicsConfig{};
   PrintScenarioSpeedRows(rows, cli);
   if (cli.empty()) return;
@@ -400,7 +404,7 @@ int main(int argc, char** argv) {
       options.push_back({name, scene});
     };
     // The defaults, then one change at a time from them (docs/simulation.md, "Where a step's time goes").
-    add("default: 1 ms, noslip 0, impratio 1000", [](SceneConfig&) {});
+    add("default: 1 ms, noslip 0, impratio auto", [](SceneConfig&) {});
     add("before: 0.5 ms, noslip 3, impratio 10",
         [](SceneConfig& s) { s.physics = graspbed::sim::PhysicsBefore(); });
     add("broad phase (contact_pairs false)", [](SceneConfig& s) { s.physics.contact_pairs = false; });
