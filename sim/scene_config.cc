@@ -541,6 +541,15 @@ void StartObject(const common::YamlMap& map, ObjectConfig* object) {
     if (entry == nullptr)
       map.Fail("name", "unknown object; the library (" + library->path() + ") has: " + library->NameList());
     *object = entry->object;
+    // `--set object.name=apple` on a file whose object is a box keeps the box's keys beside the name:
+    // say so, since the run is then no apple (a shape beside a name is allowed, as any key is).
+    if (map.Has("shape") && map.GetString("shape", "") != ToString(entry->object.shape)) {
+      std::cerr << "warning: " << map.file() << ": object.name = " << name << " beside "
+                << "object.shape = " << map.GetString("shape", "") << ": the library's " << name
+                << " is a " << ToString(entry->object.shape)
+                << "; the object is the section's shape with the library entry's other keys where the section "
+                   "does not set them (to get the library's object, give `name` alone)\n";
+    }
   }
   if (map.Has("mesh")) {
     std::filesystem::path path(map.GetString("mesh", ""));

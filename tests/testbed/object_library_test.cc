@@ -177,6 +177,28 @@ TEST(ObjectModelTest, AnUnknownNameListsTheKnownOnes) {
   }
 }
 
+// `--set object.name=apple` on scenarios/default.yaml, whose object is a box: the name comes with the
+// file's shape, so the object is a box with the apple's other keys. It loads (a key beside a name is
+// allowed) and says so; a name alone, or with keys of its own shape, says nothing.
+TEST(ObjectModelTest, ANameBesideAnotherShapeIsWarnedAbout) {
+  test_support::TempDir dir;
+  const std::string hybrid = dir.Write("hybrid.yaml", "object: {shape: box, size_m: [0.05, 0.05, 0.08], name: apple}\n");
+  testing::internal::CaptureStderr();
+  const sim::SceneConfig scene = sim::LoadSceneConfigFile(hybrid);
+  const std::string warned = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(scene.object.shape, sim::ObjectShape::kBox);
+  EXPECT_THAT(warned, HasSubstr("hybrid.yaml"));
+  EXPECT_THAT(warned, HasSubstr("object.name = apple beside object.shape = box"));
+  EXPECT_THAT(warned, HasSubstr("the library's apple is a sphere"));
+  for (const char* quiet : {"object: {name: apple}\n", "object: {name: can, size_m: [0.03, 0, 0.101]}\n",
+                            "object: {name: apple, shape: sphere}\n"}) {
+    const std::string file = dir.Write("quiet.yaml", quiet);
+    testing::internal::CaptureStderr();
+    sim::LoadSceneConfigFile(file);
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << quiet;
+  }
+}
+
 TEST(ObjectModelTest, TooStiffForTheStepIsRefusedWithTheMostItTakes) {
   test_support::TempDir dir;
   const std::string file = dir.Write("stiff.yaml", "object: {name: marker, stiffness_n_m: 1e8}\n");
