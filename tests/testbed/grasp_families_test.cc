@@ -86,6 +86,23 @@ TEST(GraspFamilyTest, EachShapeFamilyIsHeldOnThePadAtItsOracleGrip) {
   }
 }
 
+// `graspbed model --kinematics` says which friction the object's contacts get: auto follows the
+// object's stiffness (the default box keeps 1000, the 5e4 N/m apple 20, the 500 N/m foam brick 10),
+// a number in the scene replaces it.
+TEST(GraspFamilyTest, TheKinematicsSayWhichImpratioTheObjectsContactsGet) {
+  const auto line = [](const std::string& scene_yaml) {
+    const ScenarioConfig scenario = LoadScenarioFromString(
+        scene_yaml + "controller: {name: constant_grip}\nscript:\n  - {at_s: 0.1, action: close}\n", "k.yaml");
+    const std::string described = sim::DescribeHand(DefaultLayout(), scenario.scene);
+    const size_t at = described.find("object contacts:");
+    return at == std::string::npos ? std::string() : described.substr(at, described.find('\n', at) - at);
+  };
+  EXPECT_EQ(line(""), "object contacts: condim 4, impratio 1000 (auto, the object's stiffness 2.5e+06 N/m)");
+  EXPECT_EQ(line("object: {name: apple}\n"), "object contacts: condim 4, impratio 20 (auto, the object's stiffness 50000 N/m)");
+  EXPECT_EQ(line("object: {name: foam_brick}\n"), "object contacts: condim 4, impratio 10 (auto, the object's stiffness 500 N/m)");
+  EXPECT_EQ(line("object: {name: apple}\nphysics: {impratio: 300}\n"), "object contacts: condim 4, impratio 300");
+}
+
 // Users' parts from STL files, several shapes and heights, each with its origin at a corner as CAD
 // exports them: lifted by the reference controller and held on the pad.
 TEST(GraspFamilyTest, UsersStlPartsAreLiftedAndHeldOnThePad) {
