@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 #include "common/config_error.h"
+#include "controller/parameter_binding.h"
 
 namespace graspbed::controller {
 namespace {
@@ -13,54 +13,33 @@ namespace {
 /// Longest time step the integrator accepts [s] (a pause of the clock is not integrated).
 constexpr double kMaxStepS = 0.01;
 
-/// One declared parameter and the field it sets (the one integer field is converted on the way).
-struct Binding {
-  const char* name;
-  double min;
-  double max;
-  const char* unit;
-  const char* doc;
-  double ConstantGripConfig::*number;  ///< nullptr for contact_confirm_frames
+#define GRASPBED_BIND(name, field, min, max, unit, doc) \
+  GRASPBED_BIND_PARAMETER(ConstantGripConfig, name, field, min, max, unit, doc)
+
+const ParameterBinding<ConstantGripConfig> kBindings[] = {
+    GRASPBED_BIND("grip_n", grip_n, 0.01, 500.0, "N", "total normal force held after contact (sum over the valid units)"),
+    GRASPBED_BIND("close_effort", close_effort, 0.01, 1.0, "", "motor effort while closing towards the object"),
+    GRASPBED_BIND("open_effort", open_effort, 0.01, 1.0, "", "motor effort magnitude while releasing"),
+    GRASPBED_BIND("release_time_s", release_time_s, 0.01, 10.0, "s",
+                  "the opening effort is applied this long after an open command"),
+    GRASPBED_BIND("contact_threshold_n", contact_threshold_n, 0.01, 10.0, "N",
+                  "total normal force that means the digits touch the object"),
+    GRASPBED_BIND("contact_confirm_frames", contact_confirm_frames, 1, 100, "frames",
+                  "consecutive frames above the threshold before the force loop starts"),
+    GRASPBED_BIND("effort_per_newton", effort_per_newton, 0.0, 1.0, "1/N", "feed-forward effort per newton of grip"),
+    GRASPBED_BIND("kp_effort_per_n", kp_effort_per_n, 0.0, 1.0, "1/N", "proportional gain of the force loop"),
+    GRASPBED_BIND("ki_effort_per_n_s", ki_effort_per_n_s, 0.0, 100.0, "1/(N s)", "integral gain of the force loop"),
+    GRASPBED_BIND("integrator_limit", integrator_limit, 0.0, 1.0, "", "bound of the integral term"),
+    GRASPBED_BIND("grip_filter_s", grip_filter_s, 0.0, 0.1, "s", "low-pass time constant of the measured grip"),
 };
 
-constexpr Binding kBindings[] = {
-    {"grip_n", 0.01, 500.0, "N", "total normal force held after contact (sum over the valid units)",
-     &ConstantGripConfig::grip_n},
-    {"close_effort", 0.01, 1.0, "", "motor effort while closing towards the object",
-     &ConstantGripConfig::close_effort},
-    {"open_effort", 0.01, 1.0, "", "motor effort magnitude while releasing", &ConstantGripConfig::open_effort},
-    {"release_time_s", 0.01, 10.0, "s", "the opening effort is applied this long after an open command",
-     &ConstantGripConfig::release_time_s},
-    {"contact_threshold_n", 0.01, 10.0, "N", "total normal force that means the digits touch the object",
-     &ConstantGripConfig::contact_threshold_n},
-    {"contact_confirm_frames", 1, 100, "frames", "consecutive frames above the threshold before the force "
-                                                 "loop starts", nullptr},
-    {"effort_per_newton", 0.0, 1.0, "1/N", "feed-forward effort per newton of grip",
-     &ConstantGripConfig::effort_per_newton},
-    {"kp_effort_per_n", 0.0, 1.0, "1/N", "proportional gain of the force loop",
-     &ConstantGripConfig::kp_effort_per_n},
-    {"ki_effort_per_n_s", 0.0, 100.0, "1/(N s)", "integral gain of the force loop",
-     &ConstantGripConfig::ki_effort_per_n_s},
-    {"integrator_limit", 0.0, 1.0, "", "bound of the integral term", &ConstantGripConfig::integrator_limit},
-    {"grip_filter_s", 0.0, 0.1, "s", "low-pass time constant of the measured grip",
-     &ConstantGripConfig::grip_filter_s},
-};
-
-double Get(const ConstantGripConfig& config, const Binding& binding) {
-  return binding.number != nullptr ? config.*binding.number : static_cast<double>(config.contact_confirm_frames);
-}
+#undef GRASPBED_BIND
 
 void Validate(const ConstantGripConfig& config) {
-  for (const Binding& binding : kBindings) {
-    const double value = Get(config, binding);
-    std::ostringstream range;
-    range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
-    try {
-      common::Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value,
-                      range.str());
-    } catch (const common::ConfigError& error) {
-      throw error.WithContext("controller 'constant_grip'");
-    }
+  try {
+    RequireParametersInRange<ConstantGripConfig>(kBindings, config);
+  } catch (const common::ConfigError& error) {
+    throw error.WithContext("controller 'constant_grip'");
   }
 }
 
@@ -78,28 +57,15 @@ ConstantGripController::ConstantGripController(const ConstantGripConfig& config)
 }
 
 std::vector<ControllerParameter> ConstantGripController::Parameters() {
-  const ConstantGripConfig defaults;
-  std::vector<ControllerParameter> parameters;
-  for (const Binding& binding : kBindings) {
-    parameters.push_back({binding.name, Get(defaults, binding), binding.min, binding.max, binding.unit, binding.doc});
-  }
-  return parameters;
+  return DescribeParameters<ConstantGripConfig>(kBindings);
 }
 
 ConstantGripConfig ConstantGripController::ConfigFromParams(const ControllerParams& params) {
   ConstantGripConfig config;
-  for (const Binding& binding : kBindings) {
-    const auto found = params.find(binding.name);
-    if (found == params.end()) continue;
-    if (binding.number != nullptr) {
-      config.*binding.number = found->second;
-    } else if (found->second != std::round(found->second)) {
-      throw common::ConfigError("", 0, binding.name, common::ReadableNumber(found->second),
-                                "must be a whole number")
-          .WithContext("controller 'constant_grip'");
-    } else {
-      config.contact_confirm_frames = static_cast<int>(found->second);
-    }
+  try {
+    ApplyParameters<ConstantGripConfig>(kBindings, params, &config);
+  } catch (const common::ConfigError& error) {
+    throw error.WithContext("controller 'constant_grip'");
   }
   Validate(config);
   return config;

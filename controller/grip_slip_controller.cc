@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
-#include <type_traits>
 
 #include "common/config_error.h"
 #include "controller/learned_slip_controller.h"
+#include "controller/parameter_binding.h"
 
 namespace graspbed::controller {
 namespace {
@@ -49,38 +48,10 @@ const char* CueNames(bool ratio, bool vibration, bool centroid, bool learned) {
   return kNames[(ratio ? 1 : 0) | (vibration ? 2 : 0) | (centroid ? 4 : 0) | (learned ? 8 : 0)];
 }
 
-/// One declared parameter bound to its field of GripSlipConfig.
-struct Binding {
-  const char* name;
-  const char* member;  ///< the GripSlipConfig member it sets, as written ("slip.settle_s")
-  double min;
-  double max;
-  const char* unit;
-  const char* doc;
-  bool integer;  ///< the field is an int or a bool: the value must be a whole number
-  double (*get)(const GripSlipConfig&);
-  void (*set)(GripSlipConfig&, double);
-};
+using Binding = ParameterBinding<GripSlipConfig>;
 
-template <typename Field>
-constexpr bool kIsInteger = std::is_integral_v<Field>;
-
-// Binds a parameter name to a config field in one line; ints and bools take whole numbers.
-#define GRASPBED_BIND(name, field, min, max, unit, doc)                              \
-  Binding {                                                                          \
-    name, #field, min, max, unit, doc, kIsInteger<decltype(GripSlipConfig{}.field)>, \
-        [](const GripSlipConfig& c) { return static_cast<double>(c.field); },        \
-        [](GripSlipConfig& c, double v) {                                            \
-          using Field = decltype(GripSlipConfig{}.field);                            \
-          if constexpr (std::is_same_v<Field, bool>) {                               \
-            c.field = v != 0.0;                                                      \
-          } else if constexpr (std::is_integral_v<Field>) {                          \
-            c.field = static_cast<Field>(std::lround(v));                            \
-          } else {                                                                   \
-            c.field = v;                                                             \
-          }                                                                          \
-        }                                                                            \
-  }
+#define GRASPBED_BIND(name, field, min, max, unit, doc) \
+  GRASPBED_BIND_PARAMETER(GripSlipConfig, name, field, min, max, unit, doc)
 
 const std::vector<Binding>& Bindings() {
   static const std::vector<Binding> bindings = {
@@ -292,13 +263,7 @@ const SlipDetectorConfig& ValidatedSlipConfig(const GripSlipConfig& config) {
 
 void GripSlipConfig::Validate() const {
   try {
-    for (const Binding& binding : Bindings()) {
-      const double value = binding.get(*this);
-      std::ostringstream range;
-      range << "must be in [" << binding.min << ", " << binding.max << "] " << binding.unit;
-      Require(std::isfinite(value) && value >= binding.min && value <= binding.max, binding.name, value,
-              range.str());
-    }
+    RequireParametersInRange<GripSlipConfig>(Bindings(), *this);
     Require(min_grip_n <= max_grip_n, "min_grip_n", min_grip_n, "must not exceed max_grip_n");
     Require(initial_grip_n <= max_grip_n, "initial_grip_n", initial_grip_n, "must not exceed max_grip_n");
     Require(friction_min <= friction_initial, "friction_min", friction_min,
@@ -310,26 +275,15 @@ void GripSlipConfig::Validate() const {
 }
 
 std::vector<ControllerParameter> GripSlipController::Parameters() {
-  const GripSlipConfig defaults;
-  std::vector<ControllerParameter> parameters;
-  for (const Binding& binding : Bindings()) {
-    parameters.push_back(
-        {binding.name, binding.get(defaults), binding.min, binding.max, binding.unit, binding.doc});
-  }
-  return parameters;
+  return DescribeParameters<GripSlipConfig>(Bindings());
 }
 
 GripSlipConfig GripSlipController::ConfigFromParams(const ControllerParams& params) {
   GripSlipConfig config;
-  for (const Binding& binding : Bindings()) {
-    const auto found = params.find(binding.name);
-    if (found == params.end()) continue;
-    const double value = found->second;
-    if (binding.integer && !(std::isfinite(value) && value == std::round(value))) {
-      throw AsParameterError(
-          common::ConfigError("", 0, binding.name, common::ReadableNumber(value), "must be a whole number"));
-    }
-    binding.set(config, value);
+  try {
+    ApplyParameters<GripSlipConfig>(Bindings(), params, &config);
+  } catch (const common::ConfigError& error) {
+    throw AsParameterError(error);
   }
   config.Validate();
   return config;

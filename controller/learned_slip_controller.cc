@@ -8,32 +8,25 @@
 
 #include "common/config_error.h"
 #include "common/data_dir.h"
+#include "controller/parameter_binding.h"
 
 namespace graspbed::controller {
 namespace {
 
-struct Binding {
-  const char* name;
-  double min;
-  double max;
-  const char* unit;
-  const char* doc;
-  double LearnedSlipControllerConfig::*field;
+#define GRASPBED_BIND(name, field, min, max, unit, doc) \
+  GRASPBED_BIND_PARAMETER(LearnedSlipControllerConfig, name, field, min, max, unit, doc)
+
+const ParameterBinding<LearnedSlipControllerConfig> kBindings[] = {
+    GRASPBED_BIND("initial_grip_n", initial_grip_n, 0.05, 100.0, "N", "grip target when the hold starts"),
+    GRASPBED_BIND("max_grip_n", max_grip_n, 0.1, 200.0, "N", "grip target ceiling"),
+    GRASPBED_BIND("slip_grip_gain", slip_grip_gain, 0.0, 5.0, "", "on a learned flag: target = target x (1 + gain) + step"),
+    GRASPBED_BIND("slip_grip_step_n", slip_grip_step_n, 0.0, 50.0, "N", "additive part of the response"),
+    GRASPBED_BIND("slip_refractory_s", slip_refractory_s, 0.001, 1.0, "s", "no second response sooner than this"),
+    GRASPBED_BIND("threshold", threshold, -1.0, 1.0, "", "flag threshold on the model's score; < 0: the model's own"),
+    GRASPBED_BIND("close_effort", close_effort, 0.01, 1.0, "", "motor effort while closing towards the object"),
 };
 
-constexpr Binding kBindings[] = {
-    {"initial_grip_n", 0.05, 100.0, "N", "grip target when the hold starts", &LearnedSlipControllerConfig::initial_grip_n},
-    {"max_grip_n", 0.1, 200.0, "N", "grip target ceiling", &LearnedSlipControllerConfig::max_grip_n},
-    {"slip_grip_gain", 0.0, 5.0, "", "on a learned flag: target = target x (1 + gain) + step",
-     &LearnedSlipControllerConfig::slip_grip_gain},
-    {"slip_grip_step_n", 0.0, 50.0, "N", "additive part of the response", &LearnedSlipControllerConfig::slip_grip_step_n},
-    {"slip_refractory_s", 0.001, 1.0, "s", "no second response sooner than this",
-     &LearnedSlipControllerConfig::slip_refractory_s},
-    {"threshold", -1.0, 1.0, "", "flag threshold on the model's score; < 0: the model's own",
-     &LearnedSlipControllerConfig::threshold},
-    {"close_effort", 0.01, 1.0, "", "motor effort while closing towards the object",
-     &LearnedSlipControllerConfig::close_effort},
-};
+#undef GRASPBED_BIND
 
 constexpr DiagnosticChannel kDiagnosticChannels[] = {
     {"learned_score", "the learned cue's score: probability of a gross slip within its horizon [-]"},
@@ -76,18 +69,12 @@ LearnedSlipController::LearnedSlipController(const LearnedSlipControllerConfig& 
 }
 
 std::vector<ControllerParameter> LearnedSlipController::Parameters() {
-  const LearnedSlipControllerConfig defaults;
-  std::vector<ControllerParameter> parameters;
-  for (const Binding& b : kBindings) parameters.push_back({b.name, defaults.*b.field, b.min, b.max, b.unit, b.doc});
-  return parameters;
+  return DescribeParameters<LearnedSlipControllerConfig>(kBindings);
 }
 
 LearnedSlipControllerConfig LearnedSlipController::ConfigFromParams(const ControllerParams& params) {
   LearnedSlipControllerConfig config;
-  for (const Binding& b : kBindings) {
-    const auto found = params.find(b.name);
-    if (found != params.end()) config.*b.field = found->second;
-  }
+  ApplyParameters<LearnedSlipControllerConfig>(kBindings, params, &config);
   return config;
 }
 
